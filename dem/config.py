@@ -39,3 +39,39 @@ def default_threads() -> int:
     """Threads for numba parallel loops: NUMBA_NUM_THREADS if set, else all cores."""
     value = os.environ.get("NUMBA_NUM_THREADS")
     return int(value) if value else (os.cpu_count() or 1)
+
+
+# --- DEM engine -------------------------------------------------------------------------------
+#: Automatic time step, linear contact: this fraction of the collision time
+#: pi / sqrt(k_n / m* - (gamma_n / 2 m*)^2) of the lightest pair (undamped time if over-damped).
+DEM_DT_COLLISION_FRACTION = 1.0 / 50.0
+#: Automatic time step, Hertz contact: this fraction of the Rayleigh time
+#: pi R sqrt(rho / G) / (0.1631 nu + 0.8766) ...
+DEM_DT_RAYLEIGH_FRACTION = 0.1
+#: ... and this fraction of the Hertz collision time 2.87 (m*^2 / (R* Y*^2 v))^(1/5) at the
+#: largest expected impact velocity v = A omega + sqrt(2 g h_fill).
+DEM_DT_HERTZ_FRACTION = 1.0 / 50.0
+#: A user time step is refused above this fraction of the critical time step 2 / omega_0 of the
+#: stiffest single contact (omega_0 = sqrt(k / m*)); the margin covers grains with several
+#: contacts (the stiffness seen by one grain adds up) and the damping.
+DEM_DT_STABILITY_FRACTION = 0.3
+#: Verlet skin as a fraction of the largest sphere radius; the list is rebuilt when a sphere has
+#: moved more than half the skin since the last build.
+DEM_SKIN_FRACTION = 0.25
+#: Neighbour lists are regrown to this factor times the needed size when they overflow.
+DEM_GROWTH_FACTOR = 1.5
+#: Instability checks run every this many steps.
+DEM_CHECK_INTERVAL = 500
+#: Largest overlap allowed, as a fraction of the smaller radius, before the run is stopped.
+DEM_MAX_OVERLAP_FRACTION = 0.1
+#: A grain whose speed exceeds this factor times the largest speed the drive and gravity can
+#: give (A omega + sqrt(2 g h_fill)) stops the run.
+DEM_MAX_SPEED_FACTOR = 20.0
+#: Settling ends when the rms grain speed falls below this fraction of sqrt(g r).
+DEM_SETTLE_SPEED_FRACTION = 0.01
+#: Settling gives up after this many seconds of simulated time.
+DEM_SETTLE_MAX_TIME = 5.0
+#: Random sequential placement: tries per sphere before the fill box is made taller.
+DEM_FILL_TRIES = 200
+#: Fill box: initial height as a multiple of the height of a dense bed (packing fraction 0.6).
+DEM_FILL_HEIGHT_FACTOR = 2.5
