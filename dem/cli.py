@@ -1,0 +1,359 @@
+"""The ``dem`` command: parses arguments, calls the library, prints. No physics here.
+
+Every error the user can fix ends with exit status 2 and one line naming the option (or case
+key), the value and what is allowed; nothing is computed before the inputs are checked.
+"""
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from dem import __version__
+from dem.errors import InputError, SimulationError
+
+EXIT_USAGE = 2
+
+#: Allowed values of each numeric option, used in error messages.
+_ALLOWED = {
+    "--throw-number": "throw number Gamma > 0",
+    "--angle": "vibration angle phi in degrees, in (0, 90)",
+    "--friction": "friction coefficient mu >= 0",
+    "--inclination": "inclination alpha in degrees, in (-90, 90)",
+    "--eps-t": "tangential restitution in [0, 1]",
+    "--eps-n": "normal restitution in [0, 1]",
+    "--frequency": "frequency in Hz, > 0",
+    "--amplitude": "amplitude in m, > 0",
+    "--peak-acceleration": "peak trough acceleration in units of g, > 0",
+    "--drive-velocity": "drive velocity amplitude A omega in m/s, > 0",
+    "--cycles": "whole number of cycles >= 1",
+    "--threads": "whole number of threads >= 1",
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line and exit with status 2."""
+
+    def error(self, message: str) -> None:  # noqa: D102
+        prefix = "the following arguments are required: "
+        if message.startswith(prefix):
+            names = [n.strip() for n in message[len(prefix) :].split(",")]
+            parts = [f"{n} ({_ALLOWED[n]})" if n in _ALLOWED else n for n in names]
+            message = "missing option " + ", ".join(parts)
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+def _number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"value {text!r} is not a finite number")
+    return value
+
+
+def _whole(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"value {value} must be >= 1")
+    return value
+
+
+def _option_name(key: str) -> str:
+    return "--" + key.replace("_", "-")
+
+
+def _print_json(obj) -> None:
+    print(json.dumps(obj, indent=2, default=_json_default))
+
+
+def _json_default(value):
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"cannot serialise {type(value).__name__}")
+
+
+# --- dem pointmass ------------------------------------------------------------------------------
+
+
+def _add_material(p: argparse.ArgumentParser, *, angle_required: bool = True) -> None:
+    if angle_required:
+        p.add_argument("--angle", type=_number, required=True, help=_ALLOWED["--angle"])
+    p.add_argument("--friction", type=_number, required=True, help=_ALLOWED["--friction"])
+    p.add_argument("--inclination", type=_number, default=0.0, help=_ALLOWED["--inclination"])
+
+
+def _add_restitution(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--eps-t", type=_number, default=0.8, help=_ALLOWED["--eps-t"])
+    p.add_argument("--eps-n", type=_number, default=0.0, help=_ALLOWED["--eps-n"])
+
+
+def _cmd_thresholds(args) -> int:
+    from dem import pointmass
+
+    t = pointmass.thresholds(args.angle, args.friction, args.inclination)
+    result = {
+        "angle": args.angle,
+        "friction": args.friction,
+        "inclination": args.inclination,
+        "forward_sliding": t.forward_sliding,
+        "backward_sliding": t.backward_sliding,
+        "flight": t.flight,
+    }
+    if args.json:
+        _print_json(result)
+    else:
+        back = "never" if t.backward_sliding is None else f"{t.backward_sliding:.4f}"
+        print(f"forward sliding  Gamma > {t.forward_sliding:.4f}   (Eq. 1)")
+        print(f"backward sliding Gamma > {back}   (Eq. 2)")
+        print(f"flight           Gamma >= {t.flight:.4f}   (Eq. 4)")
+    return 0
+
+
+def _cmd_velocity(args) -> int:
+    from dem import pointmass
+
+    r = pointmass.velocity(
+        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n
+    )
+    result = r.as_dict()
+    if args.frequency is not None:
+        result["frequency"] = args.frequency
+        result["velocity"] = r.velocity(args.frequency)
+        result["amplitude"] = pointmass.amplitude_from_throw_number(
+            r.throw_number, r.angle, r.inclination, args.frequency
+        )
+    if args.json:
+        _print_json(result)
+        return 0
+    print(f"velocity_norm  {r.velocity_norm:.6f}   (v / (A omega cos phi))")
+    if args.frequency is not None:
+        print(f"velocity       {result['velocity']:.6g} m/s at {args.frequency:g} Hz")
+    print(f"regime         {r.regime}")
+    if r.periodic:
+        print(f"periodic       yes, period {r.period} cycle(s), settled after {r.cycles}")
+    else:
+        print(
+            f"periodic       no: mean over starting phases, spread {r.spread:.3g} "
+            f"(range {r.velocity_min:.4f} .. {r.velocity_max:.4f})"
+        )
+    print(
+        f"phases         stick {r.stick:.3f}  forward {r.slide_forward:.3f}  "
+        f"backward {r.slide_backward:.3f}  flight {r.flight:.3f} (fractions of a cycle)"
+    )
+    return 0
+
+
+def _cmd_sweep(args) -> int:
+    from dem.pointmass.sweep import parse_values, sweep, write_csv
+
+    values = {
+        key: parse_values(getattr(args, key), _option_name(key))
+        for key in ("throw_number", "angle", "friction", "inclination", "eps_t", "eps_n")
+    }
+    result = sweep(**values)
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as stream:
+            write_csv(result, stream)
+        print(f"wrote {len(result['velocity_norm'])} rows to {args.out}", file=sys.stderr)
+    else:
+        write_csv(result, sys.stdout)
+    return 0
+
+
+def _cmd_optimum(args) -> int:
+    from dem.pointmass.sweep import optimum, parse_values
+
+    bounds = None
+    if args.bounds:
+        parts = args.bounds.split(":")
+        if len(parts) != 2:
+            raise InputError("--bounds", args.bounds, "LOW:HIGH")
+        bounds = tuple(parse_values(p, "--bounds")[0] for p in parts)
+    o = optimum(
+        args.over,
+        args.hold,
+        friction=args.friction,
+        angle=args.angle,
+        throw_number=args.throw_number,
+        amplitude=args.amplitude,
+        peak_acceleration=args.peak_acceleration,
+        drive_velocity=args.drive_velocity,
+        frequency=args.frequency,
+        inclination=args.inclination,
+        eps_t=args.eps_t,
+        eps_n=args.eps_n,
+        bounds=bounds,
+    )
+    if args.plot:
+        from dem.plots import optimum_figure
+
+        optimum_figure(o, args.plot)
+    if args.json:
+        _print_json(o.as_dict(with_curve=args.curve))
+        return 0
+    unit = "deg" if args.over == "angle" else ""
+    held = ", ".join(f"{k} = {v:g}" for k, v in o.held.items())
+    print(f"optimum {args.over}: {o.value:.3f} {unit}  (holding {args.hold}; {held})")
+    print(f"maximises      {o.objective}")
+    print(f"velocity       {o.velocity:.5g} m/s   velocity_norm {o.velocity_norm:.5f}")
+    print(
+        f"drive          Gamma {o.throw_number:.4g}, phi {o.angle:.3g} deg, "
+        f"A {o.amplitude * 1e3:.4g} mm, f {o.frequency:.4g} Hz"
+    )
+    print(f"regime         {o.regime}")
+    print(f"within 90%     {o.plateau[0]:.3g} .. {o.plateau[1]:.3g} {unit}")
+    return 0
+
+
+def _pointmass_parser(sub) -> None:
+    pm = sub.add_parser("pointmass", help="the paper's point-mass model")
+    pms = pm.add_subparsers(dest="pm_command", required=True, parser_class=_Parser)
+
+    p = pms.add_parser("thresholds", help="throw numbers where sliding and flight begin")
+    _add_material(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_thresholds)
+
+    p = pms.add_parser("velocity", help="mean conveying velocity of the steady motion")
+    p.add_argument("--throw-number", type=_number, required=True, help=_ALLOWED["--throw-number"])
+    _add_material(p)
+    _add_restitution(p)
+    p.add_argument("--frequency", type=_number, help="also give the velocity in m/s at this Hz")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_velocity)
+
+    p = pms.add_parser(
+        "sweep",
+        help="velocities over a grid (CSV)",
+        description="Each option takes a value, a comma list, or start:stop:step; the CSV "
+        "has one row per combination.",
+    )
+    p.add_argument("--throw-number", required=True, help="Gamma values")
+    p.add_argument("--angle", required=True, help="phi values, degrees")
+    p.add_argument("--friction", required=True, help="mu values")
+    p.add_argument("--inclination", default="0", help="alpha values, degrees")
+    p.add_argument("--eps-t", default="0.8", help="eps_t values")
+    p.add_argument("--eps-n", default="0", help="eps_n values")
+    p.add_argument("--out", help="CSV file (default: standard output)")
+    p.set_defaults(func=_cmd_sweep)
+
+    p = pms.add_parser(
+        "optimum",
+        help="optimum vibration angle or throw number, stating what is held fixed",
+        description="--over angle --hold throw_number|amplitude|acceleration, or "
+        "--over throw_number --hold frequency|amplitude|drive_velocity.",
+    )
+    p.add_argument("--over", choices=("angle", "throw_number"), required=True)
+    p.add_argument(
+        "--hold",
+        required=True,
+        choices=("throw_number", "amplitude", "acceleration", "frequency", "drive_velocity"),
+    )
+    p.add_argument("--angle", type=_number, help=_ALLOWED["--angle"] + " (over throw_number)")
+    _add_material(p, angle_required=False)
+    _add_restitution(p)
+    p.add_argument("--throw-number", type=_number, help=_ALLOWED["--throw-number"])
+    p.add_argument("--amplitude", type=_number, help=_ALLOWED["--amplitude"])
+    p.add_argument("--peak-acceleration", type=_number, help=_ALLOWED["--peak-acceleration"])
+    p.add_argument("--drive-velocity", type=_number, help=_ALLOWED["--drive-velocity"])
+    p.add_argument("--frequency", type=_number, default=60.0, help=_ALLOWED["--frequency"])
+    p.add_argument("--bounds", help="LOW:HIGH of the scanned variable")
+    p.add_argument("--plot", help="write a PNG of the scanned curve")
+    p.add_argument("--curve", action="store_true", help="include the scanned curve in --json")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_optimum)
+
+
+# --- dem run / export ---------------------------------------------------------------------------
+
+
+def _cmd_run(args) -> int:
+    from dem.case import load_case
+    from dem.simulation import run_case
+
+    case = load_case(args.case_dir)
+    out = Path(args.out) if args.out else case.directory / "output"
+    summary = run_case(case, out, cycles=args.cycles, threads=args.threads, progress=True)
+    keys = (
+        "mean_velocity",
+        "mean_velocity_stderr",
+        "mean_velocity_norm",
+        "pointmass_velocity_norm",
+        "mass_flow_rate",
+        "particle_steps_per_s",
+    )
+    for key in keys:
+        if key in summary:
+            print(f"{key:26s} {summary[key]}")
+    print(f"wrote {out / 'summary.json'}")
+    return 0
+
+
+def _cmd_export_liggghts(args) -> int:
+    from dem.case import load_case
+    from dem.io.liggghts import write_deck
+
+    case = load_case(args.case_dir)
+    path = write_deck(case, Path(args.out_dir))
+    print(f"wrote {path}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full ``dem`` argument parser."""
+    parser = _Parser(
+        prog="dem",
+        description="Granular material on vibratory conveyors: point-mass model and DEM.",
+    )
+    parser.add_argument("--version", action="version", version=f"dem {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    _pointmass_parser(sub)
+
+    p = sub.add_parser("run", help="run a case directory (DEM)")
+    p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument("--out", help="output directory (default CASE_DIR/output)")
+    p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
+    p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("export", help="export a case to another code")
+    es = p.add_subparsers(dest="export_command", required=True, parser_class=_Parser)
+    e = es.add_parser("liggghts", help="write an equivalent LIGGGHTS-PUBLIC 3.8 deck")
+    e.add_argument("case_dir")
+    e.add_argument("out_dir")
+    e.set_defaults(func=_cmd_export_liggghts)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``dem`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as err:
+        where = f"{err.source}: " if err.source else ""
+        key = err.key if err.source or err.key.startswith("--") else _option_name(err.key)
+        if err.value is None:
+            print(f"dem: error: {where}missing {key}: {err.allowed}", file=sys.stderr)
+        else:
+            print(f"dem: error: {where}{key} = {err.value!r}: {err.allowed}", file=sys.stderr)
+        return EXIT_USAGE
+    except SimulationError as err:
+        print(f"dem: simulation stopped: {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("dem: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

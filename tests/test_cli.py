@@ -1,0 +1,162 @@
+"""The ``dem`` command line: JSON contracts and one-line errors with exit status 2."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from dem.cli import main
+
+
+def run(capsys, *argv):
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_thresholds_json_matches_paper(capsys):
+    code, out, _ = run(
+        capsys,
+        "pointmass",
+        "thresholds",
+        "--angle",
+        "25",
+        "--friction",
+        "0.75",
+        "--inclination",
+        "2.5",
+        "--json",
+    )
+    assert code == 0
+    data = json.loads(out)
+    assert data["forward_sliding"] == pytest.approx(0.2742, abs=1e-4)
+    assert data["backward_sliding"] == pytest.approx(0.5065, abs=1e-4)
+    assert data["flight"] == pytest.approx(1.0, abs=1e-4)
+
+
+def test_backward_sliding_null_when_impossible(capsys):
+    code, out, _ = run(
+        capsys, "pointmass", "thresholds", "--angle", "70", "--friction", "0.8", "--json"
+    )
+    assert code == 0 and json.loads(out)["backward_sliding"] is None
+
+
+def test_velocity_json_keys(capsys):
+    code, out, _ = run(
+        capsys,
+        "pointmass",
+        "velocity",
+        "--throw-number",
+        "3.5",
+        "--angle",
+        "25",
+        "--friction",
+        "0.35",
+        "--json",
+    )
+    assert code == 0
+    data = json.loads(out)
+    assert {"velocity_norm", "regime", "periodic"} <= data.keys()
+    assert data["velocity_norm"] == pytest.approx(3.141592653589793 / 3.5, abs=1e-7)
+    assert data["regime"] == "hopping" and data["periodic"] is True
+
+
+def test_sweep_writes_csv(capsys, tmp_path):
+    out = tmp_path / "s.csv"
+    code, _, _ = run(
+        capsys,
+        "pointmass",
+        "sweep",
+        "--throw-number",
+        "0.5:1.5:0.5",
+        "--angle",
+        "20,30",
+        "--friction",
+        "0.35",
+        "--out",
+        str(out),
+    )
+    assert code == 0
+    lines = out.read_text().splitlines()
+    assert lines[0].startswith("throw_number,angle,friction")
+    assert len(lines) == 1 + 3 * 2
+
+
+def test_optimum_json_states_what_is_held(capsys):
+    code, out, _ = run(
+        capsys,
+        "pointmass",
+        "optimum",
+        "--over",
+        "angle",
+        "--hold",
+        "amplitude",
+        "--amplitude",
+        "0.0005",
+        "--frequency",
+        "60",
+        "--friction",
+        "0.35",
+        "--json",
+    )
+    assert code == 0
+    data = json.loads(out)
+    assert data["hold"] == "amplitude" and data["held"]["amplitude"] == 0.0005
+    assert 5 < data["value"] < 60
+
+
+@pytest.mark.parametrize(
+    "argv,needle",
+    [
+        (["--throw-number", "0", "--angle", "25", "--friction", "0.3"], "--throw-number = 0.0"),
+        (["--throw-number", "-2", "--angle", "25", "--friction", "0.3"], "--throw-number = -2.0"),
+        (["--throw-number", "1", "--angle", "90", "--friction", "0.3"], "--angle = 90.0"),
+        (["--throw-number", "1", "--angle", "0", "--friction", "0.3"], "(0, 90)"),
+        (["--throw-number", "1", "--angle", "25", "--friction", "-0.1"], "--friction = -0.1"),
+        (
+            ["--throw-number", "1", "--angle", "25", "--friction", "0.3", "--eps-t", "1.5"],
+            "--eps-t = 1.5",
+        ),
+        (["--throw-number", "1", "--angle", "25", "--friction", "0.3", "--eps-n", "-1"], "[0, 1]"),
+        (
+            ["--throw-number", "1", "--angle", "25", "--friction", "0.3", "--inclination", "95"],
+            "--inclination = 95.0",
+        ),
+        (["--angle", "25", "--friction", "0.3"], "missing option --throw-number"),
+        (["--throw-number", "x", "--angle", "25", "--friction", "0.3"], "'x' is not a number"),
+    ],
+)
+def test_bad_input_one_line_exit_2(capsys, argv, needle):
+    code, out, err = run(capsys, "pointmass", "velocity", *argv)
+    assert code == 2
+    assert needle in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err and out == ""
+
+
+def test_console_script_exit_status():
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "dem.cli",
+            "pointmass",
+            "thresholds",
+            "--angle",
+            "100",
+            "--friction",
+            "0.3",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert (
+        proc.stderr.strip()
+        == "dem: error: --angle = 100.0: vibration angle must be in (0, 90) degrees"
+    )
