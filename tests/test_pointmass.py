@@ -19,6 +19,18 @@ def test_thresholds_paper_example():
 
 def test_backward_sliding_impossible_when_cot_phi_below_mu():
     assert pm.thresholds(angle=60, friction=0.75).backward_sliding is None
+    assert pm.velocity(0.99, 60, 0.75).regime == "forward sliding"
+
+
+def test_backward_sliding_when_drive_leans_back_over_steep_incline():
+    # phi + alpha > 90 deg, cot phi < mu: backward sliding before flight at
+    # Gamma > (mu - tan a) / (mu - cot phi), a case Eq. (2) does not cover
+    t = pm.thresholds(angle=89, friction=0.75, inclination=2.5)
+    expected = (0.75 - math.tan(math.radians(2.5))) / (0.75 - 1 / math.tan(math.radians(89)))
+    assert t.backward_sliding == pytest.approx(expected)
+    assert t.forward_sliding > 1.0  # here the mass never slides forward before it flies
+    assert pm.velocity(0.99 * expected, 89, 0.75, 2.5).regime == "rest"
+    assert pm.velocity(1.01 * expected, 89, 0.75, 2.5).regime == "backward sliding"
 
 
 @pytest.mark.parametrize(

@@ -415,6 +415,19 @@ def mean_velocity(params, start_phase, max_cycles, average_cycles, max_period, t
                                 break
                     return total / (TWO_PI * p), period, k + 1, 0
     out_time[:] = avg_time / (TWO_PI * avg_n)
+    # Close to a bifurcation an orbit converges too slowly to close to ``tol`` within
+    # max_cycles; one that repeats to ORBIT_SIZE_TOL is periodic for every practical purpose
+    # (its velocity is the long average above either way).
+    k = max_cycles - 1
+    for p in range(1, max_period + 1):
+        a, b = k % ring, (k - p) % ring
+        a1, b1 = (k - 1) % ring, (k - 1 - p) % ring
+        if _same_state(
+            modes[a], us[a], ws[a], zs[a], modes[b], us[b], ws[b], zs[b], ORBIT_SIZE_TOL
+        ) and _same_state(
+            modes[a1], us[a1], ws[a1], zs[a1], modes[b1], us[b1], ws[b1], zs[b1], ORBIT_SIZE_TOL
+        ):
+            return avg_dx / (TWO_PI * avg_n), p, max_cycles, 0
     return avg_dx / (TWO_PI * avg_n), 0, max_cycles, 0
 
 

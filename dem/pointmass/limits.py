@@ -4,8 +4,13 @@ A point mass rests on a trough inclined at alpha and driven along a line at the 
 phi. With the throw number ``Gamma = A omega^2 sin(phi) / (g cos(alpha))`` (Eq. 3) the mass
 
 - slides forward at some phase of the cycle when ``Gamma > (mu + tan a) / (cot phi + mu)`` (1),
-- slides backward when ``Gamma > (mu - tan a) / (cot phi - mu)`` (2), never if ``cot phi <= mu``,
+- slides backward when ``Gamma > (mu - tan a) / (cot phi - mu)`` (2),
 - leaves the floor (flight) when ``Gamma >= 1`` (4).
+
+Eq. (2) assumes ``cot phi > mu``. Otherwise the backward pull grows as the floor rises, and
+backward sliding starts while the mass is still in contact (sin(omega t) <= 1/Gamma) when
+``Gamma > (mu - tan a) / (mu - cot phi)`` and that limit is below 1, i.e. only for
+``phi + alpha > 90 deg`` (a drive leaning back over a steep incline); else never before flight.
 
 A negative limit means the motion happens without any vibration (a trough steeper than the
 friction angle); it is reported as 0.
@@ -38,10 +43,12 @@ def thresholds(angle: float, friction: float, inclination: float = 0.0) -> Thres
     tan_a = math.tan(math.radians(inclination))
     cot_phi = 1.0 / math.tan(phi)
     forward = max((friction + tan_a) / (cot_phi + friction), 0.0)
+    backward: float | None = None
     if tan_a > friction:
-        backward: float | None = 0.0  # slides down without vibration
+        backward = 0.0  # slides down without vibration
     elif cot_phi > friction:
         backward = max((friction - tan_a) / (cot_phi - friction), 0.0)
-    else:
-        backward = None
+    elif cot_phi < friction:
+        limit = (friction - tan_a) / (friction - cot_phi)
+        backward = limit if limit < 1.0 else None
     return Thresholds(forward_sliding=forward, backward_sliding=backward, flight=1.0)
