@@ -1,0 +1,604 @@
+"""Case files: ``cases/NAME/case.toml`` -> one validated, frozen :class:`Case`.
+
+Everything a run needs is checked here, once, before anything runs (DESIGN.md section 6): every
+key is known, has the right type and lies in its allowed range, and the drive is resolved so that
+both the amplitude A and the throw number Gamma are available,
+
+    Gamma = A omega^2 sin(phi) / (g cos(alpha)),   omega = 2 pi f,   g = dem.config.GRAVITY,
+
+with phi the vibration angle and alpha the trough inclination. A bad value raises
+:class:`dem.errors.InputError` naming the dotted key (``particles.radius``), the value, what is
+allowed, and the file.
+
+Units are SI; angles stay in degrees in the dataclasses (as in the file) and are converted to
+radians by the code that uses them.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from dem.config import GRAVITY
+from dem.errors import InputError
+
+#: File name of a case inside its directory.
+CASE_FILE = "case.toml"
+
+#: Grain shapes the schema knows.
+SHAPES = ("sphere", "screw", "clump")
+#: Grain shapes the engine can run today. Lifting a restriction is adding the name here.
+SUPPORTED_SHAPES = ("sphere",)
+#: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
+CONTACT_MODELS = ("hertz_mindlin", "linear")
+#: Default k_t / k_n of the linear model: 2/7 makes the tangential and normal oscillations of a
+#: solid sphere equally fast (Shaefer et al. 1996).
+DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
+
+
+@dataclass(frozen=True)
+class TroughSpec:
+    """Periodic section of the trough (DESIGN.md section 2).
+
+    Attributes:
+        length: Length of the periodic section along x, m.
+        width: Distance between the side walls at y = +-width/2, m.
+        inclination: alpha, deg; > 0 means the trough rises in +x.
+        mesh: Absolute path of an STL trough (U or V section), or None for a flat floor.
+
+    """
+
+    length: float
+    width: float
+    inclination: float = 0.0
+    mesh: Path | None = None
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """Straight-line sinusoidal drive s(t) = A sin(omega t) (cos phi, 0, sin phi).
+
+    Attributes:
+        frequency: f, Hz.
+        angle: Vibration angle phi, deg, in (0, 90).
+        amplitude: A, m.
+        throw_number: Gamma = A omega^2 sin(phi) / (g cos(alpha)), dimensionless.
+        given: Which of ``"amplitude"`` and ``"throw_number"`` the file gave; the other was
+            computed from it.
+
+    """
+
+    frequency: float
+    angle: float
+    amplitude: float
+    throw_number: float
+    given: str
+
+    @property
+    def omega(self) -> float:
+        """Angular frequency omega = 2 pi f, rad/s."""
+        return 2.0 * math.pi * self.frequency
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    """Grain material, shared by grain-grain and grain-wall contacts.
+
+    Attributes:
+        density: rho, kg/m^3.
+        friction: Coulomb coefficient mu >= 0.
+        restitution_normal: eps_n in [0, 1]; 0 maps to critical damping.
+        restitution_tangential: eps_t in [0, 1]; a target for calibration (DESIGN.md section 5).
+        rolling_friction: Rolling resistance coefficient mu_r >= 0 (0: none).
+
+    """
+
+    density: float
+    friction: float
+    restitution_normal: float = 0.0
+    restitution_tangential: float = 0.8
+    rolling_friction: float = 0.0
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """Contact law selector and its coefficients.
+
+    Attributes:
+        model: ``"hertz_mindlin"`` (needs ``youngs_modulus``) or ``"linear"`` (needs
+            ``stiffness``).
+        youngs_modulus: Y, Pa (Hertz-Mindlin), else None.
+        poisson_ratio: nu in (-1, 0.5); Hertz-Mindlin uses G = Y / (2 (1 + nu)).
+        stiffness: Normal spring constant k_n, N/m (linear), else None.
+        tangential_stiffness_ratio: k_t / k_n of the linear model (default 2/7); Hertz-Mindlin
+            takes k_t from G instead.
+        limit_force: True keeps the normal force repulsive (LIGGGHTS ``limitForce on``).
+
+    """
+
+    model: str
+    youngs_modulus: float | None
+    poisson_ratio: float
+    stiffness: float | None
+    tangential_stiffness_ratio: float
+    limit_force: bool = False
+
+
+@dataclass(frozen=True)
+class ParticlesSpec:
+    """The grains.
+
+    Attributes:
+        shape: ``"sphere"``, ``"screw"`` or ``"clump"``.
+        count: Number of grains N >= 1.
+        radius: Sphere radius, m (sphere), else None.
+        rotation: False locks rotation (a sliding block, the point mass's DEM twin).
+        length: Screw length, m (screw, reserved).
+        shank_radius: Screw shank sphere radius, m (screw, reserved).
+        head_radius: Screw head sphere radius, m (screw, reserved).
+        mass: Target grain mass, kg (screw, reserved); None keeps the union-volume mass.
+        template: Absolute path of a clump template, lines ``x y z r`` in metres (clump,
+            reserved).
+
+    """
+
+    shape: str
+    count: int
+    radius: float | None
+    rotation: bool = True
+    length: float | None = None
+    shank_radius: float | None = None
+    head_radius: float | None = None
+    mass: float | None = None
+    template: Path | None = None
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Length of a run.
+
+    Attributes:
+        settle_cycles: Drive cycles run before measuring (after the fill has come to rest).
+        cycles: Drive cycles measured.
+        timestep: dt, s, or None for automatic (from the stiffest contact).
+        seed: Seed of the random generator (insertion positions).
+
+    """
+
+    settle_cycles: int = 10
+    cycles: int = 30
+    timestep: float | None = None
+    seed: int = 1
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """What is written.
+
+    Attributes:
+        frames_per_cycle: Particle frames written per measured drive cycle.
+
+    """
+
+    frames_per_cycle: int = 4
+
+
+@dataclass(frozen=True)
+class Case:
+    """A validated case.
+
+    Attributes:
+        name: Name of the case directory.
+        directory: Absolute path of the case directory.
+        source: Absolute path of the case.toml it was read from.
+
+    """
+
+    name: str
+    directory: Path
+    source: Path
+    trough: TroughSpec
+    drive: DriveSpec
+    material: MaterialSpec
+    contact: ContactSpec
+    particles: ParticlesSpec
+    run: RunSpec
+    output: OutputSpec
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the resolved case as plain data (paths as strings; None kept), for output."""
+
+        def plain(value: Any) -> Any:
+            if isinstance(value, dict):
+                return {k: plain(v) for k, v in value.items()}
+            if isinstance(value, Path):
+                return str(value)
+            return value
+
+        return plain(asdict(self))
+
+
+# --- reading -------------------------------------------------------------------------------------
+
+_REQUIRED = object()
+
+
+def _suggest(name: str, known: list[str] | tuple[str, ...]) -> str:
+    """Return ' (did you mean 'x'?)' for the closest known name, or ''."""
+    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.6)
+    close = close or [k for k in known if name and (k.startswith(name) or name.startswith(k))]
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+class _Table:
+    """One TOML table being read: typed getters that raise InputError with the dotted key."""
+
+    def __init__(self, name: str, data: dict[str, Any], source: str, directory: Path):
+        self.name = name
+        self.data = data
+        self.source = source
+        self.directory = directory
+
+    def error(self, key: str, value: object, allowed: str) -> InputError:
+        return InputError(f"{self.name}.{key}", value, allowed, source=self.source)
+
+    def check_known(self, known: tuple[str, ...]) -> None:
+        """Refuse keys that the table does not define (typos would otherwise be ignored)."""
+        for key, value in self.data.items():
+            if key not in known:
+                raise self.error(
+                    key,
+                    value,
+                    f"a key of [{self.name}]: {', '.join(known)}{_suggest(key, known)}",
+                )
+
+    def _get(self, key: str, default: Any) -> tuple[bool, Any]:
+        if key in self.data:
+            return True, self.data[key]
+        if default is _REQUIRED:
+            raise InputError(
+                f"{self.name}.{key}", None, "a value is required (the key is missing)", self.source
+            )
+        return False, default
+
+    def number(
+        self,
+        key: str,
+        default: Any = _REQUIRED,
+        check: Callable[[float], bool] | None = None,
+        allowed: str = "a finite number",
+    ) -> float | None:
+        """Read a float (an int is accepted; a bool is not); ``check`` gives the range."""
+        present, value = self._get(key, default)
+        if not present:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.error(key, value, f"a number: {allowed}")
+        value = float(value)
+        if not math.isfinite(value) or (check is not None and not check(value)):
+            raise self.error(key, value, allowed)
+        return value
+
+    def integer(
+        self,
+        key: str,
+        default: Any = _REQUIRED,
+        check: Callable[[int], bool] | None = None,
+        allowed: str = "an integer",
+    ) -> int:
+        """Read an int (not a bool, not a float)."""
+        present, value = self._get(key, default)
+        if not present:
+            return value
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, value, f"an integer: {allowed}")
+        if check is not None and not check(value):
+            raise self.error(key, value, allowed)
+        return value
+
+    def boolean(self, key: str, default: Any = _REQUIRED) -> bool:
+        """Read a TOML boolean (true/false)."""
+        present, value = self._get(key, default)
+        if present and not isinstance(value, bool):
+            raise self.error(key, value, "true or false")
+        return value
+
+    def choice(self, key: str, choices: tuple[str, ...], default: Any = _REQUIRED) -> str:
+        """Read a string out of ``choices``."""
+        present, value = self._get(key, default)
+        if present and (not isinstance(value, str) or value not in choices):
+            hint = _suggest(value, choices) if isinstance(value, str) else ""
+            raise self.error(key, value, f"one of {', '.join(map(repr, choices))}{hint}")
+        return value
+
+    def path(self, key: str) -> Path | None:
+        """Read an optional file path, relative to the case directory; the file must exist."""
+        present, value = self._get(key, None)
+        if not present:
+            return None
+        if not isinstance(value, str) or not value:
+            raise self.error(key, value, "a file path relative to the case directory")
+        resolved = (self.directory / value).resolve()
+        if not resolved.is_file():
+            raise self.error(key, value, f"an existing file (no file at {resolved})")
+        return resolved
+
+
+def _positive(x: float) -> bool:
+    return x > 0
+
+
+# --- one reader per table ------------------------------------------------------------------------
+
+_TROUGH_KEYS = ("length", "width", "inclination", "mesh")
+_DRIVE_KEYS = ("frequency", "angle", "amplitude", "throw_number")
+_MATERIAL_KEYS = (
+    "density",
+    "friction",
+    "restitution_normal",
+    "restitution_tangential",
+    "rolling_friction",
+)
+_CONTACT_KEYS = (
+    "model",
+    "youngs_modulus",
+    "poisson_ratio",
+    "stiffness",
+    "tangential_stiffness_ratio",
+    "limit_force",
+)
+_PARTICLES_KEYS = (
+    "shape",
+    "count",
+    "radius",
+    "rotation",
+    "length",
+    "shank_radius",
+    "head_radius",
+    "mass",
+    "template",
+)
+_RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed")
+_OUTPUT_KEYS = ("frames_per_cycle",)
+
+
+def _read_trough(t: _Table) -> TroughSpec:
+    t.check_known(_TROUGH_KEYS)
+    return TroughSpec(
+        length=t.number("length", check=_positive, allowed="> 0 (m)"),
+        width=t.number("width", check=_positive, allowed="> 0 (m)"),
+        inclination=t.number(
+            "inclination", 0.0, lambda x: abs(x) < 90.0, "-90 < inclination < 90 (deg)"
+        ),
+        mesh=t.path("mesh"),
+    )
+
+
+def _read_drive(t: _Table, inclination: float) -> DriveSpec:
+    t.check_known(_DRIVE_KEYS)
+    frequency = t.number("frequency", check=_positive, allowed="> 0 (Hz)")
+    angle = t.number("angle", check=lambda x: 0.0 < x < 90.0, allowed="0 < angle < 90 (deg)")
+    amplitude = t.number("amplitude", None, _positive, "> 0 (m)")
+    throw_number = t.number("throw_number", None, _positive, "> 0")
+    if (amplitude is None) == (throw_number is None):
+        both = amplitude is not None
+        raise t.error(
+            "amplitude" if both else "amplitude|throw_number",
+            {"amplitude": amplitude, "throw_number": throw_number} if both else None,
+            "exactly one of drive.amplitude (m) and drive.throw_number"
+            + (" (both are given)" if both else " (neither is given)"),
+        )
+    omega = 2.0 * math.pi * frequency
+    # Gamma = A omega^2 sin(phi) / (g cos(alpha))
+    scale = (
+        omega**2 * math.sin(math.radians(angle)) / (GRAVITY * math.cos(math.radians(inclination)))
+    )
+    if amplitude is not None:
+        given, throw_number = "amplitude", amplitude * scale
+    else:
+        given, amplitude = "throw_number", throw_number / scale
+    return DriveSpec(frequency, angle, amplitude, throw_number, given)
+
+
+def _read_material(t: _Table) -> MaterialSpec:
+    t.check_known(_MATERIAL_KEYS)
+    unit = "0 <= value <= 1"
+    return MaterialSpec(
+        density=t.number("density", check=_positive, allowed="> 0 (kg/m^3)"),
+        friction=t.number("friction", check=lambda x: x >= 0.0, allowed=">= 0"),
+        restitution_normal=t.number("restitution_normal", 0.0, lambda x: 0.0 <= x <= 1.0, unit),
+        restitution_tangential=t.number(
+            "restitution_tangential", 0.8, lambda x: 0.0 <= x <= 1.0, unit
+        ),
+        rolling_friction=t.number("rolling_friction", 0.0, lambda x: x >= 0.0, ">= 0"),
+    )
+
+
+def _read_contact(t: _Table) -> ContactSpec:
+    t.check_known(_CONTACT_KEYS)
+    model = t.choice("model", CONTACT_MODELS, "hertz_mindlin")
+    # Coefficients of the other model are refused rather than silently ignored.
+    foreign = {
+        "hertz_mindlin": ("stiffness", "tangential_stiffness_ratio"),
+        "linear": ("youngs_modulus",),
+    }
+    for key in foreign[model]:
+        if key in t.data:
+            raise t.error(
+                key, t.data[key], f"not a coefficient of contact.model = {model!r}; remove it"
+            )
+    hertz = model == "hertz_mindlin"
+    return ContactSpec(
+        model=model,
+        youngs_modulus=t.number("youngs_modulus", check=_positive, allowed="> 0 (Pa)")
+        if hertz
+        else None,
+        poisson_ratio=t.number("poisson_ratio", 0.3, lambda x: -1.0 < x < 0.5, "-1 < nu < 0.5"),
+        stiffness=None if hertz else t.number("stiffness", check=_positive, allowed="> 0 (N/m)"),
+        tangential_stiffness_ratio=t.number(
+            "tangential_stiffness_ratio", DEFAULT_TANGENTIAL_STIFFNESS_RATIO, _positive, "> 0"
+        ),
+        limit_force=t.boolean("limit_force", False),
+    )
+
+
+def _read_particles(t: _Table) -> ParticlesSpec:
+    t.check_known(_PARTICLES_KEYS)
+    shape = t.choice("shape", SHAPES, "sphere")
+    # Keys of the other shapes are refused rather than silently ignored.
+    own = {
+        "sphere": ("radius",),
+        "screw": ("length", "shank_radius", "head_radius", "mass"),
+        "clump": ("template",),
+    }
+    for other, keys in own.items():
+        for key in keys:
+            if other != shape and key in t.data:
+                raise t.error(key, t.data[key], f"a key of shape = {other!r}, not of {shape!r}")
+    count = t.integer("count", check=lambda n: n >= 1, allowed=">= 1")
+    m = "> 0 (m)"
+    spec = ParticlesSpec(
+        shape=shape,
+        count=count,
+        radius=t.number("radius", check=_positive, allowed=m) if shape == "sphere" else None,
+        rotation=t.boolean("rotation", True),
+        length=t.number("length", check=_positive, allowed=m) if shape == "screw" else None,
+        shank_radius=t.number("shank_radius", check=_positive, allowed=m)
+        if shape == "screw"
+        else None,
+        head_radius=t.number("head_radius", check=_positive, allowed=m)
+        if shape == "screw"
+        else None,
+        mass=t.number("mass", None, _positive, "> 0 (kg)"),
+        template=t.path("template") if shape == "clump" else None,
+    )
+    if shape == "clump" and spec.template is None:
+        raise t.error("template", None, "a clump template file is required for shape = 'clump'")
+    if shape not in SUPPORTED_SHAPES:
+        raise t.error(
+            "shape",
+            shape,
+            f"one of {', '.join(map(repr, SUPPORTED_SHAPES))}: shape {shape!r} is not supported "
+            "yet",
+        )
+    return spec
+
+
+def _read_run(t: _Table) -> RunSpec:
+    t.check_known(_RUN_KEYS)
+    timestep = t.data.get("timestep", "auto")
+    if timestep == "auto":
+        dt = None
+    else:
+        dt = t.number("timestep", check=_positive, allowed='"auto" or a time > 0 (s)')
+    return RunSpec(
+        settle_cycles=t.integer("settle_cycles", 10, lambda n: n >= 0, ">= 0"),
+        cycles=t.integer("cycles", 30, lambda n: n >= 1, ">= 1"),
+        timestep=dt,
+        seed=t.integer("seed", 1, lambda n: n >= 0, ">= 0"),
+    )
+
+
+def _read_output(t: _Table) -> OutputSpec:
+    t.check_known(_OUTPUT_KEYS)
+    return OutputSpec(frames_per_cycle=t.integer("frames_per_cycle", 4, lambda n: n >= 1, ">= 1"))
+
+
+_TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output")
+
+
+def _grain_diameter(particles: ParticlesSpec) -> float | None:
+    """Largest sphere diameter of a grain cross-section, m, where the schema knows it."""
+    if particles.shape == "sphere":
+        return 2.0 * particles.radius
+    if particles.shape == "screw":
+        return 2.0 * max(particles.head_radius, particles.shank_radius)
+    return None
+
+
+def load_case(path: str | Path) -> Case:
+    """Read and validate a case.
+
+    Args:
+        path: A case directory (holding ``case.toml``) or the ``case.toml`` itself.
+
+    Returns:
+        The validated case; relative paths in the file are resolved against its directory.
+
+    Raises:
+        InputError: The file is missing, is not valid TOML, or a key is unknown, missing, of the
+            wrong type or out of range. The message names the key, the value, the allowed range
+            and the file.
+
+    """
+    path = Path(path).expanduser().resolve()
+    source = path / CASE_FILE if path.is_dir() else path
+    if not source.is_file():
+        raise InputError(
+            "case", str(path), f"a case directory holding {CASE_FILE}, or a {CASE_FILE} file"
+        )
+    where = str(source)
+    try:
+        with source.open("rb") as handle:
+            data = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        line = re.search(r"line (\d+)", str(exc))
+        key = f"line {line.group(1)}" if line else "file"
+        raise InputError(key, str(exc), "valid TOML syntax (https://toml.io)", where) from exc
+    except UnicodeDecodeError as exc:
+        raise InputError("file", str(exc), "UTF-8 encoded TOML", where) from exc
+
+    for name, value in data.items():
+        if name not in _TABLES:
+            raise InputError(
+                name, value, f"a table: {', '.join(_TABLES)}{_suggest(name, _TABLES)}", where
+            )
+        if not isinstance(value, dict):
+            raise InputError(name, value, f"a table [{name}]", where)
+
+    directory = source.parent
+
+    def table(name: str) -> _Table:
+        return _Table(name, data.get(name, {}), where, directory)
+
+    trough = _read_trough(table("trough"))
+    drive = _read_drive(table("drive"), trough.inclination)
+    material = _read_material(table("material"))
+    contact = _read_contact(table("contact"))
+    particles = _read_particles(table("particles"))
+    run = _read_run(table("run"))
+    output = _read_output(table("output"))
+
+    diameter = _grain_diameter(particles)
+    if diameter is not None:
+        t = table("trough")
+        if trough.width < diameter:
+            raise t.error(
+                "width", trough.width, f">= one grain diameter ({diameter:g} m) between the walls"
+            )
+        if trough.length < 2.0 * diameter:
+            raise t.error(
+                "length",
+                trough.length,
+                f">= two grain diameters ({2.0 * diameter:g} m): a grain must not reach its own "
+                "periodic image",
+            )
+
+    return Case(
+        name=directory.name,
+        directory=directory,
+        source=source,
+        trough=trough,
+        drive=drive,
+        material=material,
+        contact=contact,
+        particles=particles,
+        run=run,
+        output=output,
+    )

@@ -1,0 +1,307 @@
+"""Export a sphere case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (DESIGN.md section 8).
+
+The deck simulates the same periodic trough section in the trough's accelerating frame: the walls
+stay still (``fix wall/gran`` primitives: floor z = 0, side walls y = +-width/2, x periodic) and
+every grain feels the effective gravity
+
+    g_x(t) = -g sin(alpha) + A omega^2 sin(omega tau) cos(phi)
+    g_y(t) = 0
+    g_z(t) = -g cos(alpha) + A omega^2 sin(omega tau) sin(phi)
+
+in m/s^2, with tau the time since the drive started. ``fix gravity`` takes a magnitude and a
+direction; both are equal-style variables, |g(t)| and (g_x, 0, g_z).
+
+Contact laws map one-to-one:
+
+- ``hertz_mindlin`` -> ``model hertz tangential history`` with the same Young's modulus Y and
+  Poisson ratio nu (one material for grains and walls), friction mu and normal restitution e.
+  LIGGGHTS computes k_n = (4/3) Y* sqrt(R* d_n) and damping from
+  beta = ln(e) / sqrt(ln(e)^2 + pi^2); it refuses e <= 0.05, so e is clamped to
+  :data:`MIN_HERTZ_RESTITUTION` and the deck says so.
+- ``linear`` -> ``model hooke/stiffness`` with ``absolute_damping on``: k_n (N/m),
+  k_t = ratio * k_n, and the damping coefficients (N s/m)
+
+      gamma_n = 2 zeta sqrt(k_n m*),   gamma_t = 2 zeta sqrt(k_t m*),
+      zeta = -ln(e) / sqrt(ln(e)^2 + pi^2)   (zeta = 1, critical, for e = 0),
+
+  with m* = m/2 for grain-grain (atom types 1-1) and m* = m for grain-wall contacts (1-2), so the
+  restitution is exact for both and e = 0 needs no clamp.
+
+``limitForce`` is written out (on or off as ``[contact] limit_force``), and so is
+``tangential_damping on`` (the LIGGGHTS default). Grains are atom type 1, walls type 2.
+
+The deck runs three stages: fill (insert N spheres at random in a loose column and let them fall
+under static gravity until at rest), settle (drive on, ``settle_steps`` steps not measured) and
+measure (``steps`` driven steps). Each stage is its own ``run`` command, so LIGGGHTS prints one
+"Loop time of T on P procs for S steps" line per stage; the last one times the driven steps
+alone. The mean x-velocity of all grains (``compute reduce ave vx``; equal masses, so the same as
+the mass-weighted mean), averaged over windows of ``sample_steps`` steps, goes to ``vx_mean.txt``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from dem import __version__
+from dem.case import Case
+from dem.config import GRAVITY
+from dem.errors import InputError
+
+#: LIGGGHTS version the decks are written for.
+LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"
+#: LIGGGHTS refuses coefficientRestitution <= 0.05; Hertz decks use at least this value.
+MIN_HERTZ_RESTITUTION = 0.06
+#: File name of the deck inside the output directory.
+DECK_NAME = "in.dem"
+#: File the deck writes the windowed mean x-velocity to (columns: step, mean vx in m/s).
+VX_FILE = "vx_mean.txt"
+#: Neighbour skin as a fraction of the sphere radius.
+SKIN_FRACTION = 0.5
+#: Solid volume fraction of the loose column the spheres are inserted into.
+FILL_VOLUME_FRACTION = 0.2
+
+
+def damping_ratio(restitution: float) -> float:
+    """Return the damping ratio zeta of a linear spring-dashpot with restitution e.
+
+    zeta = -ln(e) / sqrt(ln(e)^2 + pi^2), from e = exp(-zeta pi / sqrt(1 - zeta^2)); e = 0
+    gives critical damping, zeta = 1.
+    """
+    if restitution <= 0.0:
+        return 1.0
+    log_e = math.log(restitution)
+    return -log_e / math.sqrt(log_e**2 + math.pi**2)
+
+
+def _prime_at_least(n: int) -> int:
+    """Smallest prime >= n (LIGGGHTS wants prime seeds above 10000)."""
+    candidate = max(n, 10007)
+    while any(candidate % d == 0 for d in range(2, math.isqrt(candidate) + 1)):
+        candidate += 1
+    return candidate
+
+
+def _fmt(x: float) -> str:
+    """Format a float exactly (shortest repr) for the deck."""
+    return repr(float(x) + 0.0)  # + 0.0 turns -0.0 into 0.0
+
+
+def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]:
+    """Return the property/global lines, the model string and the model settings."""
+    contact, material = case.contact, case.material
+    limit = "on" if contact.limit_force else "off"
+    mu = _fmt(material.friction)
+    lines = [
+        "# grains are atom type 1, walls type 2; one material for both",
+        f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu} {mu} {mu} {mu}",
+    ]
+    if contact.model == "hertz_mindlin":
+        e_case = material.restitution_normal
+        e = max(e_case, MIN_HERTZ_RESTITUTION)
+        if e != e_case:
+            lines.append(
+                f"# NOTE: restitution_normal = {e_case} in the case; LIGGGHTS refuses e <= 0.05, "
+                f"so e = {e} is used here (use the same value on both sides of a comparison)"
+            )
+        y, nu, es = _fmt(contact.youngs_modulus), _fmt(contact.poisson_ratio), _fmt(e)
+        lines += [
+            f"fix m_Y all property/global youngsModulus peratomtype {y} {y}",
+            f"fix m_nu all property/global poissonsRatio peratomtype {nu} {nu}",
+            f"fix m_e all property/global coefficientRestitution peratomtypepair 2 "
+            f"{es} {es} {es} {es}",
+        ]
+        model = "model hertz tangential history"
+        settings = f"limitForce {limit} tangential_damping on"
+    else:
+        kn = contact.stiffness
+        kt = contact.tangential_stiffness_ratio * kn
+        zeta = damping_ratio(material.restitution_normal)
+        # m* = m/2 grain-grain (1-1), m for grain-wall (1-2 and 2-1); type 2-2 never meets
+        meff = (0.5 * sphere_mass, sphere_mass, sphere_mass, sphere_mass)
+        gn = [2.0 * zeta * math.sqrt(kn * m) for m in meff]
+        gt = [2.0 * zeta * math.sqrt(kt * m) for m in meff]
+        lines += [
+            f"# linear spring-dashpot: zeta = {zeta:.6g} from e = {material.restitution_normal}, "
+            "gamma = 2 zeta sqrt(k m*), m* = m/2 (1-1) or m (1-2)",
+            f"fix m_kn all property/global kn peratomtypepair 2 {' '.join([_fmt(kn)] * 4)}",
+            f"fix m_kt all property/global kt peratomtypepair 2 {' '.join([_fmt(kt)] * 4)}",
+            "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(_fmt, gn)),
+            "fix m_gt all property/global gammat_abs peratomtypepair 2 " + " ".join(map(_fmt, gt)),
+        ]
+        model = "model hooke/stiffness tangential history"
+        settings = f"absolute_damping on limitForce {limit} tangential_damping on"
+    if material.rolling_friction > 0.0:
+        mr = _fmt(material.rolling_friction)
+        lines.append(
+            f"fix m_mur all property/global coefficientRollingFriction peratomtypepair 2 "
+            f"{mr} {mr} {mr} {mr}"
+        )
+        model += " rolling_friction cdt"
+    return lines, model, settings
+
+
+def write_deck(
+    case: Case,
+    out_dir: str | Path,
+    *,
+    timestep: float,
+    steps: int,
+    settle_steps: int | None = None,
+    fill_time: float | None = None,
+    sample_steps: int | None = None,
+    thermo_every: int | None = None,
+) -> Path:
+    """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a sphere case.
+
+    Args:
+        case: A validated case with ``particles.shape == "sphere"``.
+        out_dir: Directory for the deck (created); LIGGGHTS is run inside it.
+        timestep: dt, s.
+        steps: Driven steps that are measured (the last ``run``).
+        settle_steps: Driven steps before measuring; default ``run.settle_cycles`` drive cycles.
+        fill_time: Time, s, for the inserted spheres to fall and come to rest under static
+            gravity; default sqrt(2 H / g) + 0.1 s for an insertion column of height H.
+        sample_steps: Window of the mean x-velocity written to ``vx_mean.txt``; default one
+            output frame, 1 / (frequency * frames_per_cycle) s.
+        thermo_every: Steps between thermo lines; default one drive cycle.
+
+    Returns:
+        Path of the deck.
+
+    Raises:
+        InputError: The case has grains other than spheres, or a mesh trough (primitive walls
+            only), or timestep/steps are not positive.
+
+    """
+    source = str(case.source)
+    p, t, d = case.particles, case.trough, case.drive
+    if p.shape != "sphere":
+        raise InputError("particles.shape", p.shape, "'sphere' for a LIGGGHTS export", source)
+    if t.mesh is not None:
+        raise InputError(
+            "trough.mesh", str(t.mesh), "none (flat floor) for a LIGGGHTS export", source
+        )
+    if not timestep > 0.0:
+        raise InputError("timestep", timestep, "> 0 (s)")
+    if steps < 1:
+        raise InputError("steps", steps, ">= 1")
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    r, n = p.radius, p.count
+    sphere_volume = 4.0 / 3.0 * math.pi * r**3
+    sphere_mass = case.material.density * sphere_volume
+    steps_per_cycle = 1.0 / (d.frequency * timestep)
+    if settle_steps is None:
+        settle_steps = round(case.run.settle_cycles * steps_per_cycle)
+    if sample_steps is None:
+        sample_steps = max(1, round(steps_per_cycle / case.output.frames_per_cycle))
+    if thermo_every is None:
+        thermo_every = max(1, round(steps_per_cycle))
+
+    # loose insertion column and a box tall enough that thrown grains never leave it
+    fill_height = max(n * sphere_volume / (FILL_VOLUME_FRACTION * t.length * t.width), 4.0 * r)
+    top = 3.0 * fill_height + 20.0 * r
+    if fill_time is None:
+        fill_time = math.sqrt(2.0 * fill_height / GRAVITY) + 0.1
+    fill_steps = max(1, round(fill_time / timestep))
+    half_w = 0.5 * t.width
+
+    alpha, phi = math.radians(t.inclination), math.radians(d.angle)
+    peak = d.amplitude * d.omega**2  # m/s^2
+    gx0, gz0 = -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
+    g0 = math.hypot(gx0, gz0)
+    seed = case.run.seed
+    s_template = _prime_at_least(15485863 + 1000 * seed)
+    s_dist = _prime_at_least(32452843 + 1000 * seed)
+    s_insert = _prime_at_least(49979687 + 1000 * seed)
+    material_lines, model, settings = _contact_block(case, sphere_mass)
+    integrator = "nve/sphere" if p.rotation else "nve"
+    drive_start = fill_steps
+
+    lines = [
+        f"# LIGGGHTS deck exported by dem {__version__} from {case.source}",
+        f"# case {case.name}: {n} spheres r = {r} m, {case.contact.model}, "
+        f"f = {d.frequency} Hz, phi = {d.angle} deg, A = {d.amplitude:.6g} m, "
+        f"Gamma = {d.throw_number:.6g}, alpha = {t.inclination} deg",
+        f"# made for {LIGGGHTS_VERSION} (Debian package 'liggghts')",
+        f"# run:  cd {out.name} && liggghts -in {DECK_NAME}",
+        f"#   or: cd {out.name} && mpirun -np 2 liggghts -in {DECK_NAME}",
+        f"# stages: fill {fill_steps} steps (static gravity), settle {settle_steps} driven steps, "
+        f"measure {steps} driven steps; dt = {timestep} s",
+        f"# output: {VX_FILE} (step, mean vx in m/s averaged over {sample_steps} steps), "
+        "log.liggghts",
+        "# frame: the trough's accelerating frame; walls still, effective gravity",
+        "#   g(t) = (-g sin(alpha) + A w^2 sin(w tau) cos(phi), 0, "
+        "-g cos(alpha) + A w^2 sin(w tau) sin(phi))",
+        "",
+        "atom_style granular",
+        "atom_modify map array",
+        "boundary p f f",
+        "newton off",
+        "communicate single vel yes",
+        "processors * 1 1  # split the periodic x only: the bed is uniform along x",
+        "units si",
+        "",
+        f"region domain block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
+        f"{_fmt(top)} units box",
+        "create_box 2 domain",
+        f"neighbor {_fmt(SKIN_FRACTION * r)} bin",
+        "neigh_modify delay 0",
+        "",
+        *material_lines,
+        "",
+        f"pair_style gran {model} {settings}",
+        "pair_coeff * *",
+        f"timestep {_fmt(timestep)}",
+        "",
+        f"fix floor all wall/gran {model} primitive type 2 zplane 0.0 {settings}",
+        f"fix side_lo all wall/gran {model} primitive type 2 yplane {_fmt(-half_w)} {settings}",
+        f"fix side_hi all wall/gran {model} primitive type 2 yplane {_fmt(half_w)} {settings}",
+        "",
+        f"fix grav all gravity {_fmt(g0)} vector {_fmt(gx0 / g0)} 0.0 {_fmt(gz0 / g0)}",
+        "",
+        f"fix pts all particletemplate/sphere {s_template} atom_type 1 "
+        f"density constant {_fmt(case.material.density)} radius constant {_fmt(r)}",
+        f"fix pdd all particledistribution/discrete {s_dist} 1 pts 1.0",
+        f"region fill block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
+        f"{_fmt(fill_height)} units box",
+        f"fix ins all insert/pack seed {s_insert} distributiontemplate pdd "
+        "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once overlapcheck yes all_in yes "
+        f"particles_in_region {n} region fill",
+        f"fix integr all {integrator}",
+        "",
+        "compute vxm all reduce ave vx",
+        "thermo_style custom step atoms ke c_vxm",
+        f"thermo {thermo_every}",
+        "thermo_modify norm no",
+        "",
+        "# --- fill: insert and let the grains come to rest under static gravity",
+        f"run {fill_steps}",
+        "unfix ins",
+        "variable natoms equal atoms",
+        f'if "${{natoms}} < {n}" then "print \'ERROR: only ${{natoms}} of {n} spheres inserted\'" '
+        '"quit"',
+        "variable natoms delete",
+        "",
+        "# --- drive: effective gravity in the accelerating frame",
+        f"variable tau equal (step-{drive_start})*{_fmt(timestep)}",
+        f"variable drive equal {_fmt(peak)}*sin({_fmt(d.omega)}*v_tau)",
+        f"variable gx equal {_fmt(gx0)}+v_drive*{_fmt(math.cos(phi))}",
+        f"variable gz equal {_fmt(gz0)}+v_drive*{_fmt(math.sin(phi))}",
+        "variable gmag equal sqrt(v_gx*v_gx+v_gz*v_gz)",
+        "unfix grav",
+        "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
+        f"fix vxout all ave/time 1 {sample_steps} {sample_steps} c_vxm file {VX_FILE}",
+        "",
+        "# --- settle: driven, not measured",
+        f"run {settle_steps}" if settle_steps > 0 else "# (no settle steps)",
+        "",
+        "# --- measure: driven; the last 'Loop time' line times these steps alone",
+        f"run {steps}",
+        "",
+    ]
+    deck = out / DECK_NAME
+    deck.write_text("\n".join(lines))
+    return deck

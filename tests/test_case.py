@@ -1,0 +1,342 @@
+"""Case files: every shipped case loads; every bad input is refused naming key, value and file."""
+
+import copy
+import math
+from pathlib import Path
+
+import pytest
+
+import dem.case
+from dem.case import Case, load_case
+from dem.config import GRAVITY
+from dem.errors import InputError
+
+CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
+
+BASE = {
+    "trough": {"length": 0.1, "width": 0.04},
+    "drive": {"frequency": 60.0, "angle": 25.0, "amplitude": 0.0005},
+    "material": {"density": 7800.0, "friction": 0.35},
+    "contact": {"youngs_modulus": 5.0e7},
+    "particles": {"count": 10, "radius": 0.002},
+}
+
+
+def _toml_value(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, float) and math.isnan(value):
+        return "nan"
+    return repr(value)
+
+
+def write_case(tmp_path: Path, tables: dict) -> Path:
+    """Write a case.toml from {table: {key: value}} (a value of None drops the key)."""
+    lines = []
+    for table, keys in tables.items():
+        lines.append(f"[{table}]")
+        lines += [f"{k} = {_toml_value(v)}" for k, v in keys.items() if v is not None]
+        lines.append("")
+    path = tmp_path / "case.toml"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def with_changes(changes: dict) -> dict:
+    """BASE with {"table.key": value} applied (None removes the key)."""
+    tables = copy.deepcopy(BASE)
+    for dotted, value in changes.items():
+        table, key = dotted.split(".")
+        tables.setdefault(table, {})
+        if value is None:
+            tables[table].pop(key, None)
+        else:
+            tables[table][key] = value
+    return tables
+
+
+# --- good input ----------------------------------------------------------------------------------
+
+
+def test_there_are_shipped_cases():
+    names = {p.name for p in SHIPPED}
+    assert {"single-sphere", "sphere-bed"} <= names
+
+
+@pytest.mark.parametrize("directory", SHIPPED, ids=lambda p: p.name)
+def test_every_shipped_case_loads(directory):
+    case = load_case(directory)
+    assert isinstance(case, Case)
+    assert case.name == directory.name
+    assert case.source == directory / "case.toml"
+    d, t = case.drive, case.trough
+    # independent check of the resolved drive: Gamma = A w^2 sin(phi) / (g cos(alpha))
+    gamma = (
+        d.amplitude
+        * (2 * math.pi * d.frequency) ** 2
+        * math.sin(math.radians(d.angle))
+        / (GRAVITY * math.cos(math.radians(t.inclination)))
+    )
+    assert d.throw_number == pytest.approx(gamma, rel=1e-12)
+    assert case.particles.count >= 1
+    assert t.width >= 2 * case.particles.radius
+
+
+def test_sphere_bed_is_the_issue_spec():
+    case = load_case(CASES_DIR / "sphere-bed" / "case.toml")
+    assert case.particles.count == 1500
+    assert case.particles.radius == 0.002
+    assert case.material.density == 7800.0
+    assert case.contact.model == "hertz_mindlin"
+    assert case.contact.youngs_modulus == 5.0e7
+    assert case.contact.poisson_ratio == 0.3
+    assert case.material.friction == 0.35
+    assert (case.trough.length, case.trough.width) == (0.10, 0.04)
+    assert (case.drive.frequency, case.drive.angle, case.drive.amplitude) == (60.0, 25.0, 0.0005)
+    assert case.drive.given == "amplitude"
+    assert (case.material.restitution_normal, case.material.restitution_tangential) == (0.0, 0.8)
+
+
+def test_single_sphere_slides_without_flight():
+    case = load_case(CASES_DIR / "single-sphere")
+    assert case.particles.count == 1 and not case.particles.rotation
+    assert case.contact.model == "linear"
+    mass = case.material.density * 4 / 3 * math.pi * case.particles.radius**3
+    contact_frequency = math.sqrt(case.contact.stiffness / mass) / (2 * math.pi)
+    assert contact_frequency > 20 * case.drive.frequency
+    mu, phi = case.material.friction, math.radians(case.drive.angle)
+    forward = mu / (1 / math.tan(phi) + mu)  # DESIGN.md Eq. 1 at alpha = 0
+    assert forward < case.drive.throw_number < 1.0
+
+
+def test_defaults(tmp_path):
+    case = load_case(write_case(tmp_path, BASE))
+    assert case.trough.inclination == 0.0 and case.trough.mesh is None
+    assert case.material.restitution_normal == 0.0
+    assert case.material.restitution_tangential == 0.8
+    assert case.material.rolling_friction == 0.0
+    assert case.contact.model == "hertz_mindlin"
+    assert case.contact.poisson_ratio == 0.3
+    assert case.contact.stiffness is None
+    assert case.contact.limit_force is False
+    assert case.particles.shape == "sphere" and case.particles.rotation is True
+    assert (case.run.settle_cycles, case.run.cycles, case.run.timestep, case.run.seed) == (
+        10,
+        30,
+        None,
+        1,
+    )
+    assert case.output.frames_per_cycle == 4
+    assert case.directory == tmp_path.resolve()
+
+
+def test_throw_number_gives_amplitude(tmp_path):
+    tables = with_changes(
+        {"drive.amplitude": None, "drive.throw_number": 2.0, "trough.inclination": 5.0}
+    )
+    drive = load_case(write_case(tmp_path, tables)).drive
+    omega = 2 * math.pi * 60.0
+    expected = 2.0 * GRAVITY * math.cos(math.radians(5.0)) / (omega**2 * math.sin(math.radians(25)))
+    assert drive.given == "throw_number"
+    assert drive.amplitude == pytest.approx(expected, rel=1e-12)
+    assert drive.omega == pytest.approx(omega)
+
+
+def test_ints_are_accepted_for_floats(tmp_path):
+    case = load_case(write_case(tmp_path, with_changes({"material.density": 7800})))
+    assert isinstance(case.material.density, float) and case.material.density == 7800.0
+
+
+def test_linear_contact(tmp_path):
+    tables = with_changes(
+        {"contact.model": "linear", "contact.youngs_modulus": None, "contact.stiffness": 2000}
+    )
+    contact = load_case(write_case(tmp_path, tables)).contact
+    assert contact.stiffness == 2000.0 and contact.youngs_modulus is None
+    assert contact.tangential_stiffness_ratio == pytest.approx(2 / 7)
+
+
+def test_explicit_timestep_and_mesh(tmp_path):
+    (tmp_path / "geometry").mkdir()
+    (tmp_path / "geometry" / "trough.stl").write_text("solid t\nendsolid t\n")
+    tables = with_changes({"run.timestep": 1e-6, "trough.mesh": "geometry/trough.stl"})
+    case = load_case(write_case(tmp_path, tables))
+    assert case.run.timestep == 1e-6
+    assert case.trough.mesh == (tmp_path / "geometry" / "trough.stl").resolve()
+
+
+def test_unsupported_shape_is_easy_to_lift(tmp_path, monkeypatch):
+    tables = with_changes(
+        {
+            "particles.radius": None,
+            "particles.shape": "screw",
+            "particles.length": 0.02,
+            "particles.shank_radius": 0.0015,
+            "particles.head_radius": 0.003,
+        }
+    )
+    path = write_case(tmp_path, tables)
+    with pytest.raises(InputError, match="not supported yet"):
+        load_case(path)
+    monkeypatch.setattr(dem.case, "SUPPORTED_SHAPES", ("sphere", "screw"))
+    assert load_case(path).particles.head_radius == 0.003
+
+
+# --- bad input -----------------------------------------------------------------------------------
+
+BAD = [
+    # (id, changes, key in the error, snippet of the allowed range)
+    ("missing-length", {"trough.length": None}, "trough.length", "required"),
+    ("missing-width", {"trough.width": None}, "trough.width", "required"),
+    ("missing-frequency", {"drive.frequency": None}, "drive.frequency", "required"),
+    ("missing-angle", {"drive.angle": None}, "drive.angle", "required"),
+    ("missing-density", {"material.density": None}, "material.density", "required"),
+    ("missing-friction", {"material.friction": None}, "material.friction", "required"),
+    ("missing-count", {"particles.count": None}, "particles.count", "required"),
+    ("missing-radius", {"particles.radius": None}, "particles.radius", "required"),
+    ("missing-E", {"contact.youngs_modulus": None}, "contact.youngs_modulus", "required"),
+    (
+        "missing-stiffness",
+        {"contact.model": "linear", "contact.youngs_modulus": None},
+        "contact.stiffness",
+        "required",
+    ),
+    ("unknown-key", {"particles.radus": 0.002}, "particles.radus", "did you mean 'radius'"),
+    ("unknown-model", {"contact.model": "hertz"}, "contact.model", "did you mean 'hertz_mindlin'"),
+    ("unknown-shape", {"particles.shape": "cube"}, "particles.shape", "one of"),
+    ("bool-not-number", {"particles.radius": True}, "particles.radius", "a number"),
+    ("string-not-number", {"trough.length": "0.1 m"}, "trough.length", "a number"),
+    ("float-not-int", {"particles.count": 3.5}, "particles.count", "an integer"),
+    ("bool-not-int", {"run.seed": True}, "run.seed", "an integer"),
+    ("int-not-bool", {"particles.rotation": 1}, "particles.rotation", "true or false"),
+    ("nan", {"material.density": float("nan")}, "material.density", "> 0"),
+    ("radius-zero", {"particles.radius": 0.0}, "particles.radius", "> 0"),
+    ("radius-negative", {"particles.radius": -0.002}, "particles.radius", "> 0"),
+    ("length-zero", {"trough.length": 0.0}, "trough.length", "> 0"),
+    ("width-negative", {"trough.width": -0.04}, "trough.width", "> 0"),
+    ("density-zero", {"material.density": 0.0}, "material.density", "> 0"),
+    ("frequency-negative", {"drive.frequency": -60.0}, "drive.frequency", "> 0"),
+    ("E-zero", {"contact.youngs_modulus": 0.0}, "contact.youngs_modulus", "> 0"),
+    (
+        "stiffness-negative",
+        {"contact.model": "linear", "contact.youngs_modulus": None, "contact.stiffness": -1.0},
+        "contact.stiffness",
+        "> 0",
+    ),
+    ("count-zero", {"particles.count": 0}, "particles.count", ">= 1"),
+    ("angle-zero", {"drive.angle": 0.0}, "drive.angle", "0 < angle < 90"),
+    ("angle-90", {"drive.angle": 90.0}, "drive.angle", "0 < angle < 90"),
+    ("angle-negative", {"drive.angle": -10.0}, "drive.angle", "0 < angle < 90"),
+    ("inclination-90", {"trough.inclination": 90.0}, "trough.inclination", "< 90"),
+    ("inclination-minus-95", {"trough.inclination": -95.0}, "trough.inclination", "< 90"),
+    ("friction-negative", {"material.friction": -0.1}, "material.friction", ">= 0"),
+    ("en-negative", {"material.restitution_normal": -0.1}, "material.restitution_normal", "<= 1"),
+    ("en-above-1", {"material.restitution_normal": 1.5}, "material.restitution_normal", "<= 1"),
+    (
+        "et-above-1",
+        {"material.restitution_tangential": 1.01},
+        "material.restitution_tangential",
+        "<= 1",
+    ),
+    (
+        "et-negative",
+        {"material.restitution_tangential": -0.5},
+        "material.restitution_tangential",
+        "<= 1",
+    ),
+    ("poisson-minus-1", {"contact.poisson_ratio": -1.0}, "contact.poisson_ratio", "-1 < nu < 0.5"),
+    ("poisson-half", {"contact.poisson_ratio": 0.5}, "contact.poisson_ratio", "-1 < nu < 0.5"),
+    ("width-below-diameter", {"trough.width": 0.003}, "trough.width", "grain diameter"),
+    ("both-drives", {"drive.throw_number": 2.0}, "drive.amplitude", "both are given"),
+    ("no-drive", {"drive.amplitude": None}, "drive.amplitude|throw_number", "neither is given"),
+    ("amplitude-zero", {"drive.amplitude": 0.0}, "drive.amplitude", "> 0"),
+    ("missing-mesh", {"trough.mesh": "geometry/nope.stl"}, "trough.mesh", "nope.stl"),
+    (
+        "missing-template",
+        {"particles.radius": None, "particles.shape": "clump", "particles.template": "x.spheres"},
+        "particles.template",
+        "x.spheres",
+    ),
+    (
+        "screw-not-yet",
+        {
+            "particles.radius": None,
+            "particles.shape": "screw",
+            "particles.length": 0.02,
+            "particles.shank_radius": 0.0015,
+            "particles.head_radius": 0.003,
+        },
+        "particles.shape",
+        "not supported yet",
+    ),
+    (
+        "clump-not-yet",
+        {"particles.radius": None, "particles.shape": "clump", "particles.template": "case.toml"},
+        "particles.shape",
+        "not supported yet",
+    ),
+    ("stiffness-with-hertz", {"contact.stiffness": 2000.0}, "contact.stiffness", "remove it"),
+    ("radius-with-screw", {"particles.shape": "screw"}, "particles.radius", "shape = 'sphere'"),
+    ("timestep-word", {"run.timestep": "fast"}, "run.timestep", '"auto"'),
+    ("timestep-negative", {"run.timestep": -1e-6}, "run.timestep", '"auto"'),
+    ("cycles-zero", {"run.cycles": 0}, "run.cycles", ">= 1"),
+    ("frames-zero", {"output.frames_per_cycle": 0}, "output.frames_per_cycle", ">= 1"),
+]
+
+
+@pytest.mark.parametrize(
+    ("changes", "key", "allowed"), [b[1:] for b in BAD], ids=[b[0] for b in BAD]
+)
+def test_bad_input_names_key_value_and_file(tmp_path, changes, key, allowed):
+    path = write_case(tmp_path, with_changes(changes))
+    with pytest.raises(InputError) as info:
+        load_case(path)
+    error = info.value
+    message = str(error)
+    assert error.key == key
+    assert key in message
+    assert repr(error.value) in message
+    if key in changes and changes[key] is not None:
+        # the error carries the value as written in the file
+        written = changes[key]
+        assert error.value == written or math.isnan(written)
+        assert type(error.value) is type(written) or not isinstance(written, bool)
+    assert allowed in message
+    assert str(path.resolve()) in message
+
+
+def test_unknown_table_suggests(tmp_path):
+    tables = copy.deepcopy(BASE)
+    tables["partciles"] = tables.pop("particles")
+    path = write_case(tmp_path, tables)
+    with pytest.raises(InputError, match="did you mean 'particles'") as info:
+        load_case(path)
+    assert info.value.key == "partciles"
+    assert str(path.resolve()) in str(info.value)
+
+
+def test_table_that_is_not_a_table(tmp_path):
+    path = tmp_path / "case.toml"
+    path.write_text("trough = 3\n")
+    with pytest.raises(InputError, match=r"trough = 3 .*a table \[trough\]"):
+        load_case(path)
+
+
+def test_syntax_error_gives_the_line(tmp_path):
+    path = tmp_path / "case.toml"
+    text = write_case(tmp_path, BASE).read_text().splitlines()
+    text.insert(3, "angle = 25 deg")  # line 4
+    path.write_text("\n".join(text))
+    with pytest.raises(InputError) as info:
+        load_case(path)
+    assert info.value.key == "line 4"
+    assert "line 4" in str(info.value) and str(path.resolve()) in str(info.value)
+
+
+def test_missing_case(tmp_path):
+    with pytest.raises(InputError, match="case.toml") as info:
+        load_case(tmp_path / "nowhere")
+    assert info.value.key == "case"

@@ -1,0 +1,192 @@
+"""LIGGGHTS deck export: the deck carries the case's numbers (parsing only; no liggghts needed)."""
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dem
+from dem.case import load_case
+from dem.config import GRAVITY
+from dem.errors import InputError
+from dem.io.liggghts import damping_ratio, write_deck
+
+CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+
+
+def parse(deck: Path) -> dict[str, list[list[str]]]:
+    """Map the first word of every command line to the list of its argument lists."""
+    commands: dict[str, list[list[str]]] = {}
+    for line in deck.read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words:
+            commands.setdefault(words[0], []).append(words[1:])
+    return commands
+
+
+def fix(commands, fix_id):
+    [args] = [a for a in commands["fix"] if a[0] == fix_id]
+    return args
+
+
+def variable(commands, name):
+    [args] = [a for a in commands["variable"] if a[0] == name and a[1] == "equal"]
+    return args[2]
+
+
+def evaluate(expression: str, **values: float) -> float:
+    """Evaluate a LIGGGHTS equal-style expression with v_NAME substituted."""
+    for name, value in values.items():
+        expression = expression.replace(f"v_{name}", repr(value))
+    assert "v_" not in expression
+    return float(eval(expression, {"sin": math.sin, "sqrt": math.sqrt}))
+
+
+@pytest.fixture
+def bed_deck(tmp_path):
+    case = load_case(CASES_DIR / "sphere-bed")
+    deck = write_deck(case, tmp_path / "deck", timestep=5e-6, steps=1234, settle_steps=567)
+    return case, deck, parse(deck)
+
+
+def test_sphere_bed_material_numbers(bed_deck):
+    case, deck, c = bed_deck
+    assert fix(c, "m_Y")[3:5] == ["youngsModulus", "peratomtype"]
+    assert [float(x) for x in fix(c, "m_Y")[5:]] == [case.contact.youngs_modulus] * 2
+    assert [float(x) for x in fix(c, "m_nu")[5:]] == [case.contact.poisson_ratio] * 2
+    assert [float(x) for x in fix(c, "m_mu")[6:]] == [case.material.friction] * 4
+    # e = 0 in the case; LIGGGHTS refuses e <= 0.05, so the deck clamps to 0.06 and says so
+    assert case.material.restitution_normal == 0.0
+    assert fix(c, "m_e")[3] == "coefficientRestitution"
+    assert [float(x) for x in fix(c, "m_e")[6:]] == [0.06] * 4
+    assert "NOTE: restitution_normal = 0.0" in deck.read_text()
+    pair = c["pair_style"][0]
+    assert pair[:4] == ["gran", "model", "hertz", "tangential"]
+    assert pair[pair.index("limitForce") + 1] == "off"
+
+
+def test_sphere_bed_geometry_and_grains(bed_deck):
+    case, _, c = bed_deck
+    assert c["boundary"] == [["p", "f", "f"]]
+    domain = [a for a in c["region"] if a[0] == "domain"][0]
+    x0, x1, y0, y1 = (float(v) for v in domain[2:6])
+    assert x1 - x0 == pytest.approx(case.trough.length)
+    assert (y0, y1) == (-case.trough.width / 2, case.trough.width / 2)
+    walls = {a[0]: a for a in c["fix"] if "wall/gran" in a}
+    assert walls["floor"][walls["floor"].index("zplane") + 1] == "0.0"
+    assert float(walls["side_lo"][walls["side_lo"].index("yplane") + 1]) == y0
+    assert float(walls["side_hi"][walls["side_hi"].index("yplane") + 1]) == y1
+    template = fix(c, "pts")
+    assert float(template[template.index("density") + 2]) == case.material.density
+    assert float(template[template.index("radius") + 2]) == case.particles.radius
+    insert = fix(c, "ins")
+    assert int(insert[insert.index("particles_in_region") + 1]) == case.particles.count
+    assert fix(c, "integr")[2] == "nve/sphere"
+
+
+def test_sphere_bed_timestep_and_stages(bed_deck):
+    _, _, c = bed_deck
+    assert c["timestep"] == [["5e-06"]]
+    runs = [int(a[0]) for a in c["run"]]
+    assert runs[-2:] == [567, 1234]
+
+
+def test_sphere_bed_drive_is_the_accelerating_frame(bed_deck):
+    case, _, c = bed_deck
+    d = case.drive
+    omega = 2 * math.pi * d.frequency
+    phi = math.radians(d.angle)
+    fill_steps = int(c["run"][0][0])
+    for step in (fill_steps, fill_steps + 100, fill_steps + 2345):
+        tau = evaluate(variable(c, "tau").replace("step", str(step)))
+        assert tau == pytest.approx((step - fill_steps) * 5e-6, abs=1e-15)
+        drive = evaluate(variable(c, "drive"), tau=tau)
+        expected = d.amplitude * omega**2 * math.sin(omega * tau)
+        assert drive == pytest.approx(expected, rel=1e-12, abs=1e-12)
+        gx = evaluate(variable(c, "gx"), drive=drive)
+        gz = evaluate(variable(c, "gz"), drive=drive)
+        assert gx == pytest.approx(expected * math.cos(phi), abs=1e-12)
+        assert gz == pytest.approx(-GRAVITY + expected * math.sin(phi), abs=1e-12)
+        assert evaluate(variable(c, "gmag"), gx=gx, gz=gz) == pytest.approx(math.hypot(gx, gz))
+    gravity = [a for a in c["fix"] if a[0] == "grav"]
+    assert gravity[-1][2:] == ["gravity", "v_gmag", "vector", "v_gx", "0.0", "v_gz"]
+    # the peak acceleration is Gamma g (alpha = 0)
+    peak = float(variable(c, "drive").split("*")[0])
+    assert peak * math.sin(phi) / GRAVITY == pytest.approx(d.throw_number, rel=1e-12)
+
+
+def test_inclination_tilts_static_gravity(tmp_path):
+    case = load_case(CASES_DIR / "sphere-bed")
+    tilted = dataclasses.replace(case, trough=dataclasses.replace(case.trough, inclination=4.0))
+    c = parse(write_deck(tilted, tmp_path, timestep=5e-6, steps=10))
+    alpha = math.radians(4.0)
+    assert evaluate(variable(c, "gx"), drive=0.0) == pytest.approx(-GRAVITY * math.sin(alpha))
+    assert evaluate(variable(c, "gz"), drive=0.0) == pytest.approx(-GRAVITY * math.cos(alpha))
+    static = [a for a in c["fix"] if a[0] == "grav"][0]
+    assert float(static[3]) == pytest.approx(GRAVITY)
+    assert float(static[5]) == pytest.approx(-math.sin(alpha))
+
+
+def _restitution_of_linear_dashpot(k: float, m: float, gamma: float) -> float:
+    """Rebound speed of a unit-speed normal impact, m x'' = -k x - gamma x', overlap x > 0.
+
+    Integrated with small symplectic Euler steps until the overlap returns to zero; no return
+    within ten natural periods (over-critical damping) means no rebound.
+    """
+    period = 2 * math.pi * math.sqrt(m / k)
+    dt = 1e-4 * period
+    x, v = 0.0, 1.0
+    for _ in range(100_000):
+        v += (-k * x - gamma * v) / m * dt
+        x += v * dt
+        if x <= 0.0:
+            return -v
+    return 0.0
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.8])
+def test_linear_deck_damping_gives_the_restitution(tmp_path, e):
+    case = load_case(CASES_DIR / "single-sphere")
+    case = dataclasses.replace(
+        case, material=dataclasses.replace(case.material, restitution_normal=e)
+    )
+    c = parse(write_deck(case, tmp_path, timestep=2e-6, steps=10))
+    assert c["pair_style"][0][2] == "hooke/stiffness"
+    assert fix(c, "integr")[2] == "nve"  # rotation = false
+    kn = float(fix(c, "m_kn")[6])
+    assert kn == case.contact.stiffness
+    assert float(fix(c, "m_kt")[6]) == pytest.approx(kn * case.contact.tangential_stiffness_ratio)
+    gn = [float(x) for x in fix(c, "m_gn")[6:]]
+    mass = case.material.density * 4 / 3 * math.pi * case.particles.radius**3
+    # grain-wall (types 1-2): m* = m; integrate the impact and compare the rebound speed
+    e_measured = _restitution_of_linear_dashpot(kn, mass, gn[1])
+    assert e_measured == pytest.approx(e, abs=2e-3)
+    # grain-grain (1-1): m* = m/2
+    assert _restitution_of_linear_dashpot(kn, mass / 2, gn[0]) == pytest.approx(e, abs=2e-3)
+
+
+def test_damping_ratio_inverts_restitution():
+    e = np.linspace(0.01, 0.99, 50)
+    zeta = np.array([damping_ratio(x) for x in e])
+    assert np.allclose(np.exp(-zeta * np.pi / np.sqrt(1 - zeta**2)), e, rtol=1e-12)
+    assert damping_ratio(0.0) == 1.0
+
+
+def test_refuses_what_liggghts_primitives_cannot_do(tmp_path):
+    case = load_case(CASES_DIR / "sphere-bed")
+    screw = dataclasses.replace(case, particles=dataclasses.replace(case.particles, shape="screw"))
+    with pytest.raises(InputError, match="particles.shape"):
+        write_deck(screw, tmp_path, timestep=5e-6, steps=10)
+    with pytest.raises(InputError, match="timestep"):
+        write_deck(case, tmp_path, timestep=0.0, steps=10)
+
+
+def test_header_names_version_and_command(bed_deck):
+    _, deck, _ = bed_deck
+    header = deck.read_text().split("\n\n", 1)[0]
+    assert f"dem {dem.__version__}" in header
+    assert "liggghts -in in.dem" in header and "mpirun -np 2" in header
+    assert "LIGGGHTS-PUBLIC 3.8.0" in header
+    assert header.isascii()
