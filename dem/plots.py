@@ -28,3 +28,171 @@ def optimum_figure(opt, path: str | Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def velocity_cycles_figure(
+    cycle,
+    velocity,
+    running_mean,
+    running_stderr,
+    path: str | Path,
+    *,
+    measured=None,
+    title: str = "",
+) -> Path:
+    """Per-cycle mean x-velocity (m/s) with its running mean and +-1 standard-error band.
+
+    Args:
+        cycle: Cycle numbers, (C,).
+        velocity: Mass-weighted mean x-velocity of each cycle, (C,), m/s.
+        running_mean: Running mean over the measured cycles so far, (C,), m/s (nan where none).
+        running_stderr: Its standard error, (C,), m/s (nan with fewer than two cycles).
+        path: PNG file.
+        measured: Boolean mask (C,) of measured cycles; settling cycles are drawn grey.
+        title: Figure title.
+
+    """
+    import numpy as np
+
+    cycle = np.asarray(cycle)
+    velocity = np.asarray(velocity)
+    measured = np.ones(cycle.shape, bool) if measured is None else np.asarray(measured, bool)
+    m, s = np.asarray(running_mean), np.asarray(running_stderr)
+    fig, ax = plt.subplots(figsize=(6.5, 4), dpi=120)
+    if np.any(~measured):
+        ax.plot(cycle[~measured], velocity[~measured], "o", ms=3, color="0.6", label="settling")
+    ax.plot(cycle[measured], velocity[measured], "o-", ms=3, lw=0.8, color="C0", label="cycle")
+    ax.plot(cycle, m, color="C3", label="running mean")
+    ax.fill_between(cycle, m - s, m + s, color="C3", alpha=0.2, label="+-1 standard error")
+    ax.set_xlabel("drive cycle")
+    ax.set_ylabel("mean x-velocity v (m/s)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def pointmass_comparison_figure(
+    labels, dem_norm, dem_stderr, pointmass_norm, path: str | Path, *, xlabel: str = ""
+) -> Path:
+    """DEM normalised velocity v / (A omega cos phi) with +-1 s.e. bars beside the point mass.
+
+    Args:
+        labels: One x tick label per run (strings) or numbers (a parameter, drawn as lines).
+        dem_norm: DEM normalised velocity per run, (R,).
+        dem_stderr: Its standard error, (R,) (nan: no bar).
+        pointmass_norm: Point-mass prediction per run, (R,) (nan: not available).
+        path: PNG file.
+        xlabel: Axis label (for numeric labels).
+
+    """
+    import numpy as np
+
+    y = np.asarray(dem_norm, float)
+    e = np.nan_to_num(np.asarray(dem_stderr, float))
+    pm = np.asarray(pointmass_norm, float)
+    fig, ax = plt.subplots(figsize=(min(4 + 1.2 * len(y), 10), 4), dpi=120)
+    numeric = all(isinstance(v, int | float) for v in labels) and len(labels) > 1
+    if numeric:
+        x = np.asarray(labels, float)
+        order = np.argsort(x)
+        ax.errorbar(x[order], y[order], yerr=e[order], fmt="o-", capsize=3, label="DEM")
+        if np.any(np.isfinite(pm)):
+            ax.plot(x[order], pm[order], "s--", color="C1", label="point mass")
+        ax.set_xlabel(xlabel)
+    else:
+        x = np.arange(len(y))
+        w = 0.38
+        ax.bar(x - w / 2, y, w, yerr=e, capsize=4, color="C0", label="DEM (+-1 s.e.)")
+        ax.bar(x + w / 2, np.nan_to_num(pm), w, color="C1", label="point mass")
+        for xi, p in zip(x, pm, strict=True):
+            if not np.isfinite(p):
+                ax.text(xi + w / 2, 0.0, "n/a", ha="center", va="bottom", fontsize=8)
+        for xi, yi, ei, p in zip(x, y, e, pm, strict=True):
+            ax.text(xi - w / 2, yi + ei, f"{yi:.3g}", ha="center", va="bottom", fontsize=8)
+            if np.isfinite(p):
+                ax.text(xi + w / 2, p, f"{p:.3g}", ha="center", va="bottom", fontsize=8)
+        ax.set_xticks(x, [str(v) for v in labels], fontsize=8)
+        ax.set_xlim(-0.7, len(y) - 0.3)
+        ax.axhline(0.0, color="k", lw=0.6)
+    ax.set_ylabel("v / (A omega cos phi)")
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def bed_snapshot_figure(
+    positions,
+    radius,
+    vx,
+    length: float,
+    width: float,
+    path: str | Path,
+    *,
+    title: str = "",
+) -> Path:
+    """Side view (x-z) and top view (x-y) of the bed, spheres drawn to scale, coloured by v_x.
+
+    Args:
+        positions: Sphere centres in the trough frame, (N, 3), m (x wrapped into [0, length)).
+        radius: (N,), m.
+        vx: x-velocity relative to the trough, (N,), m/s.
+        length, width: Trough section, m.
+        path: PNG file.
+        title: Figure title.
+
+    """
+    import numpy as np
+    from matplotlib.collections import EllipseCollection
+
+    x = np.asarray(positions, float).copy()
+    x[:, 0] = np.mod(x[:, 0], length)
+    r = np.asarray(radius, float)
+    vx = np.asarray(vx, float)
+    top = float(max(np.max(x[:, 2] + r), 0.25 * width)) if len(r) else 0.25 * width
+    lim = float(np.max(np.abs(vx))) if len(vx) else 1.0
+    lim = lim if lim > 0 else 1.0
+    fig, (a1, a2) = plt.subplots(
+        2,
+        1,
+        figsize=(7, min(max(1.8 + 5.0 * (top + width) / length, 3.0), 9.0)),
+        dpi=120,
+        height_ratios=[top, width],
+        sharex=True,
+        layout="constrained",
+    )
+    coll = None
+    for ax, (i, j), depth in ((a1, (0, 2), 1), (a2, (0, 1), 2)):
+        order = np.argsort(x[:, depth] if depth == 2 else -x[:, depth])  # nearest drawn last
+        coll = EllipseCollection(
+            2 * r[order], 2 * r[order], np.zeros(len(r)), units="xy",
+            offsets=x[order][:, [i, j]], offset_transform=ax.transData, cmap="coolwarm",
+            edgecolors="k", linewidths=0.2,
+        )  # fmt: skip
+        coll.set_array(vx[order])
+        coll.set_clim(-lim, lim)
+        ax.add_collection(coll)
+        ax.set_aspect("equal")
+        ax.set_xlim(0.0, length)
+    a1.set_ylim(0.0, 1.05 * top)
+    a1.axhline(0.0, color="k", lw=1.0)
+    a1.set_ylabel("z (m)")
+    a1.set_title(title, fontsize=9)
+    a2.set_ylim(-0.5 * width, 0.5 * width)
+    a2.axhline(-0.5 * width, color="k", lw=1.0)
+    a2.axhline(0.5 * width, color="k", lw=1.0)
+    a2.set_ylabel("y (m)")
+    a2.set_xlabel("x (m)")
+    fig.colorbar(coll, ax=[a1, a2], label="v_x relative to the trough (m/s)", shrink=0.8)
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path

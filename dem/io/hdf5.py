@@ -1,0 +1,333 @@
+"""``results.h5``: the self-describing record of a run, written incrementally.
+
+Layout (format version 1; SI units)::
+
+    /                       attributes:
+        format_version      int, 1
+        seed                int, the random seed of the fill
+        timestep            float, s
+        case_json           str, the resolved case as JSON (complete; the record of truth)
+        created_utc         str, ISO 8601
+        complete            bool, False until ResultsWriter.close() ran (False: killed run)
+    /case/                  the resolved case as nested groups of attributes: one group per
+                            table ([trough] -> /case/trough), one attribute per key; None values
+                            are left out (case_json has them), lists become arrays
+    /versions/              attributes dem, numpy, numba, h5py, python (version strings)
+    /cycles/<key>           (C,) one row per drive cycle, one resizable 1-D dataset per key given
+                            to ResultsWriter.append_cycle (e.g. cycle, time s, mean_velocity m/s,
+                            kinetic_energy J, contacts); int keys int64, the rest float64
+    /frames/time            (F,) float64, s
+    /frames/positions       (F, N, 3) float64, m, trough frame
+    /frames/velocity        (F, N, 3) float64, m/s, relative to the trough
+    /frames/contact_count   (F, N) int32
+    /frames/radius          (N,) float64, m (written once)
+    /frames/grain_id        (N,) int64 (written once)
+
+Frame datasets are chunked one frame per chunk and gzip-compressed (with the shuffle filter);
+cycle datasets are chunked by 256 rows. Both grow along their first axis.
+
+Crash safety: the writer keeps no HDF5 handle open between calls. Each append opens the file,
+resizes and writes, and closes it again (closing flushes the metadata), so a run killed between
+two appends leaves a complete, closed file holding every cycle and frame appended so far, and a
+reader may open the file at any time between appends (no SWMR needed). ``/frames/time`` is
+written last within an append, and :func:`read_results` counts a frame only when every frame
+dataset holds it. A kill during an append (a few milliseconds of each cycle) is not covered: HDF5
+without SWMR gives no guarantee for a file whose metadata was being written. Opening and closing
+costs a few milliseconds, negligible next to a cycle. The writer does not take HDF5's file lock,
+so a viewer that holds the file open (HDFView, h5py) cannot make an append fail and stop the run;
+such a viewer sees the file as it was when it opened it.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import platform
+from collections.abc import Mapping
+from importlib import metadata
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+FORMAT_VERSION = 1
+CYCLE_CHUNK = 256
+_FRAME_VECTORS = ("positions", "velocity")
+
+
+def package_versions() -> dict[str, str]:
+    """Versions of dem, numpy, numba, h5py and python, as strings ("unknown" if not found)."""
+    out = {}
+    for name in ("dem", "numpy", "numba", "h5py"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "unknown"
+    out["python"] = platform.python_version()
+    return out
+
+
+class ResultsWriter:
+    """Write ``results.h5`` incrementally (layout in the module docstring).
+
+    The file is created (overwritten) with the metadata when the writer is constructed.
+
+    Args:
+        path: File to write.
+        case: The resolved case as a nested dict (tables -> dicts); values JSON-serialisable or
+            paths (written as strings).
+        versions: Package versions, e.g. :func:`package_versions`.
+        seed: Random seed.
+        timestep: Time step, s.
+        format_version: Layout version written to the file.
+
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        case: dict,
+        versions: dict,
+        seed: int,
+        timestep: float,
+        format_version: int = FORMAT_VERSION,
+    ):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._cycle_keys: tuple[str, ...] | None = None
+        self._n_cycles = 0
+        self._n_frames = 0
+        self._n_spheres: int | None = None
+        self._closed = False
+        with h5py.File(self.path, "w", locking=False) as f:
+            f.attrs["format_version"] = int(format_version)
+            f.attrs["seed"] = int(seed)
+            f.attrs["timestep"] = float(timestep)
+            f.attrs["case_json"] = json.dumps(case, default=str, sort_keys=True)
+            f.attrs["created_utc"] = datetime.datetime.now(datetime.UTC).isoformat()
+            f.attrs["complete"] = False
+            _write_attr_tree(f.create_group("case"), case)
+            g = f.create_group("versions")
+            for key, value in versions.items():
+                g.attrs[str(key)] = str(value)
+            f.create_group("cycles")
+            f.create_group("frames")
+
+    def append_cycle(self, **stats: float) -> None:
+        """Append one row to ``/cycles``; the first call fixes the keys, later calls repeat them.
+
+        Args:
+            **stats: Scalar per key (int or float), e.g. ``cycle=3, time=0.05,
+                mean_velocity=0.012``.
+
+        """
+        self._check_open()
+        if not stats:
+            raise ValueError("append_cycle needs at least one statistic")
+        values = {k: np.asarray(v) for k, v in stats.items()}
+        for k, v in values.items():
+            if v.ndim != 0 or v.dtype.kind not in "biuf":
+                raise ValueError(f"cycle statistic {k!r} must be a real scalar, got {v!r}")
+        keys = tuple(stats)
+        if self._cycle_keys is not None and set(keys) != set(self._cycle_keys):
+            raise ValueError(
+                f"append_cycle keys {sorted(keys)} differ from the first row's "
+                f"{sorted(self._cycle_keys)}"
+            )
+        row = self._n_cycles
+        with h5py.File(self.path, "a", locking=False) as f:
+            g = f["cycles"]
+            if self._cycle_keys is None:
+                for k, v in values.items():
+                    dtype = np.int64 if v.dtype.kind in "biu" else np.float64
+                    g.create_dataset(
+                        k, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(CYCLE_CHUNK,)
+                    )
+                self._cycle_keys = keys
+            for k, v in values.items():
+                d = g[k]
+                d.resize((row + 1,))
+                d[row] = v
+        self._n_cycles += 1
+
+    def append_frame(
+        self,
+        time: float,
+        positions: np.ndarray,
+        velocity: np.ndarray,
+        radius: np.ndarray | None = None,
+        grain_id: np.ndarray | None = None,
+        contact_count: np.ndarray | None = None,
+    ) -> None:
+        """Append one frame to ``/frames``.
+
+        Args:
+            time: Simulated time, s.
+            positions: Sphere centres in the trough frame, (N, 3), m.
+            velocity: Velocities relative to the trough, (N, 3), m/s.
+            radius: (N,), m; stored with the first frame (required then), ignored afterwards.
+            grain_id: Grain index of each sphere, (N,); stored with the first frame
+                (default 0..N-1), ignored afterwards.
+            contact_count: Contacts per sphere, (N,) int (default zeros).
+
+        """
+        self._check_open()
+        pos = np.asarray(positions, dtype=np.float64)
+        if pos.ndim != 2 or pos.shape[1] != 3:
+            raise ValueError(f"positions must have shape (N, 3), got {pos.shape}")
+        n = pos.shape[0]
+        if self._n_spheres is not None and n != self._n_spheres:
+            raise ValueError(f"frame has {n} spheres, earlier frames {self._n_spheres}")
+        vel = np.asarray(velocity, dtype=np.float64)
+        if vel.shape != (n, 3):
+            raise ValueError(f"velocity must have shape ({n}, 3), got {vel.shape}")
+        cc = np.zeros(n, np.int32) if contact_count is None else np.asarray(contact_count)
+        if cc.shape != (n,):
+            raise ValueError(f"contact_count must have shape ({n},), got {cc.shape}")
+        k = self._n_frames
+        with h5py.File(self.path, "a", locking=False) as f:
+            g = f["frames"]
+            if self._n_spheres is None:
+                if radius is None:
+                    raise ValueError("the first frame needs radius (N,)")
+                r = np.asarray(radius, dtype=np.float64)
+                gid = np.arange(n) if grain_id is None else np.asarray(grain_id)
+                if r.shape != (n,) or gid.shape != (n,):
+                    raise ValueError(f"radius and grain_id must have shape ({n},)")
+                g.create_dataset("radius", data=r)
+                g.create_dataset("grain_id", data=gid.astype(np.int64))
+                opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+                for name in _FRAME_VECTORS:
+                    g.create_dataset(
+                        name, shape=(0, n, 3), maxshape=(None, n, 3), dtype=np.float64,
+                        chunks=(1, max(n, 1), 3), **opts,
+                    )  # fmt: skip
+                g.create_dataset(
+                    "contact_count", shape=(0, n), maxshape=(None, n), dtype=np.int32,
+                    chunks=(1, max(n, 1)), **opts,
+                )  # fmt: skip
+                g.create_dataset(
+                    "time", shape=(0,), maxshape=(None,), dtype=np.float64, chunks=(CYCLE_CHUNK,)
+                )
+                self._n_spheres = n
+            for name, data in (("positions", pos), ("velocity", vel), ("contact_count", cc)):
+                d = g[name]
+                d.resize(k + 1, axis=0)
+                d[k] = data
+            g["time"].resize((k + 1,))
+            g["time"][k] = float(time)
+        self._n_frames += 1
+
+    def flush(self) -> None:
+        """Nothing to do: every append closes (and so flushes) the file; kept for callers."""
+
+    def close(self) -> Path:
+        """Mark the file complete; further appends raise. Returns the path."""
+        if not self._closed:
+            with h5py.File(self.path, "a", locking=False) as f:
+                f.attrs["complete"] = True
+            self._closed = True
+        return self.path
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise ValueError(f"{self.path} is closed")
+
+
+class Frames:
+    """Lazy access to the frames of a ``results.h5``; each access opens the file read-only.
+
+    ``len(frames)`` is the number of complete frames; ``frames[i]`` (negative i allowed) returns
+    a dict with ``time`` (s), ``positions`` (N, 3) m, ``velocity`` (N, 3) m/s, ``contact_count``
+    (N,), ``radius`` (N,) m and ``grain_id`` (N,).
+    """
+
+    def __init__(self, path: Path, count: int, time: np.ndarray):
+        self.path = Path(path)
+        self.count = int(count)
+        self.time = time
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __getitem__(self, i: int) -> dict:
+        i = int(i)
+        if i < 0:
+            i += self.count
+        if not 0 <= i < self.count:
+            raise IndexError(f"frame {i} out of range ({self.count} frames)")
+        with h5py.File(self.path, "r", locking=False) as f:
+            g = f["frames"]
+            return {
+                "time": float(g["time"][i]),
+                "positions": g["positions"][i],
+                "velocity": g["velocity"][i],
+                "contact_count": g["contact_count"][i],
+                "radius": g["radius"][()],
+                "grain_id": g["grain_id"][()],
+            }
+
+
+def read_results(path: Path) -> dict:
+    """Read a ``results.h5`` (complete or from a killed run).
+
+    Returns:
+        dict with ``case`` (dict, from ``case_json``), ``versions`` (dict of str), ``seed``,
+        ``timestep`` (s), ``format_version``, ``complete`` (bool), ``cycles`` (dict key ->
+        (C,) array, truncated to the shortest column), ``frame_count`` and ``frames``
+        (:class:`Frames`).
+
+    """
+    path = Path(path)
+    with h5py.File(path, "r", locking=False) as f:
+        a = f.attrs
+        cycles = {k: d[()] for k, d in f["cycles"].items()}
+        if cycles:
+            rows = min(len(v) for v in cycles.values())
+            cycles = {k: v[:rows] for k, v in cycles.items()}
+        g = f["frames"]
+        if "time" in g:
+            names = ("time", "contact_count", *_FRAME_VECTORS)
+            count = min(g[k].shape[0] for k in names)
+            time = g["time"][:count]
+        else:
+            count, time = 0, np.zeros(0)
+        return {
+            "case": json.loads(a["case_json"]),
+            "versions": {k: str(v) for k, v in f["versions"].attrs.items()},
+            "seed": int(a["seed"]),
+            "timestep": float(a["timestep"]),
+            "format_version": int(a["format_version"]),
+            "complete": bool(a["complete"]),
+            "cycles": cycles,
+            "frame_count": count,
+            "frames": Frames(path, count, time),
+        }
+
+
+def _write_attr_tree(group: h5py.Group, tree: Mapping) -> None:
+    for key, value in tree.items():
+        key = str(key)
+        if isinstance(value, Mapping):
+            _write_attr_tree(group.create_group(key), value)
+        elif value is None:
+            continue
+        elif isinstance(value, bool | int | float | str | np.generic):
+            group.attrs[key] = value
+        elif isinstance(value, Path):
+            group.attrs[key] = str(value)
+        elif isinstance(value, list | tuple | np.ndarray):
+            arr = np.asarray(value)
+            if arr.dtype.kind in "biuf":
+                group.attrs[key] = arr
+            else:
+                group.attrs[key] = json.dumps(value, default=str)
+        else:
+            group.attrs[key] = str(value)

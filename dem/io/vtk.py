@@ -1,0 +1,256 @@
+"""VTK time series for ParaView: one ``.vtp`` per frame and a ``particles.pvd`` collection.
+
+Layout of an output directory::
+
+    particles.pvd                  ParaView Data collection (open this one)
+    frames/particles_NNNNNN.vtp    spheres of frame NNNNNN (binary, zlib-compressed XML PolyData)
+    frames/trough_NNNNNN.vtp       trough of frame NNNNNN: floor and the two side walls
+
+Every frame is one ``<DataSet timestep="t" part="0" .../>`` (the spheres) and one with
+``part="1"`` (the trough) in the collection, t in seconds of simulated time. The collection is
+rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
+collection that opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a
+last time.
+
+Frames (coordinates in m):
+
+- Trough frame (default, ``lab_frame=False``): x along the trough (conveying direction), y across,
+  z normal to the floor; the floor is z = 0 for 0 <= x <= length, the side walls are
+  y = -width/2 and y = +width/2 (DESIGN.md section 2). The trough is fixed in this frame, the axes
+  are tilted by the inclination alpha against the horizontal (gravity is
+  g (-sin alpha, 0, -cos alpha)); the inclination is stored as field data ``inclination_deg``.
+- Lab frame (``lab_frame=True``): the same axes, but spheres AND trough are shifted by the drive
+  displacement s(t) = A sin(omega t) e of the frame, so the trough is seen to move with the drive.
+  Velocities are shifted by the optional ``drive_velocity`` s'(t) when it is given (otherwise they
+  stay relative to the trough, as in the trough frame; field data ``velocity_frame`` says which).
+
+Sphere point data (one value per sphere): ``radius`` (m, float32, the active scalars),
+``velocity`` (m/s, float32, 3 components), ``grain_id``, ``clump_id``, ``contact_count`` (int32),
+and ``orientation`` (unit quaternion w, x, y, z of the sphere's clump, float32, 4 components) when
+orientations are given. Positions are float32 (2e-9 m resolution at 0.1 m: enough to look at) and
+x is wrapped into [0, length) of the periodic section. Every point is also a vertex cell, so
+ParaView shows the points as they are; for spheres use Filters > Glyph with Glyph Type Sphere,
+Scale Array ``radius`` and Scale Factor 2 (the unit glyph has radius 0.5), or
+``mesh.glyph(scale="radius", geom=pyvista.Sphere(radius=1.0), orient=False)`` in pyvista.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+import pyvista as pv
+
+PVD_NAME = "particles.pvd"
+FRAMES_DIR = "frames"
+PARTICLE_ARRAYS = ("radius", "velocity", "grain_id", "clump_id", "contact_count")
+
+
+def trough_polydata(
+    length: float, width: float, wall_height: float, shift: np.ndarray | None = None
+) -> pv.PolyData:
+    """Floor and side walls of the trough section as three quads, coordinates in m.
+
+    Floor: z = 0, 0 <= x <= length, |y| <= width/2; side walls: y = +-width/2,
+    0 <= z <= wall_height. Cell data ``part``: 0 floor, 1 wall y = -width/2, 2 wall y = +width/2.
+    ``shift`` (3,) is added to every point (the lab-frame drive displacement).
+    """
+    h = 0.5 * width
+    pts = np.array(
+        [
+            [0.0, -h, 0.0],
+            [length, -h, 0.0],
+            [length, h, 0.0],
+            [0.0, h, 0.0],
+            [0.0, -h, wall_height],
+            [length, -h, wall_height],
+            [length, h, wall_height],
+            [0.0, h, wall_height],
+        ]
+    )
+    if shift is not None:
+        pts = pts + np.asarray(shift, dtype=np.float64).reshape(1, 3)
+    faces = np.array([4, 0, 1, 2, 3, 4, 0, 1, 5, 4, 4, 3, 2, 6, 7])
+    mesh = pv.PolyData(pts, faces=faces)
+    mesh.cell_data["part"] = np.array([0, 1, 2], dtype=np.int32)
+    return mesh
+
+
+class VTKSeriesWriter:
+    """Write sphere frames and the trough as a ParaView time series (see the module docstring).
+
+    Args:
+        out_dir: Output directory (created); ``particles.pvd`` goes here, the ``.vtp`` files to
+            ``out_dir/frames``.
+        trough_length: Length of the periodic section along x, m.
+        trough_width: Distance between the side walls, m.
+        inclination_deg: Inclination alpha, degrees (stored as field data; axes are not tilted).
+        lab_frame: False (default): trough frame, trough fixed. True: spheres and trough shifted
+            by the drive displacement given to :meth:`write_frame`.
+        wall_height: Height of the drawn side walls, m (default: half the width).
+
+    """
+
+    def __init__(
+        self,
+        out_dir: Path,
+        trough_length: float,
+        trough_width: float,
+        inclination_deg: float,
+        *,
+        lab_frame: bool = False,
+        wall_height: float | None = None,
+    ):
+        if trough_length <= 0 or trough_width <= 0:
+            raise ValueError(
+                f"trough length and width must be positive, got {trough_length}, {trough_width}"
+            )
+        self.out_dir = Path(out_dir)
+        self.frames_dir = self.out_dir / FRAMES_DIR
+        self.frames_dir.mkdir(parents=True, exist_ok=True)
+        self.length = float(trough_length)
+        self.width = float(trough_width)
+        self.inclination_deg = float(inclination_deg)
+        self.lab_frame = bool(lab_frame)
+        self.wall_height = 0.5 * self.width if wall_height is None else float(wall_height)
+        self.pvd_path = self.out_dir / PVD_NAME
+        self._entries: list[tuple[float, str, str]] = []  # (time, particles file, trough file)
+        self._trough_fixed: pv.PolyData | None = None
+
+    @property
+    def frame_count(self) -> int:
+        """Number of frames written so far."""
+        return len(self._entries)
+
+    def write_frame(
+        self,
+        time: float,
+        positions: np.ndarray,
+        radius: np.ndarray,
+        velocity: np.ndarray,
+        grain_id: np.ndarray,
+        clump_id: np.ndarray,
+        contact_count: np.ndarray,
+        orientation: np.ndarray | None = None,
+        drive_displacement: np.ndarray | None = None,
+        *,
+        drive_velocity: np.ndarray | None = None,
+    ) -> Path:
+        """Write one frame (spheres and trough) and rewrite the collection.
+
+        Args:
+            time: Simulated time of the frame, s (the ParaView time value).
+            positions: Sphere centres in the trough frame, (N, 3), m.
+            radius: (N,), m.
+            velocity: Velocities relative to the trough, (N, 3), m/s.
+            grain_id: Grain index of each sphere, (N,), int.
+            clump_id: Clump index of each sphere, (N,), int (the grain index for plain spheres).
+            contact_count: Contacts per sphere, (N,), int.
+            orientation: Unit quaternions (w, x, y, z) of the clumps, (M, 4), indexed by
+                ``clump_id``; None for spheres.
+            drive_displacement: Trough displacement s(t), (3,), m (default zeros); used in the
+                lab frame only.
+            drive_velocity: Trough velocity s'(t), (3,), m/s; added to the velocities in the lab
+                frame when given.
+
+        Returns:
+            Path of the sphere ``.vtp`` file.
+
+        """
+        pos = np.asarray(positions, dtype=np.float64)
+        if pos.ndim != 2 or pos.shape[1] != 3:
+            raise ValueError(f"positions must have shape (N, 3), got {pos.shape}")
+        n = pos.shape[0]
+        arrays = {
+            "radius": _check(radius, (n,), "radius"),
+            "velocity": _check(velocity, (n, 3), "velocity"),
+            "grain_id": _check(grain_id, (n,), "grain_id"),
+            "clump_id": _check(clump_id, (n,), "clump_id"),
+            "contact_count": _check(contact_count, (n,), "contact_count"),
+        }
+        shift = np.zeros(3)
+        if drive_displacement is not None:
+            shift = _check(drive_displacement, (3,), "drive_displacement").astype(np.float64)
+        if not np.all(np.isfinite(shift)):
+            raise ValueError("drive_displacement must be finite")
+
+        pos = pos.copy()
+        pos[:, 0] = np.mod(pos[:, 0], self.length)
+        vel = arrays["velocity"].astype(np.float64)
+        if self.lab_frame:
+            pos += shift
+            if drive_velocity is not None:
+                vel = vel + _check(drive_velocity, (3,), "drive_velocity")
+
+        mesh = pv.PolyData(pos.astype(np.float32))  # one vertex cell per point
+        mesh.point_data["radius"] = arrays["radius"].astype(np.float32)
+        mesh.point_data["velocity"] = vel.astype(np.float32)
+        for key in ("grain_id", "clump_id", "contact_count"):
+            mesh.point_data[key] = arrays[key].astype(np.int32)
+        if orientation is not None:
+            q = np.asarray(orientation, dtype=np.float64)
+            cid = arrays["clump_id"].astype(np.int64)
+            if q.ndim != 2 or q.shape[1] != 4 or (n and (cid.min() < 0 or cid.max() >= len(q))):
+                raise ValueError(
+                    f"orientation must have shape (M, 4) with M > max(clump_id), got {q.shape}"
+                )
+            mesh.point_data["orientation"] = q[cid].astype(np.float32)
+        mesh.set_active_scalars("radius")
+        mesh.field_data["time"] = np.array([time], dtype=np.float64)
+        mesh.field_data["inclination_deg"] = np.array([self.inclination_deg])
+        mesh.field_data["drive_displacement"] = shift
+        frame = "lab" if self.lab_frame else "trough"
+        mesh.field_data["frame"] = np.array([frame])
+        lab_vel = self.lab_frame and drive_velocity is not None
+        mesh.field_data["velocity_frame"] = np.array(["lab" if lab_vel else "trough"])
+
+        index = len(self._entries)
+        p_name = f"particles_{index:06d}.vtp"
+        t_name = f"trough_{index:06d}.vtp"
+        mesh.save(self.frames_dir / p_name, binary=True, compression="zlib")
+        self._trough(shift).save(self.frames_dir / t_name, binary=True, compression="zlib")
+        self._entries.append((float(time), p_name, t_name))
+        self._write_pvd()
+        return self.frames_dir / p_name
+
+    def close(self) -> Path:
+        """Write the collection a last time; returns the path of ``particles.pvd``."""
+        self._write_pvd()
+        return self.pvd_path
+
+    def __enter__(self) -> VTKSeriesWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _trough(self, shift: np.ndarray) -> pv.PolyData:
+        if self.lab_frame:
+            return trough_polydata(self.length, self.width, self.wall_height, shift)
+        if self._trough_fixed is None:
+            self._trough_fixed = trough_polydata(self.length, self.width, self.wall_height)
+        return self._trough_fixed
+
+    def _write_pvd(self) -> None:
+        lines = [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+            "  <Collection>",
+        ]
+        for t, p_name, t_name in self._entries:
+            for part, name in ((0, p_name), (1, t_name)):
+                file = quoteattr(f"{FRAMES_DIR}/{name}")
+                lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" file={file}/>')
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        tmp = self.pvd_path.with_name(self.pvd_path.name + ".tmp")
+        tmp.write_text("\n".join(lines), encoding="ascii")
+        os.replace(tmp, self.pvd_path)
+
+
+def _check(a, shape: tuple[int, ...], name: str) -> np.ndarray:
+    arr = np.asarray(a)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    return arr

@@ -1,0 +1,329 @@
+"""Reports of finished (or killed) runs: figures, a text summary, and a comparison across runs.
+
+``make_report([OUT])`` reads ``OUT/summary.json`` (DESIGN.md section 6) and, when present,
+``OUT/results.h5`` (:mod:`dem.io.hdf5`), and writes into the report folder:
+
+- ``velocity_per_cycle.png``: the mass-weighted mean x-velocity of every cycle (settling cycles
+  grey), the running mean over the measured cycles and its +-1 standard-error band
+  (std(ddof=1) / sqrt(k) of the first k measured cycles, as :mod:`dem.measure`);
+- ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error beside
+  the point-mass prediction for the same drive and material;
+- ``bed_snapshot.png``: the last frame of ``results.h5``, side view x-z and top view x-y,
+  spheres to scale, coloured by the x-velocity relative to the trough;
+- ``report.txt``: the numbers behind the figures.
+
+With several runs each gets a sub-folder named after its output folder, and the report folder
+also holds ``comparison.csv``, ``comparison.txt`` (one row per run) and ``comparison.png``.
+Figures that lack their data (no ``results.h5``, no frames) are skipped and report.txt says so.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from dem import plots
+
+COMPARISON_COLUMNS = (
+    "run",
+    "case",
+    "angle",
+    "throw_number",
+    "frequency",
+    "amplitude",
+    "inclination",
+    "friction",
+    "grains",
+    "spheres",
+    "cycles",
+    "mean_velocity",
+    "mean_velocity_stderr",
+    "mean_velocity_norm",
+    "mean_velocity_norm_stderr",
+    "pointmass_velocity_norm",
+    "dem_over_pointmass",
+    "mass_flow_rate",
+    "particle_steps_per_s",
+)
+
+
+def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Running mean and its standard error over the first k values, k = 1..C.
+
+    Args:
+        values: (C,) samples (per-cycle means, m/s).
+
+    Returns:
+        (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) / sqrt(k), nan for k = 1.
+
+    """
+    v = np.asarray(values, dtype=np.float64)
+    mean = np.cumsum(v) / np.arange(1, v.size + 1)
+    stderr = np.full(v.size, np.nan)
+    for k in range(2, v.size + 1):  # C is a few hundred cycles at most
+        stderr[k - 1] = np.std(v[:k], ddof=1) / math.sqrt(k)
+    return mean, stderr
+
+
+def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
+    """Write the figures and texts of one or several runs (see the module docstring).
+
+    Args:
+        out_dirs: Run output folders, each with ``summary.json`` (``results.h5`` optional).
+        dest: Report folder; default ``OUT/report`` for one run, ``<common parent>/report`` for
+            several.
+
+    Returns:
+        The files written.
+
+    Raises:
+        FileNotFoundError: A folder has no ``summary.json``.
+
+    """
+    out_dirs = [Path(d) for d in out_dirs]
+    if not out_dirs:
+        raise ValueError("make_report needs at least one output folder")
+    for d in out_dirs:
+        if not (d / "summary.json").is_file():
+            raise FileNotFoundError(f"{d / 'summary.json'} not found: is {d} a dem run folder?")
+    if dest is None:
+        if len(out_dirs) == 1:
+            dest = out_dirs[0] / "report"
+        else:
+            dest = Path(os.path.commonpath([d.resolve() for d in out_dirs])) / "report"
+    dest = Path(dest)
+    dest.mkdir(parents=True, exist_ok=True)
+    labels = _labels(out_dirs)
+    written: list[Path] = []
+    rows = []
+    for label, d in zip(labels, out_dirs, strict=True):
+        run_dest = dest if len(out_dirs) == 1 else dest / label
+        run_dest.mkdir(parents=True, exist_ok=True)
+        files, row = _report_run(d, run_dest, label)
+        written += files
+        rows.append(row)
+    if len(out_dirs) > 1:
+        written += _comparison(rows, dest)
+    return written
+
+
+def _labels(out_dirs: list[Path]) -> list[str]:
+    names = [d.resolve().name or "run" for d in out_dirs]
+    if len(set(names)) < len(names):  # e.g. several cases/*/output: use the parent's name too
+        names = [f"{d.resolve().parent.name}_{d.resolve().name}" for d in out_dirs]
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        seen[n] = seen.get(n, 0) + 1
+        out.append(n if seen[n] == 1 else f"{n}_{seen[n]}")
+    return out
+
+
+def _load_results(d: Path) -> dict | None:
+    path = d / "results.h5"
+    if not path.is_file():
+        return None
+    from dem.io.hdf5 import read_results
+
+    return read_results(path)
+
+
+def _cycle_series(summary: dict, results: dict | None):
+    """(cycle, velocity, measured mask) from results.h5 /cycles, else summary per_cycle_velocity."""
+    cycles = results["cycles"] if results else {}
+    if "mean_velocity" in cycles and len(cycles["mean_velocity"]):
+        v = np.asarray(cycles["mean_velocity"], dtype=np.float64)
+        c = np.asarray(cycles.get("cycle", np.arange(v.size)))
+        if "measured" in cycles:
+            measured = np.asarray(cycles["measured"]).astype(bool)
+        else:
+            settle = int(summary.get("settle_cycles") or 0)
+            measured = np.arange(v.size) >= min(settle, v.size - 1)
+        return c, v, measured, "results.h5 /cycles"
+    per = summary.get("per_cycle_velocity") or []
+    if per:
+        v = np.asarray(per, dtype=np.float64)
+        settle = int(summary.get("settle_cycles") or 0)
+        return np.arange(settle, settle + v.size), v, np.ones(v.size, bool), "summary.json"
+    return None
+
+
+def _num(summary: dict, key: str) -> float:
+    v = summary.get(key)
+    return float(v) if isinstance(v, int | float) else math.nan
+
+
+def _report_run(d: Path, dest: Path, label: str) -> tuple[list[Path], dict]:
+    summary = json.loads((d / "summary.json").read_text())
+    results = _load_results(d)
+    files: list[Path] = []
+    notes: list[str] = []
+    case = summary.get("case", label)
+    title = (
+        f"{case}: phi = {_num(summary, 'angle'):g} deg, Gamma = {_num(summary, 'throw_number'):.3g}"
+        f", f = {_num(summary, 'frequency'):g} Hz"
+    )
+
+    series = _cycle_series(summary, results)
+    if series is not None:
+        c, v, measured, source = series
+        mean = np.full(v.size, np.nan)
+        err = np.full(v.size, np.nan)
+        mean[measured], err[measured] = running_statistics(v[measured])
+        files.append(
+            plots.velocity_cycles_figure(
+                c, v, mean, err, dest / "velocity_per_cycle.png", measured=measured, title=title
+            )
+        )
+        notes.append(f"per-cycle velocities from {source} ({v.size} cycles)")
+    else:
+        notes.append("no per-cycle velocities: velocity_per_cycle.png skipped")
+
+    dem_norm = _num(summary, "mean_velocity_norm")
+    dem_err = _num(summary, "mean_velocity_norm_stderr")
+    if math.isnan(dem_err):
+        scale = _num(summary, "mean_velocity") / dem_norm if dem_norm else math.nan
+        dem_err = _num(summary, "mean_velocity_stderr") / scale if scale else math.nan
+    pm = _num(summary, "pointmass_velocity_norm")
+    files.append(
+        plots.pointmass_comparison_figure(
+            [label], [dem_norm], [dem_err], [pm], dest / "pointmass_comparison.png"
+        )
+    )
+
+    if results is not None and results["frame_count"] > 0:
+        frame = results["frames"][-1]
+        tr = results["case"].get("trough", {}) if isinstance(results["case"], dict) else {}
+        length = float(tr.get("length") or np.ptp(frame["positions"][:, 0]) or 1.0)
+        width = float(tr.get("width") or 2 * np.max(np.abs(frame["positions"][:, 1])) or 1.0)
+        files.append(
+            plots.bed_snapshot_figure(
+                frame["positions"],
+                frame["radius"],
+                frame["velocity"][:, 0],
+                length,
+                width,
+                dest / "bed_snapshot.png",
+                title=f"{case}: last frame, t = {frame['time']:.4g} s",
+            )  # fmt: skip
+        )
+        complete = "complete" if results["complete"] else "INCOMPLETE (run did not close it)"
+        notes.append(f"results.h5: {results['frame_count']} frames, {complete}")
+    else:
+        notes.append("no frames in results.h5: bed_snapshot.png skipped")
+
+    ratio = dem_norm / pm if pm and not math.isnan(pm) else math.nan
+    row = {k: summary.get(k) for k in COMPARISON_COLUMNS}
+    row.update(
+        run=label,
+        case=case,
+        mean_velocity_norm_stderr=dem_err,
+        dem_over_pointmass=ratio,
+        cycles=summary.get("cycles"),
+    )
+    text = _run_text(label, d, summary, dem_err, ratio, notes)
+    (dest / "report.txt").write_text(text, encoding="ascii", errors="replace")
+    files.append(dest / "report.txt")
+    return files, row
+
+
+def _fmt(v, spec: str = ".4g") -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "n/a"
+    if isinstance(v, int) and not isinstance(v, bool):
+        return str(v)
+    if isinstance(v, float):
+        return format(v, spec)
+    return str(v)
+
+
+def _run_text(label, d, s, dem_err, ratio, notes) -> str:
+    g = s.get
+    lines = [
+        f"dem report: {label} ({d})",
+        "",
+        f"case            {g('case', 'n/a')}",
+        f"drive           f = {_fmt(g('frequency'))} Hz, A = {_fmt(g('amplitude'))} m, "
+        f"phi = {_fmt(g('angle'))} deg, Gamma = {_fmt(g('throw_number'))}, "
+        f"alpha = {_fmt(g('inclination'))} deg",
+        f"material        mu = {_fmt(g('friction'))}, contact {g('contact_model', 'n/a')}",
+        f"grains          {_fmt(g('grains'))} ({_fmt(g('spheres'))} spheres, "
+        f"{_fmt(g('total_mass'))} kg)",
+        f"cycles          {_fmt(g('settle_cycles'))} settling + {_fmt(g('cycles'))} measured",
+        "",
+        f"v               {_fmt(g('mean_velocity'))} +- {_fmt(g('mean_velocity_stderr'))} m/s"
+        " (+-1 standard error of the per-cycle means)",
+        f"v/(A w cos phi) {_fmt(g('mean_velocity_norm'))} +- {_fmt(dem_err)}",
+        f"point mass      {_fmt(g('pointmass_velocity_norm'))}  (DEM / point mass = "
+        f"{_fmt(ratio, '.3f')})",
+        f"mass flow       {_fmt(g('mass_flow_rate'))} kg/s "
+        f"({_fmt(g('mass_flow_rate_per_width'))} kg/(s m))",
+        "",
+        f"timestep        {_fmt(g('timestep'))} s (limit {_fmt(g('timestep_limit'))} s), "
+        f"{_fmt(g('steps'))} steps",
+        f"wall time       {_fmt(g('wall_time_s'))} s, {_fmt(g('particle_steps_per_s'), '.3g')} "
+        f"particle-steps/s on {_fmt(g('threads'))} threads",
+        "",
+        *[f"note: {n}" for n in notes],
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _comparison(rows: list[dict], dest: Path) -> list[Path]:
+    csv_path = dest / "comparison.csv"
+    with csv_path.open("w", newline="", encoding="ascii", errors="replace") as fh:
+        w = csv.DictWriter(fh, fieldnames=COMPARISON_COLUMNS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in COMPARISON_COLUMNS})
+    shown = (
+        ("run", "run", "s"),
+        ("angle", "phi", ".4g"),
+        ("throw_number", "Gamma", ".4g"),
+        ("frequency", "f", ".4g"),
+        ("grains", "grains", "d"),
+        ("mean_velocity", "v m/s", ".4g"),
+        ("mean_velocity_stderr", "se m/s", ".2g"),
+        ("mean_velocity_norm", "v_norm", ".4g"),
+        ("pointmass_velocity_norm", "pm_norm", ".4g"),
+        ("dem_over_pointmass", "dem/pm", ".3f"),
+        ("mass_flow_rate", "flow kg/s", ".4g"),
+    )
+    table = [[h for _, h, _ in shown]]
+    for r in rows:
+        table.append([_fmt(r.get(k), spec) if spec != "s" else str(r[k]) for k, _, spec in shown])
+    widths = [max(len(row[i]) for row in table) for i in range(len(shown))]
+    buf = io.StringIO()
+    for row in table:
+        buf.write("  ".join(c.rjust(wd) for c, wd in zip(row, widths, strict=True)).rstrip() + "\n")
+    txt_path = dest / "comparison.txt"
+    txt_path.write_text(buf.getvalue(), encoding="ascii", errors="replace")
+
+    labels, xlabel = [r["run"] for r in rows], ""
+    for key, name in (("angle", "vibration angle phi (deg)"), ("throw_number", "Gamma")):
+        vals = [r.get(key) for r in rows]
+        if all(isinstance(v, int | float) for v in vals) and len(set(vals)) == len(vals):
+            others = [k for k in ("angle", "throw_number") if k != key]
+            if all(len({r.get(k) for r in rows}) == 1 for k in others):
+                labels, xlabel = [float(v) for v in vals], name
+                break
+    png = plots.pointmass_comparison_figure(
+        labels,
+        [_as_float(r.get("mean_velocity_norm")) for r in rows],
+        [_as_float(r.get("mean_velocity_norm_stderr")) for r in rows],
+        [_as_float(r.get("pointmass_velocity_norm")) for r in rows],
+        dest / "comparison.png",
+        xlabel=xlabel,
+    )
+    return [csv_path, txt_path, png]
+
+
+def _as_float(v) -> float:
+    return float(v) if isinstance(v, int | float) else math.nan

@@ -1,0 +1,133 @@
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from dem.io.hdf5 import ResultsWriter
+from dem.report import make_report, running_statistics
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _summary(angle=25.0, norm=0.31, stderr=0.004, pm=0.42):
+    scale = 0.0005 * 2 * np.pi * 60 * np.cos(np.radians(angle))
+    return {
+        "case": "spheres",
+        "mean_velocity": norm * scale,
+        "mean_velocity_stderr": stderr * scale,
+        "mean_velocity_norm": norm,
+        "mean_velocity_norm_stderr": stderr,
+        "mass_flow_rate": 0.0123,
+        "mass_flow_rate_per_width": 0.3,
+        "amplitude": 0.0005,
+        "throw_number": 1.8,
+        "frequency": 60.0,
+        "angle": angle,
+        "inclination": 0.0,
+        "friction": 0.35,
+        "contact_model": "hertz_mindlin",
+        "grains": 60,
+        "spheres": 60,
+        "total_mass": 0.02,
+        "timestep": 5e-6,
+        "steps": 40000,
+        "settle_cycles": 2,
+        "cycles": 6,
+        "per_cycle_velocity": [norm * scale] * 6,
+        "wall_time_s": 3.0,
+        "particle_steps_per_s": 8e5,
+        "threads": 1,
+        "pointmass_velocity_norm": pm,
+    }
+
+
+def _run_folder(path, angle=25.0, with_h5=True, pm=0.42):
+    path.mkdir(parents=True)
+    s = _summary(angle=angle, pm=pm)
+    (path / "summary.json").write_text(json.dumps(s))
+    if with_h5:
+        rng = np.random.default_rng(0)
+        case = {"trough": {"length": 0.05, "width": 0.02}, "drive": {"angle": angle}}
+        w = ResultsWriter(path / "results.h5", case=case, versions={}, seed=1, timestep=5e-6)
+        n = 60
+        for k in range(8):
+            v = s["mean_velocity"] * (1 + 0.1 * rng.standard_normal()) if k >= 2 else 0.001
+            w.append_cycle(cycle=k, time=k / 60.0, mean_velocity=v)
+            pos = np.column_stack(
+                [
+                    rng.uniform(0, 0.05, n),
+                    rng.uniform(-0.008, 0.008, n),
+                    rng.uniform(0.002, 0.01, n),
+                ]
+            )
+            w.append_frame(k / 60.0, pos, rng.normal(0.01, 0.01, (n, 3)), np.full(n, 0.002))
+        w.close()
+    return path
+
+
+def _is_png(p):
+    return p.read_bytes()[:8] == PNG and p.stat().st_size > 5000
+
+
+def test_running_statistics_match_direct_formula():
+    v = np.random.default_rng(3).normal(0.02, 0.003, 12)
+    mean, err = running_statistics(v)
+    assert np.isnan(err[0])
+    for k in range(1, 13):
+        assert np.isclose(mean[k - 1], v[:k].mean())
+        if k > 1:
+            assert np.isclose(err[k - 1], v[:k].std(ddof=1) / np.sqrt(k))
+
+
+def test_single_run_report(tmp_path):
+    out = _run_folder(tmp_path / "run")
+    files = make_report([out])
+    names = {p.name for p in files}
+    assert names == {
+        "velocity_per_cycle.png",
+        "pointmass_comparison.png",
+        "bed_snapshot.png",
+        "report.txt",
+    }
+    for p in files:
+        assert p.parent == out / "report" and p.is_file()
+        if p.suffix == ".png":
+            assert _is_png(p), p
+    text = (out / "report" / "report.txt").read_text()
+    text.encode("ascii")
+    assert "0.31 +- 0.004" in text  # normalised velocity and its standard error
+    assert "0.42" in text and "0.738" in text  # point mass and DEM / point mass = 0.31 / 0.42
+    assert "8 frames, complete" in text
+    assert "results.h5 /cycles (8 cycles)" in text
+
+
+def test_report_without_results_h5_skips_snapshot(tmp_path):
+    out = _run_folder(tmp_path / "run", with_h5=False, pm=None)
+    files = make_report([out], dest=tmp_path / "rep")
+    names = {p.name for p in files}
+    assert "bed_snapshot.png" not in names and "velocity_per_cycle.png" in names
+    text = (tmp_path / "rep" / "report.txt").read_text()
+    assert "summary.json (6 cycles)" in text and "bed_snapshot.png skipped" in text
+
+
+def test_comparison_across_runs(tmp_path):
+    outs = [_run_folder(tmp_path / f"phi{a}", angle=a) for a in (15.0, 25.0, 35.0)]
+    files = make_report(outs, dest=tmp_path / "cmp")
+    names = [p.relative_to(tmp_path / "cmp").as_posix() for p in files]
+    assert {"comparison.csv", "comparison.txt", "comparison.png"} <= set(names)
+    assert "phi25.0/report.txt" in names and "phi35.0/bed_snapshot.png" in names
+    with (tmp_path / "cmp" / "comparison.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["run"] for r in rows] == ["phi15.0", "phi25.0", "phi35.0"]
+    assert [float(r["angle"]) for r in rows] == [15.0, 25.0, 35.0]
+    assert np.isclose(float(rows[1]["dem_over_pointmass"]), 0.31 / 0.42)
+    table = (tmp_path / "cmp" / "comparison.txt").read_text().splitlines()
+    assert len(table) == 4 and "dem/pm" in table[0]
+    assert _is_png(tmp_path / "cmp" / "comparison.png")
+
+
+def test_missing_summary_is_named(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(FileNotFoundError, match="summary.json"):
+        make_report([tmp_path / "empty"])
