@@ -75,3 +75,11 @@ DEM_SETTLE_MAX_TIME = 5.0
 DEM_FILL_TRIES = 200
 #: Fill box: initial height as a multiple of the height of a dense bed (packing fraction 0.6).
 DEM_FILL_HEIGHT_FACTOR = 2.5
+#: Runs with fewer spheres than this use one thread: a parallel region costs more than it saves
+#: on a handful of spheres (and far more when the cores are shared).
+DEM_PARALLEL_MIN_SPHERES = 256
+#: numba threading layer for the DEM kernels (applied by dem.kernels unless the environment sets
+#: NUMBA_THREADING_LAYER): on the project's 2-core machines OpenMP scales (1.5e7 vs 9.7e6
+#: particle-steps/s, sphere-bed, 2 vs 1 thread) where TBB and workqueue make 2 threads 2-3x
+#: slower than one (a parallel region costs them tens of microseconds; a step has two).
+DEM_THREADING_LAYER = "omp"

@@ -1,0 +1,298 @@
+"""Contact laws: each law is one small function of the overlap; one contact routine uses them.
+
+A contact between sphere i and sphere j (or a wall, j = wall) is described by
+
+- the unit normal n pointing from j to i and the overlap delta = r_i + r_j - |x_i - x_j| > 0,
+- the relative velocity of the centres v_r = v_i - v_j and the spins omega_i, omega_j,
+- the lever arms c_i = r_i - delta / 2, c_j = r_j - delta / 2 (a wall: c_i = r_i - delta, c_j = 0),
+- the effective mass m* = m_i m_j / (m_i + m_j) and radius R* = r_i r_j / (r_i + r_j) (a wall has
+  infinite mass and radius: m* = m_i, R* = r_i),
+- the tangential spring elongation s (3 floats of contact history, per contact pair).
+
+A *law* maps (delta, m*, R*) to the four coefficients (k_n, gamma_n, k_t, gamma_t); the
+spring-dashpot routine :func:`contact_force` turns them into forces exactly as LIGGGHTS does
+(``normal_model_hooke`` / ``normal_model_hertz`` with ``tangential_model_history``):
+
+    F_n = k_n delta - gamma_n (v_r . n)                    (clamped to >= 0 with limit_force)
+    v_t = v_r - (v_r . n) n - (c_i omega_i + c_j omega_j) x n   (slip velocity at the contact)
+    s  <- s + v_t dt;  s <- s - (s . n) n                  (increment, then project)
+    F_t = -k_t s - gamma_t v_t                             if k_t |s| <= mu |F_n|
+    F_t = -mu |F_n| s / |s|,  s <- -F_t / k_t              otherwise (sliding, no damping)
+    F_i = F_n n + F_t,  tau_i = -c_i n x F_t,  tau_j = -c_j n x F_t,  F_j = -F_i
+
+Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directional torque):
+w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
+tau_j += the same.
+
+Laws (the registry is :data:`MODELS`; a new law is a new function and one entry there):
+
+- linear spring-dashpot (LIGGGHTS ``hooke/stiffness`` with a restitution-derived damping):
+  k_n given, k_t = ratio k_n, gamma_n = gamma_t = -2 beta sqrt(k_n m*).
+- Hertz-Mindlin as coded in LIGGGHTS (``hertz``, tangential damping on): with
+  S_n = 2 Y* sqrt(R* delta) and S_t = 8 G* sqrt(R* delta),
+  k_n = 4/3 Y* sqrt(R* delta), gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*), k_t = S_t,
+  gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*).
+
+Here beta = ln(e) / sqrt(ln(e)^2 + pi^2) for 0 < e <= 1 and beta = -1 for e = 0 (critical damping
+of the linear law; ln 0 is never evaluated), see :func:`damping_beta`. For equal materials
+Y* = Y / (2 (1 - nu^2)) and G* = Y / (4 (2 - nu)(1 + nu)).
+
+Parameters reach the kernels as one float64 array ``params`` indexed by the ``P_*`` constants.
+"""
+
+import math
+
+import numba
+import numpy as np
+
+from dem.config import NUMBA_OPTIONS
+
+#: Contact law selectors (the case's ``contact.model``) -> integer id used by the kernels.
+MODELS = {"linear": 0, "hertz_mindlin": 1}
+LINEAR = MODELS["linear"]
+HERTZ = MODELS["hertz_mindlin"]
+
+# Layout of the float64 ``params`` array of the kernels.
+P_KN = 0  #: linear normal stiffness k_n, N/m
+P_KT_RATIO = 1  #: linear k_t / k_n
+P_YSTAR = 2  #: effective Young's modulus Y*, Pa
+P_GSTAR = 3  #: effective shear modulus G*, Pa
+P_BETA = 4  #: damping parameter beta (<= 0)
+P_MU = 5  #: Coulomb friction coefficient mu
+P_MU_ROLL = 6  #: rolling resistance coefficient mu_r (0: off)
+P_LIMIT_FORCE = 7  #: 1.0 keeps F_n >= 0 (LIGGGHTS limitForce), else 0.0
+P_HERTZ_DAMP_N = 8  #: -2 sqrt(5/6) beta sqrt(2 Y*): gamma_n = this sqrt(m* sqrt(R* delta))
+P_HERTZ_DAMP_T = 9  #: -2 sqrt(5/6) beta sqrt(8 G*): gamma_t = this sqrt(m* sqrt(R* delta))
+N_PARAMS = 10
+
+_SQRT_5_6 = math.sqrt(5.0 / 6.0)
+
+
+def damping_beta(restitution: float) -> float:
+    """Return beta = ln(e) / sqrt(ln(e)^2 + pi^2) for 0 < e <= 1, and -1 for e = 0.
+
+    beta = -1 is critical damping of the linear spring-dashpot (the limit e -> 0 of the formula);
+    the logarithm of 0 is never evaluated.
+    """
+    if not 0.0 <= restitution <= 1.0:
+        raise ValueError(f"restitution must lie in [0, 1], got {restitution}")
+    if restitution == 0.0:
+        return -1.0
+    log_e = math.log(restitution)
+    return log_e / math.sqrt(log_e * log_e + math.pi * math.pi)
+
+
+def make_params(
+    *,
+    stiffness: float = 0.0,
+    tangential_stiffness_ratio: float = 2.0 / 7.0,
+    youngs_modulus: float = 0.0,
+    poisson_ratio: float = 0.3,
+    restitution: float = 0.0,
+    friction: float = 0.0,
+    rolling_friction: float = 0.0,
+    limit_force: bool = False,
+) -> np.ndarray:
+    """Pack contact coefficients into the ``params`` array of the kernels, shape (N_PARAMS,).
+
+    Both laws' entries are filled; the law id chosen separately selects which are used.
+    """
+    p = np.zeros(N_PARAMS)
+    nu = poisson_ratio
+    p[P_KN] = stiffness
+    p[P_KT_RATIO] = tangential_stiffness_ratio
+    p[P_YSTAR] = youngs_modulus / (2.0 * (1.0 - nu * nu))
+    p[P_GSTAR] = youngs_modulus / (4.0 * (2.0 - nu) * (1.0 + nu))
+    p[P_BETA] = damping_beta(restitution)
+    p[P_MU] = friction
+    p[P_MU_ROLL] = rolling_friction
+    p[P_LIMIT_FORCE] = 1.0 if limit_force else 0.0
+    damp = -2.0 * _SQRT_5_6 * p[P_BETA]
+    p[P_HERTZ_DAMP_N] = damp * math.sqrt(2.0 * p[P_YSTAR])
+    p[P_HERTZ_DAMP_T] = damp * math.sqrt(8.0 * p[P_GSTAR])
+    return p
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _linear_law(delta, m_eff, r_eff, p):
+    """Linear: (k_n, gamma_n, k_t, gamma_t) = (k, -2 beta sqrt(k m*), ratio k, gamma_n)."""
+    kn = p[P_KN]
+    gn = -2.0 * p[P_BETA] * math.sqrt(kn * m_eff)
+    return kn, gn, p[P_KT_RATIO] * kn, gn
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _hertz_law(delta, m_eff, r_eff, p):
+    """Hertz-Mindlin (LIGGGHTS): coefficients from S_n = 2 Y* sqrt(R* d), S_t = 8 G* sqrt(R* d).
+
+    -2 sqrt(5/6) beta sqrt(S m*) is evaluated as (-2 sqrt(5/6) beta sqrt(2 Y*)) sqrt(m* root)
+    with the constant factor precomputed: two square roots per contact instead of three.
+    """
+    root = math.sqrt(r_eff * delta)
+    q = math.sqrt(m_eff * root)
+    return (
+        (4.0 / 3.0) * p[P_YSTAR] * root,
+        p[P_HERTZ_DAMP_N] * q,
+        8.0 * p[P_GSTAR] * root,
+        p[P_HERTZ_DAMP_T] * q,
+    )
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def law_coefficients(model, delta, m_eff, r_eff, p):
+    """Dispatch to the law with id ``model``: returns (k_n, gamma_n, k_t, gamma_t)."""
+    if model == HERTZ:
+        return _hertz_law(delta, m_eff, r_eff, p)
+    return _linear_law(delta, m_eff, r_eff, p)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def contact_force(
+    model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
+    ci, cj, m_eff, r_eff, hist, k, dt,
+):  # fmt: skip
+    """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
+
+    Args:
+        model: Law id (:data:`MODELS`).
+        p: Contact parameters, shape (N_PARAMS,).
+        nx, ny, nz: Unit normal from j to i.
+        delta: Overlap > 0, m.
+        vrx, vry, vrz: v_i - v_j, m/s.
+        wix, wiy, wiz, wjx, wjy, wjz: Spins of i and j, rad/s.
+        ci, cj: Lever arms from the centres to the contact point, m.
+        m_eff, r_eff: m*, kg, and R*, m.
+        hist: Tangential elongations, shape (n, 3), m; row k belongs to this contact.
+        k: Row of ``hist``.
+        dt: Time step, s.
+
+    Returns:
+        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, fn): force on i (N), torques on i and j
+        (N m) and the normal force F_n (N).
+
+    """
+    kn, gn, kt, gt = law_coefficients(model, delta, m_eff, r_eff, p)
+    vn = vrx * nx + vry * ny + vrz * nz
+    fn = kn * delta - gn * vn
+    if p[P_LIMIT_FORCE] != 0.0 and fn < 0.0:
+        fn = 0.0
+    # slip velocity at the contact point: tangential part minus (c_i w_i + c_j w_j) x n
+    wx = ci * wix + cj * wjx
+    wy = ci * wiy + cj * wjy
+    wz = ci * wiz + cj * wjz
+    vtx = vrx - vn * nx - (wy * nz - wz * ny)
+    vty = vry - vn * ny - (wz * nx - wx * nz)
+    vtz = vrz - vn * nz - (wx * ny - wy * nx)
+    # tangential spring: increment, then project onto the current tangent plane
+    sx = hist[k, 0] + vtx * dt
+    sy = hist[k, 1] + vty * dt
+    sz = hist[k, 2] + vtz * dt
+    sn = sx * nx + sy * ny + sz * nz
+    sx -= sn * nx
+    sy -= sn * ny
+    sz -= sn * nz
+    ftx = -kt * sx
+    fty = -kt * sy
+    ftz = -kt * sz
+    s_mag = math.sqrt(sx * sx + sy * sy + sz * sz)
+    f_shear = kt * s_mag
+    f_friction = p[P_MU] * abs(fn)
+    if f_shear > f_friction:
+        if s_mag > 0.0:
+            ratio = f_friction / f_shear
+            ftx *= ratio
+            fty *= ratio
+            ftz *= ratio
+            sx = -ftx / kt
+            sy = -fty / kt
+            sz = -ftz / kt
+        else:
+            ftx = 0.0
+            fty = 0.0
+            ftz = 0.0
+    else:
+        ftx -= gt * vtx
+        fty -= gt * vty
+        ftz -= gt * vtz
+    hist[k, 0] = sx
+    hist[k, 1] = sy
+    hist[k, 2] = sz
+    # torques -c n x F_t
+    cx = ny * ftz - nz * fty
+    cy = nz * ftx - nx * ftz
+    cz = nx * fty - ny * ftx
+    tix = -ci * cx
+    tiy = -ci * cy
+    tiz = -ci * cz
+    tjx = -cj * cx
+    tjy = -cj * cy
+    tjz = -cj * cz
+    mu_roll = p[P_MU_ROLL]
+    if mu_roll > 0.0:
+        rx = wix - wjx
+        ry = wiy - wjy
+        rz = wiz - wjz
+        rn = rx * nx + ry * ny + rz * nz
+        rx -= rn * nx
+        ry -= rn * ny
+        rz -= rn * nz
+        r_mag = math.sqrt(rx * rx + ry * ry + rz * rz)
+        if r_mag > 0.0:
+            scale = mu_roll * abs(fn) * r_eff / r_mag
+            tix -= scale * rx
+            tiy -= scale * ry
+            tiz -= scale * rz
+            tjx += scale * rx
+            tjy += scale * ry
+            tjz += scale * rz
+    return (
+        fn * nx + ftx,
+        fn * ny + fty,
+        fn * nz + ftz,
+        tix,
+        tiy,
+        tiz,
+        tjx,
+        tjy,
+        tjz,
+        fn,
+    )
+
+
+# --- time scales of the laws (Python; used to choose and to check the time step) ----------------
+
+
+def linear_collision_time(stiffness: float, m_eff: float, beta: float) -> float:
+    """Contact duration pi / sqrt(k_n/m* - (gamma_n / 2 m*)^2) of the linear law, s.
+
+    With gamma_n = -2 beta sqrt(k_n m*) the radicand is (k_n/m*)(1 - beta^2); at or beyond
+    critical damping (beta^2 >= 1) the undamped time pi / sqrt(k_n/m*) is returned.
+    """
+    w0_sq = stiffness / m_eff
+    wd_sq = w0_sq * (1.0 - beta * beta)
+    return math.pi / math.sqrt(wd_sq if wd_sq > 0.0 else w0_sq)
+
+
+def hertz_max_overlap(youngs_star: float, r_eff: float, m_eff: float, speed: float) -> float:
+    """Largest overlap of an elastic Hertz impact, (15 m* v^2 / (16 Y* sqrt(R*)))^(2/5), m."""
+    return (15.0 * m_eff * speed**2 / (16.0 * youngs_star * math.sqrt(r_eff))) ** 0.4
+
+
+def hertz_collision_time(youngs_star: float, r_eff: float, m_eff: float, speed: float) -> float:
+    """Elastic Hertz contact duration 2.87 (m*^2 / (R* Y*^2 v))^(1/5), s."""
+    return 2.87 * (m_eff**2 / (r_eff * youngs_star**2 * speed)) ** 0.2
+
+
+def rayleigh_time(radius: float, density: float, youngs_modulus: float, poisson: float) -> float:
+    """Rayleigh time pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = Y / (2 (1 + nu)), s."""
+    shear = youngs_modulus / (2.0 * (1.0 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def critical_timestep(stiffness: float, m_eff: float, zeta: float) -> float:
+    """Stability limit of velocity Verlet for a damped spring, 2/w0 (sqrt(1 + z^2) - z), s.
+
+    w0 = sqrt(k / m*), z = gamma / (2 sqrt(k m*)) the damping ratio.
+    """
+    w0 = math.sqrt(stiffness / m_eff)
+    return 2.0 / w0 * (math.sqrt(1.0 + zeta * zeta) - zeta)

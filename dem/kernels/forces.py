@@ -1,0 +1,152 @@
+"""The pair loop and the wall contacts: forces and torques on every sphere.
+
+Race-free by construction, no atomics:
+
+1. :func:`pair_forces` runs in parallel over the pair list; pair k writes only row k of
+   ``out_pf`` (force on i; j gets -out_pf[k]), rows 2k and 2k + 1 of ``out_pt`` (torques on i
+   and on j) and of the tangential history.
+2. :func:`sphere_force` is called by a parallel loop over spheres
+   (:func:`dem.kernels.integrate.forces_kick`); sphere i gathers its own pairs through the CSR
+   index of :mod:`dem.kernels.neighbours` (entry e = 2 k + role: force sign 1 - 2 role, torque
+   row e, so the gather has no branch), adds its wall contacts (history rows 3 i + w, its own)
+   and the body force m a_body. Each pair is computed once.
+
+Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
+wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
+infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - delta.
+
+Every contact law goes through :func:`dem.kernels.contacts.contact_force`.
+"""
+
+import math
+
+import numba
+
+from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
+from dem.kernels.contacts import contact_force
+
+N_WALLS = 3
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def pair_forces(
+    model, p, x, v, omega, radius, mass, pair_i, pair_j, n_pairs, hist, length, dt, out_pf, out_pt,
+):  # fmt: skip
+    """Contact force and torques of each pair of the list (zero and history reset if apart).
+
+    Args:
+        model, p: Contact law id and parameters (:mod:`dem.kernels.contacts`).
+        x, v, omega: Positions (m), velocities (m/s), spins (rad/s), shape (n, 3).
+        radius, mass: Shape (n,), m and kg.
+        pair_i, pair_j: Pairs i < j, shape (cap,); the first ``n_pairs`` are valid.
+        hist: Tangential elongation per pair, shape (cap, 3), m; updated.
+        length: Period in x, m (minimum image).
+        dt: Time step, s.
+        out_pf: Force on i per pair, shape (cap, 3), N.
+        out_pt: Torque on i (row 2k) and on j (row 2k + 1) per pair, shape (2 cap, 3), N m.
+
+    """
+    half = 0.5 * length
+    for k in numba.prange(n_pairs):
+        i = pair_i[k]
+        j = pair_j[k]
+        dx = x[i, 0] - x[j, 0]
+        if dx > half:
+            dx -= length
+        elif dx < -half:
+            dx += length
+        dy = x[i, 1] - x[j, 1]
+        dz = x[i, 2] - x[j, 2]
+        d2 = dx * dx + dy * dy + dz * dz
+        ri = radius[i]
+        rj = radius[j]
+        rsum = ri + rj
+        if d2 >= rsum * rsum:
+            for c in range(3):
+                hist[k, c] = 0.0
+                out_pf[k, c] = 0.0
+                out_pt[2 * k, c] = 0.0
+                out_pt[2 * k + 1, c] = 0.0
+            continue
+        d = math.sqrt(d2)
+        delta = rsum - d
+        inv_d = 1.0 / d
+        mi = mass[i]
+        mj = mass[j]
+        f = contact_force(
+            model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
+            v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
+            omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
+            ri - 0.5 * delta, rj - 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
+        )  # fmt: skip
+        out_pf[k, 0] = f[0]
+        out_pf[k, 1] = f[1]
+        out_pf[k, 2] = f[2]
+        out_pt[2 * k, 0] = f[3]
+        out_pt[2 * k, 1] = f[4]
+        out_pt[2 * k, 2] = f[5]
+        out_pt[2 * k + 1, 0] = f[6]
+        out_pt[2 * k + 1, 1] = f[7]
+        out_pt[2 * k + 1, 2] = f[8]
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def sphere_force(
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, part_pairs,
+    pf, pt, ax, ay, az,
+):  # fmt: skip
+    """Total force and torque on sphere i: its pairs, its wall contacts and m (ax, ay, az).
+
+    Returns:
+        (fx, fy, fz, tx, ty, tz) in N and N m.
+
+    """
+    m = mass[i]
+    fx = m * ax
+    fy = m * ay
+    fz = m * az
+    tx = 0.0
+    ty = 0.0
+    tz = 0.0
+    for e in range(part_start[i], part_start[i + 1]):
+        row = part_pairs[e]
+        k = row >> 1
+        sign = 1.0 - 2.0 * (row & 1)
+        fx += sign * pf[k, 0]
+        fy += sign * pf[k, 1]
+        fz += sign * pf[k, 2]
+        tx += pt[row, 0]
+        ty += pt[row, 1]
+        tz += pt[row, 2]
+    r = radius[i]
+    for w in range(N_WALLS):
+        nz = 0.0
+        ny = 0.0
+        if w == 0:
+            gap = x[i, 2]
+            nz = 1.0
+        elif w == 1:
+            gap = x[i, 1] + half_width
+            ny = 1.0
+        else:
+            gap = half_width - x[i, 1]
+            ny = -1.0
+        delta = r - gap
+        row = N_WALLS * i + w
+        if delta <= 0.0:
+            wall_hist[row, 0] = 0.0
+            wall_hist[row, 1] = 0.0
+            wall_hist[row, 2] = 0.0
+            continue
+        f = contact_force(
+            model, p, 0.0, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2],
+            omega[i, 0], omega[i, 1], omega[i, 2], 0.0, 0.0, 0.0,
+            r - delta, 0.0, m, r, wall_hist, row, dt,
+        )  # fmt: skip
+        fx += f[0]
+        fy += f[1]
+        fz += f[2]
+        tx += f[3]
+        ty += f[4]
+        tz += f[5]
+    return fx, fy, fz, tx, ty, tz

@@ -1,0 +1,182 @@
+"""Velocity Verlet in the trough's accelerating frame, many steps per call.
+
+One step n -> n + 1 (t_n = n dt), as in LAMMPS ``fix nve/sphere``:
+
+1. half kick and drift (parallel over spheres):
+   v += dt/2 F/m, omega += dt/2 T/I (if rotation is on), x += dt v
+   (fused into step 4 of the previous step within one call);
+2. if some sphere moved more than skin/2 since the last build, rebuild the pair list
+   (:func:`dem.kernels.neighbours.rebuild`, history carried over by pair key);
+3. pair forces (parallel over pairs, :func:`dem.kernels.forces.pair_forces`) with the positions
+   x_{n+1} and the half-step velocities v_{n+1/2} (damping and friction see these);
+4. gather, walls, body force m (g + A omega^2 sin(omega t_{n+1}) e) and the second half kick
+   v += dt/2 F/m, omega += dt/2 T/I (parallel over spheres), summing the x-momentum
+   sum_i m_i v_x,i for the measurement.
+
+Arrays travel as two tuples: ``sph = (x, v, omega, force, torque, radius, mass, inv_mass,
+inv_inertia, wall_hist)`` and ``nb = (x_ref, pair_i, pair_j, pair_key, hist, scratch_j,
+scratch_key, scratch_hist, counts, offsets, cell_of, cell_start, cell_particles, part_start,
+part_pairs, pf, pt)`` (shapes in :mod:`dem.state`).
+"""
+
+import math
+
+import numba
+
+from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
+from dem.kernels.forces import pair_forces, sphere_force
+from dem.kernels.neighbours import OK, max_displacement_sq, rebuild
+
+#: status returned by :func:`advance` when all steps were done.
+DONE = OK
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation):
+    """Half kick of v (and omega if ``rotation``) with the stored force, then drift x."""
+    h = 0.5 * dt
+    for i in numba.prange(n):
+        a = h * inv_mass[i]
+        for c in range(3):
+            v[i, c] += a * force[i, c]
+            x[i, c] += dt * v[i, c]
+        if rotation:
+            b = h * inv_inertia[i]
+            for c in range(3):
+                omega[i, c] += b * torque[i, c]
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def forces_kick(
+    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift,
+):  # fmt: skip
+    """Gather forces per sphere into ``force``/``torque``; then (if ``kick``) the half kick.
+
+    With ``next_drift`` the next step's first half kick and drift follow in the same loop (one
+    parallel region less per step): v_{n+3/2} = v_{n+1} + dt/2 F_{n+1}/m, x_{n+2} = x_{n+1} +
+    dt v_{n+3/2}.
+
+    Returns:
+        sum_i m_i v_x,i after the (second) half kick, kg m/s.
+
+    """
+    x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
+    part_start, part_pairs, pf, pt = nb[13], nb[14], nb[15], nb[16]
+    h = 0.5 * dt
+    px = 0.0
+    for i in numba.prange(n):
+        f = sphere_force(
+            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+            part_pairs, pf, pt, ax, ay, az,
+        )  # fmt: skip
+        force[i, 0] = f[0]
+        force[i, 1] = f[1]
+        force[i, 2] = f[2]
+        torque[i, 0] = f[3]
+        torque[i, 1] = f[4]
+        torque[i, 2] = f[5]
+        if kick:
+            a = h * inv_mass[i]
+            v[i, 0] += a * f[0]
+            v[i, 1] += a * f[1]
+            v[i, 2] += a * f[2]
+            if rotation:
+                b = h * inv_inertia[i]
+                omega[i, 0] += b * f[3]
+                omega[i, 1] += b * f[4]
+                omega[i, 2] += b * f[5]
+        px += mass[i] * v[i, 0]
+        if next_drift:
+            a = h * inv_mass[i]
+            for c in range(3):
+                v[i, c] += a * f[c]
+                x[i, c] += dt * v[i, c]
+            if rotation:
+                b = h * inv_inertia[i]
+                for c in range(3):
+                    omega[i, c] += b * f[3 + c]
+    return px
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def body_acceleration(t, gravity, drive):
+    """a_body = g + A omega^2 sin(omega t) e; drive = (A omega^2, omega, e_x, e_y, e_z)."""
+    s = drive[0] * math.sin(drive[1] * t)
+    return gravity[0] + s * drive[2], gravity[1] + s * drive[3], gravity[2] + s * drive[4]
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def evaluate_forces(
+    n, model, p, rotation, sph, nb, n_pairs, geom, t, gravity, drive, kick, next_drift,
+):  # fmt: skip
+    """Pair forces then per-sphere gather at time t (see :func:`forces_kick`); sum m v_x."""
+    x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
+    length, width, dt = geom[0], geom[1], geom[3]
+    pair_forces(
+        model, p, x, v, omega, radius, mass, nb[1], nb[2], n_pairs, nb[4], length, dt, nb[15],
+        nb[16],
+    )  # fmt: skip
+    ax, ay, az = body_acceleration(t, gravity, drive)
+    return forces_kick(
+        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift
+    )
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def build(n, sph, nb, counters, geom):
+    """Rebuild the pair list of ``nb`` (counters[0] = number of pairs); returns (status, need)."""
+    x, radius = sph[0], sph[5]
+    status, n_pairs, need = rebuild(
+        x, radius, n, geom[2], geom[0], geom[1], nb[0], nb[1], nb[2], nb[3], nb[4], counters[0],
+        nb[5], nb[6], nb[7], nb[8], nb[9], nb[10], nb[11], nb[12], nb[13], nb[14],
+    )  # fmt: skip
+    counters[0] = n_pairs
+    if status == OK:
+        counters[1] += 1
+    return status, need
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def advance(
+    n_steps, step0, resume, n, model, p, rotation, sph, nb, counters, geom, gravity, drive,
+    out_stats,
+):  # fmt: skip
+    """Advance ``n_steps`` velocity-Verlet steps from step index ``step0`` (t = step dt).
+
+    Args:
+        n_steps, step0: Steps to take, index of the first step's start.
+        resume: True when the first step's kick and drift were already done (a retry after a
+            neighbour-list overflow).
+        n, model, p, rotation: Sphere count, contact law id and parameters, rotation on/off.
+        sph, nb: Array tuples (module docstring).
+        counters: int64 (2,): number of pairs, number of builds; updated.
+        geom: float64 (4,): length, width, skin, dt.
+        gravity: float64 (3,), m/s^2, trough frame.
+        drive: float64 (5,): A omega^2 (m/s^2), omega (rad/s), e_x, e_y, e_z.
+        out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
+
+    Returns:
+        (status, steps_done, need): status DONE, or a neighbour-list overflow code with the
+        capacity needed; then the step ``steps_done`` has been kicked and drifted but has no forces
+        yet (call again with ``resume`` after regrowing).
+
+    """
+    x, v, omega, force, torque = sph[0], sph[1], sph[2], sph[3], sph[4]
+    inv_mass, inv_inertia = sph[7], sph[8]
+    length, skin, dt = geom[0], geom[2], geom[3]
+    limit = 0.25 * skin * skin
+    for s in range(n_steps):
+        if s == 0 and not resume:
+            kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation)
+        if max_displacement_sq(x, nb[0], n, length) > limit:
+            status, need = build(n, sph, nb, counters, geom)
+            if status != OK:
+                return status, s, need
+        t = (step0 + s + 1) * dt
+        px = evaluate_forces(
+            n, model, p, rotation, sph, nb, counters[0], geom, t, gravity, drive, True,
+            s < n_steps - 1,
+        )  # fmt: skip
+        out_stats[0] += px
+        out_stats[1] += 1.0
+    return DONE, n_steps, 0

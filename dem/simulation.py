@@ -1,0 +1,533 @@
+"""The DEM step loop: fill, settle, drive, measure; ``run_case`` behind ``dem run``.
+
+Order of operations in one step n -> n + 1 (t_n = n dt, drive time counted from the moment the
+drive was switched on), all inside :func:`dem.kernels.integrate.advance`:
+
+1. half kick and drift: v += dt/2 F_n/m, omega += dt/2 T_n/I (rotation on), x += dt v;
+2. neighbour list rebuilt if a sphere moved more than skin/2 since the last build (history kept
+   per pair key; overflowing capacities are regrown here in Python and the step resumed);
+3. pair forces at x_{n+1} with the half-step velocities (parallel over pairs);
+4. per sphere: gather its pairs, wall contacts, body force m (g + A omega^2 sin(omega t) e); second
+   half kick; x-momentum summed for the measurement (within one call of ``advance``, step n+1's
+   item 1 runs in this same parallel loop).
+
+The trajectory does not depend on the number of threads, bit for bit: every force sum is taken
+in the same order whatever the threads (per-pair rows, then a per-sphere gather in CSR order);
+only the momentum sum of the measurement is a parallel reduction (last-bit differences).
+
+Every ``DEM_CHECK_INTERVAL`` steps Python checks for instability (non-finite values, overlaps
+beyond ``DEM_MAX_OVERLAP_FRACTION`` of the radius, grains far faster than drive and gravity can
+make them) and raises :class:`dem.errors.SimulationError` naming the cause and the fix.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from dem import config
+from dem.errors import InputError, SimulationError
+from dem.kernels import contacts
+from dem.kernels.integrate import DONE, advance, build, evaluate_forces
+from dem.kernels.neighbours import OK
+from dem.state import PairList, Spheres, random_fill
+from dem.trough import Trough
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """A contact law selector with its kernel parameters.
+
+    Attributes:
+        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
+        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
+
+    """
+
+    model: str
+    params: np.ndarray
+
+    @classmethod
+    def from_case(cls, case) -> ContactLaw:
+        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall)."""
+        c, m = case.contact, case.material
+        return cls(
+            model=c.model,
+            params=contacts.make_params(
+                stiffness=c.stiffness or 0.0,
+                tangential_stiffness_ratio=c.tangential_stiffness_ratio,
+                youngs_modulus=c.youngs_modulus or 0.0,
+                poisson_ratio=c.poisson_ratio,
+                restitution=m.restitution_normal,
+                friction=m.friction,
+                rolling_friction=m.rolling_friction,
+                limit_force=c.limit_force,
+            ),
+        )
+
+    @property
+    def model_id(self) -> int:
+        """Integer id used by the kernels."""
+        return contacts.MODELS[self.model]
+
+
+def timestep_limits(
+    law: ContactLaw,
+    radius: float,
+    density: float,
+    impact_speed: float,
+    *,
+    rotation: bool = True,
+    pairs: bool = True,
+    youngs_modulus: float = 0.0,
+    poisson_ratio: float = 0.3,
+) -> tuple[float, float]:
+    """Automatic time step and stability limit, s, for equal spheres.
+
+    Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
+    the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
+    a rolling sphere's tangential effective mass is 2/7 m*), sphere-sphere (m* = m/2, R* = r/2;
+    only if ``pairs``) and sphere-wall (m* = m, R* = r). Hertz stiffnesses are the tangent
+    stiffnesses S_n, S_t at the overlap of an impact at ``impact_speed``.
+
+    Automatic: linear: ``DEM_DT_COLLISION_FRACTION`` of the collision time; Hertz: the smaller
+    of ``DEM_DT_RAYLEIGH_FRACTION`` of the Rayleigh time and ``DEM_DT_HERTZ_FRACTION`` of the
+    Hertz collision time at ``impact_speed``; never above the stability limit.
+    """
+    p = law.params
+    mass = density * 4.0 / 3.0 * math.pi * radius**3
+    beta = p[contacts.P_BETA]
+    tangential_factor = 3.5 if rotation else 1.0
+    contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
+    limit = math.inf
+    auto = math.inf
+    for m_eff, r_eff in contacts_list:
+        if law.model == "linear":
+            kn = p[contacts.P_KN]
+            kt = p[contacts.P_KT_RATIO] * kn
+            zeta = -beta
+            auto = min(auto, contacts.linear_collision_time(kn, m_eff, beta))
+        else:
+            delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
+            root = math.sqrt(r_eff * delta)
+            kn = 2.0 * p[contacts.P_YSTAR] * root
+            kt = 8.0 * p[contacts.P_GSTAR] * root
+            zeta = -math.sqrt(5.0 / 6.0) * beta
+            auto = min(
+                auto,
+                contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
+            )
+        kt_eff = tangential_factor * kt
+        zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
+        limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
+        if kt > 0:
+            limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
+    limit *= config.DEM_DT_STABILITY_FRACTION
+    if law.model == "linear":
+        auto *= config.DEM_DT_COLLISION_FRACTION
+    else:
+        auto = min(
+            auto * config.DEM_DT_HERTZ_FRACTION,
+            config.DEM_DT_RAYLEIGH_FRACTION
+            * contacts.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
+        )
+    return min(auto, limit), limit
+
+
+class Simulation:
+    """Spheres in a periodic trough section: the state and the step loop.
+
+    Order of operations in one step (n -> n + 1, see the module docstring):
+    half kick + drift -> neighbour rebuild if needed -> pair forces -> gather + walls + body force
+    + half kick. Instability checks every ``DEM_CHECK_INTERVAL`` steps.
+
+    Args:
+        spheres: Sphere state (modified in place).
+        trough: Geometry and drive.
+        law: Contact law.
+        dt: Time step, s.
+        rotation: False locks rotation (spins stay zero, torques are not integrated).
+        skin: Verlet skin, m; default ``DEM_SKIN_FRACTION`` times the largest radius.
+        reference_speed: Speed scale for the instability check, m/s (drive and free fall).
+
+    """
+
+    def __init__(
+        self,
+        spheres: Spheres,
+        trough: Trough,
+        law: ContactLaw,
+        dt: float,
+        *,
+        rotation: bool = True,
+        skin: float | None = None,
+        reference_speed: float | None = None,
+    ):
+        self.spheres = spheres
+        self.trough = trough
+        self.law = law
+        self.dt = float(dt)
+        self.rotation = bool(rotation)
+        r_max = float(np.max(spheres.radius))
+        self.skin = config.DEM_SKIN_FRACTION * r_max if skin is None else float(skin)
+        if trough.length < 2.0 * (2.0 * r_max + self.skin):
+            raise InputError(
+                "trough.length",
+                trough.length,
+                f"at least 2 (2 r + skin) = {2 * (2 * r_max + self.skin):.6g} m "
+                "(the periodic image must be unique)",
+            )
+        self.pairs = PairList.for_spheres(spheres.n)
+        self.geom = np.array([trough.length, trough.width, self.skin, self.dt])
+        self.gravity = trough.gravity
+        self.drive_on = False
+        self.drive_start_step = 0
+        self.step_index = 0
+        self.stats = np.zeros(2)
+        self.reference_speed = reference_speed or (
+            trough.drive_speed + math.sqrt(2 * config.GRAVITY * 10 * r_max)
+        )
+        self._forces_valid = False
+
+    # --- stepping ---------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the start, s."""
+        return self.step_index * self.dt
+
+    @property
+    def drive_time(self) -> float:
+        """Time since the drive was switched on (phase origin), s."""
+        return (self.step_index - self.drive_start_step) * self.dt
+
+    def start_drive(self) -> None:
+        """Switch the drive on with phase 0 now: a = A omega^2 sin(omega (t - t_now)) e."""
+        self.drive_on = True
+        self.drive_start_step = self.step_index
+        # sin(0) = 0: the stored forces are already those of drive time 0
+
+    def _drive(self) -> np.ndarray:
+        return self.trough.drive_array(self.drive_on)
+
+    def _build(self) -> None:
+        while True:
+            status, need = build(
+                self.spheres.n, self.spheres.as_tuple(), self.pairs.as_tuple(),
+                self.pairs.counters, self.geom,
+            )  # fmt: skip
+            if status == OK:
+                return
+            self.pairs.grow(status, need)
+
+    def compute_forces(self) -> None:
+        """Rebuild the pair list and evaluate forces and torques at the current state (no kick).
+
+        Updates the contact history once, as a step does; ``spheres.force``/``torque`` hold
+        contact forces plus m a_body.
+        """
+        self._build()
+        evaluate_forces(
+            self.spheres.n, self.law.model_id, self.law.params, self.rotation,
+            self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.n_pairs, self.geom,
+            self.drive_time, self.gravity, self._drive(), False, False,
+        )  # fmt: skip
+        self._forces_valid = True
+
+    def _advance(self, n_steps: int) -> None:
+        threads = numba.get_num_threads()
+        if self.spheres.n < config.DEM_PARALLEL_MIN_SPHERES:
+            numba.set_num_threads(1)
+        try:
+            self._advance_steps(n_steps)
+        finally:
+            numba.set_num_threads(threads)
+
+    def _advance_steps(self, n_steps: int) -> None:
+        if not self._forces_valid:
+            self.compute_forces()
+        done = 0
+        resume = False
+        while done < n_steps:
+            status, steps, need = advance(
+                n_steps - done, self.step_index - self.drive_start_step, resume,
+                self.spheres.n, self.law.model_id, self.law.params, self.rotation,
+                self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.counters, self.geom,
+                self.gravity, self._drive(), self.stats,
+            )  # fmt: skip
+            done += steps
+            self.step_index += steps
+            if status == DONE:
+                return
+            self.pairs.grow(status, need)
+            resume = True
+
+    def run(self, n_steps: int) -> None:
+        """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``."""
+        left = int(n_steps)
+        while left > 0:
+            chunk = min(left, config.DEM_CHECK_INTERVAL)
+            self._advance(chunk)
+            left -= chunk
+            self.check()
+
+    # --- diagnostics -------------------------------------------------------------------------
+
+    def max_overlap_fraction(self) -> float:
+        """Largest overlap over the smaller radius, pairs and walls (0 if nothing touches)."""
+        s, p = self.spheres, self.pairs
+        r = s.radius
+        worst = 0.0
+        k = p.n_pairs
+        if k:
+            i, j = p.pair_i[:k], p.pair_j[:k]
+            d = s.x[i] - s.x[j]
+            d[:, 0] -= self.trough.length * np.round(d[:, 0] / self.trough.length)
+            delta = r[i] + r[j] - np.sqrt(np.einsum("ij,ij->i", d, d))
+            worst = max(worst, float(np.max(delta / np.minimum(r[i], r[j]))))
+        half = 0.5 * self.trough.width
+        gaps = np.stack([s.x[:, 2], s.x[:, 1] + half, half - s.x[:, 1]])
+        worst = max(worst, float(np.max((r - gaps) / r)))
+        return worst
+
+    def check(self) -> None:
+        """Raise SimulationError if the state is non-finite, overlapping or far too fast."""
+        s = self.spheres
+        where = f"at t = {self.time:.6g} s (step {self.step_index}, dt = {self.dt:.3g} s)"
+        if not (np.isfinite(s.x).all() and np.isfinite(s.v).all() and np.isfinite(s.omega).all()):
+            raise SimulationError(
+                f"non-finite positions or velocities {where}: the integration blew up; "
+                "use a smaller run.timestep (or 'auto') or a softer contact"
+            )
+        overlap = self.max_overlap_fraction()
+        if overlap > config.DEM_MAX_OVERLAP_FRACTION:
+            raise SimulationError(
+                f"overlap of {overlap:.3g} radii {where} exceeds "
+                f"{config.DEM_MAX_OVERLAP_FRACTION} (DEM_MAX_OVERLAP_FRACTION): the contact is "
+                "too soft for these impacts or the time step too large; use a stiffer contact "
+                "(contact.youngs_modulus / contact.stiffness), a smaller run.timestep or a "
+                "smaller drive.throw_number"
+            )
+        speed = float(np.sqrt(np.max(np.einsum("ij,ij->i", s.v, s.v))))
+        bound = config.DEM_MAX_SPEED_FACTOR * self.reference_speed
+        if speed > bound:
+            raise SimulationError(
+                f"a grain moves at {speed:.3g} m/s {where}, more than {bound:.3g} m/s that drive "
+                "and gravity can explain (kinetic energy far above the drive's input): the "
+                "integration is unstable; use a smaller run.timestep (or 'auto'), a stiffer "
+                "contact or a smaller drive.throw_number"
+            )
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy in the trough frame, J."""
+        s = self.spheres
+        trans = 0.5 * np.sum(s.mass * np.einsum("ij,ij->i", s.v, s.v))
+        rot = 0.5 * np.sum(np.einsum("ij,ij->i", s.omega, s.omega) / s.inv_inertia)
+        return float(trans + rot)
+
+    def rms_speed(self) -> float:
+        """Root mean square sphere speed, m/s."""
+        return float(np.sqrt(np.mean(np.einsum("ij,ij->i", self.spheres.v, self.spheres.v))))
+
+    def settle(self, *, max_time: float | None = None, chunk_time: float = 0.005) -> float:
+        """Run with the drive off until the rms speed < DEM_SETTLE_SPEED_FRACTION sqrt(g r).
+
+        Returns the simulated settling time, s; raises SimulationError after ``max_time``.
+        """
+        max_time = config.DEM_SETTLE_MAX_TIME if max_time is None else max_time
+        self.drive_on = False
+        r = float(np.mean(self.spheres.radius))
+        threshold = config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * r)
+        chunk = max(1, int(round(chunk_time / self.dt)))
+        start = self.time
+        while self.time - start < max_time:
+            self.run(chunk)
+            if self.rms_speed() < threshold:
+                return self.time - start
+        raise SimulationError(
+            f"the fill did not come to rest within {max_time} s of simulated time (rms speed "
+            f"{self.rms_speed():.3g} m/s > {threshold:.3g} m/s); raise "
+            "material.restitution_normal damping (lower eps_n) or check the contact stiffness"
+        )
+
+    def mean_velocity_x(self) -> float:
+        """Mass-weighted mean x-velocity now (trough frame), m/s."""
+        s = self.spheres
+        return float(np.sum(s.mass * s.v[:, 0]) / np.sum(s.mass))
+
+    # --- construction from a case --------------------------------------------------------------
+
+    @classmethod
+    def from_case(cls, case, *, timestep: float | None = None) -> Simulation:
+        """Fill the case's trough with spheres (seeded) and set up the time step.
+
+        The time step is ``timestep``, else ``case.run.timestep``, else automatic; a given value
+        above the stability limit raises InputError naming ``run.timestep``. An automatic step is
+        shortened so that a drive period holds a whole number of steps.
+        """
+        pt, mat = case.particles, case.material
+        if pt.shape != "sphere":
+            raise InputError("particles.shape", pt.shape, "'sphere' (the engine runs spheres)")
+        if case.trough.mesh is not None:
+            raise InputError(
+                "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
+            )
+        trough = Trough.from_case(case)
+        law = ContactLaw.from_case(case)
+        rng = np.random.default_rng(case.run.seed)
+        positions, height = random_fill(pt.count, pt.radius, trough.length, trough.width, rng)
+        impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
+        auto, limit = timestep_limits(
+            law, pt.radius, mat.density, impact, rotation=pt.rotation, pairs=pt.count > 1,
+            youngs_modulus=case.contact.youngs_modulus or 0.0,
+            poisson_ratio=case.contact.poisson_ratio,
+        )  # fmt: skip
+        user = timestep if timestep is not None else case.run.timestep
+        if user is not None:
+            if user > limit:
+                raise InputError(
+                    "run.timestep",
+                    user,
+                    f"<= {limit:.4g} s, the stability limit of this contact "
+                    f"({config.DEM_DT_STABILITY_FRACTION} of the critical step; 'auto' gives "
+                    f"{auto:.4g} s)",
+                    source=str(case.source),
+                )
+            dt = float(user)
+        else:
+            dt = trough.period / math.ceil(trough.period / auto)
+        spheres = Spheres.create(positions, pt.radius, mat.density)
+        sim = cls(spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact)
+        sim.fill_height = height
+        sim.timestep_limit = limit
+        return sim
+
+
+def _set_threads(threads: int | None) -> int:
+    n = config.default_threads() if threads is None else int(threads)
+    n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))
+    numba.set_num_threads(n)
+    return n
+
+
+def _pointmass_norm(case) -> float | None:
+    try:
+        from dem import pointmass
+    except ImportError:  # pragma: no cover - the point-mass package is a sibling module
+        return None
+    result = pointmass.velocity(
+        throw_number=case.drive.throw_number,
+        angle=case.drive.angle,
+        friction=case.material.friction,
+        inclination=case.trough.inclination,
+        eps_t=case.material.restitution_tangential,
+        eps_n=case.material.restitution_normal,
+    )
+    return float(result.velocity_norm)
+
+
+def run_case(
+    case,
+    out_dir: Path,
+    *,
+    cycles: int | None = None,
+    threads: int | None = None,
+    progress: bool = True,
+) -> dict:
+    """Fill, settle, drive ``settle_cycles + cycles`` cycles, measure; write summary.json.
+
+    Args:
+        case: A :class:`dem.case.Case`.
+        out_dir: Output directory (created).
+        cycles: Measured cycles (default ``case.run.cycles``).
+        threads: numba threads (default all cores or NUMBA_NUM_THREADS).
+        progress: Show a tqdm progress bar.
+
+    Returns:
+        The summary (also written to ``out_dir/summary.json``).
+
+    """
+    from dem import measure
+
+    n_threads = _set_threads(threads)
+    cycles = case.run.cycles if cycles is None else int(cycles)
+    if cycles < 1:
+        raise InputError("cycles", cycles, ">= 1")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    sim = Simulation.from_case(case)
+    t0 = time.perf_counter()
+    settle_time = sim.settle()
+    t_settle = time.perf_counter() - t0
+    sim.start_drive()
+    total = case.run.settle_cycles + cycles
+    period = sim.trough.period
+    per_cycle = []
+    steps = 0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="cycle", desc=f"dem {case.name}")
+    t_loop = 0.0
+    for c in range(total):
+        end = int(round((c + 1) * period / sim.dt)) + sim.drive_start_step
+        n = end - sim.step_index
+        sim.stats[:] = 0.0
+        t1 = time.perf_counter()
+        sim.run(n)
+        t_loop += time.perf_counter() - t1
+        steps += n
+        if c >= case.run.settle_cycles:
+            per_cycle.append(sim.stats[0] / (sim.stats[1] * float(np.sum(sim.spheres.mass))))
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    stat = measure.conveying_velocity(
+        np.array(per_cycle), amplitude=case.drive.amplitude, omega=case.drive.omega,
+        angle=case.drive.angle,
+    )  # fmt: skip
+    total_mass = float(np.sum(sim.spheres.mass))
+    flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
+    summary = {
+        "case": case.name,
+        "mean_velocity": stat.mean,
+        "mean_velocity_stderr": stat.stderr,
+        "mean_velocity_norm": stat.norm,
+        "mean_velocity_norm_stderr": stat.norm_stderr,
+        "mass_flow_rate": flow,
+        "mass_flow_rate_per_width": flow / case.trough.width,
+        "amplitude": case.drive.amplitude,
+        "throw_number": case.drive.throw_number,
+        "frequency": case.drive.frequency,
+        "angle": case.drive.angle,
+        "inclination": case.trough.inclination,
+        "friction": case.material.friction,
+        "contact_model": case.contact.model,
+        "grains": case.particles.count,
+        "spheres": sim.spheres.n,
+        "total_mass": total_mass,
+        "timestep": sim.dt,
+        "timestep_limit": sim.timestep_limit,
+        "steps": steps,
+        "settle_cycles": case.run.settle_cycles,
+        "cycles": cycles,
+        "per_cycle_velocity": [float(u) for u in per_cycle],
+        "settle_time_s": settle_time,
+        "settle_wall_time_s": t_settle,
+        "wall_time_s": t_loop,
+        "particle_steps_per_s": sim.spheres.n * steps / t_loop if t_loop > 0 else None,
+        "neighbour_builds": sim.pairs.builds,
+        "threads": n_threads,
+        "seed": case.run.seed,
+        "pointmass_velocity_norm": _pointmass_norm(case),
+    }
+    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary

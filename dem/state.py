@@ -1,0 +1,262 @@
+"""Structure-of-arrays state: spheres (the contact members) and the neighbour pair list.
+
+Spheres are what touch: positions, velocities, spins, forces and torques are per sphere, and the
+kernels accumulate contact forces per sphere. A grain (``body``) is a sphere today; a rigid clump
+will own several spheres (``body[s]`` is the grain of sphere s) and a reduction sphere -> body
+(force, torque about the clump's centre of mass) followed by a rigid-body update slots in between
+the force gather and the kick without touching the pair loop.
+
+All arrays are float64 C-contiguous unless stated; n spheres, ``cap`` pair capacity.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES, DEM_GROWTH_FACTOR
+from dem.kernels.forces import N_WALLS
+from dem.kernels.neighbours import OVERFLOW_CELLS, OVERFLOW_PAIRS, OVERFLOW_SLOTS
+
+
+@dataclass
+class Spheres:
+    """Per-sphere state.
+
+    Attributes:
+        x: Positions in the trough frame, (n, 3), m.
+        v: Velocities relative to the trough, (n, 3), m/s.
+        omega: Spins, (n, 3), rad/s.
+        force: Total force of the last evaluation (contacts + body force), (n, 3), N.
+        torque: Total torque of the last evaluation, (n, 3), N m.
+        radius: (n,), m.
+        mass: (n,), kg.
+        inv_mass: 1 / mass, (n,), 1/kg.
+        inv_inertia: 1 / I with I = 2/5 m r^2 (solid sphere), (n,), 1/(kg m^2).
+        wall_hist: Tangential elongation per sphere and wall (row 3 s + w), (3 n, 3), m.
+        body: Grain index of each sphere, (n,), int64.
+
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    omega: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    radius: np.ndarray
+    mass: np.ndarray
+    inv_mass: np.ndarray
+    inv_inertia: np.ndarray
+    wall_hist: np.ndarray
+    body: np.ndarray
+
+    @classmethod
+    def create(cls, positions: np.ndarray, radius: np.ndarray | float, density: float) -> Spheres:
+        """Spheres at rest at ``positions`` (n, 3), of radius (n,) or scalar, density kg/m^3."""
+        x = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3).copy()
+        n = x.shape[0]
+        r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,)).copy()
+        if np.any(r <= 0) or density <= 0:
+            raise ValueError("radius and density must be positive")
+        mass = density * 4.0 / 3.0 * math.pi * r**3
+        inertia = 0.4 * mass * r**2
+        return cls(
+            x=x,
+            v=np.zeros((n, 3)),
+            omega=np.zeros((n, 3)),
+            force=np.zeros((n, 3)),
+            torque=np.zeros((n, 3)),
+            radius=r,
+            mass=mass,
+            inv_mass=1.0 / mass,
+            inv_inertia=1.0 / inertia,
+            wall_hist=np.zeros((N_WALLS * n, 3)),
+            body=np.arange(n, dtype=np.int64),
+        )
+
+    @property
+    def n(self) -> int:
+        """Number of spheres."""
+        return self.x.shape[0]
+
+    def as_tuple(self) -> tuple:
+        """Kernel tuple ``sph`` (:mod:`dem.kernels.integrate`)."""
+        return (
+            self.x,
+            self.v,
+            self.omega,
+            self.force,
+            self.torque,
+            self.radius,
+            self.mass,
+            self.inv_mass,
+            self.inv_inertia,
+            self.wall_hist,
+        )
+
+
+@dataclass
+class PairList:
+    """Verlet pair list with per-pair contact history, cell work arrays and the CSR index.
+
+    Attributes:
+        n: Number of spheres.
+        capacity: Pair capacity ``cap``; ``cell_capacity`` cells (+1 for the start array).
+        slots: Neighbour slots j > i per sphere during a build (``scratch_j``, (n slots,)).
+        counters: int64 (2,): valid pairs, builds so far.
+        x_ref: Positions at the last build, (n, 3).
+        pair_i, pair_j, pair_key: int64 (cap,): i < j, key i n + j, sorted by key.
+        hist: Tangential elongation per pair, (cap, 3), m.
+        pf: Per-pair force on i of the last evaluation, (cap, 3), N.
+        pt: Per-pair torques on i (row 2 k) and j (row 2 k + 1), (2 cap, 3), N m.
+        part_start, part_pairs: CSR sphere -> pairs, int64 (n + 1,) and (2 cap,); an entry
+            2 k + role is pair k with this sphere as i (role 0) or j (role 1).
+
+    """
+
+    n: int
+    capacity: int
+    cell_capacity: int
+    slots: int = 16
+    counters: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        n, cap = self.n, self.capacity
+        self.counters = np.zeros(2, dtype=np.int64)
+        self.x_ref = np.full((n, 3), np.inf)  # forces a build at the first step
+        self.pair_i = np.zeros(cap, dtype=np.int64)
+        self.pair_j = np.zeros(cap, dtype=np.int64)
+        self.pair_key = np.zeros(cap, dtype=np.int64)
+        self.hist = np.zeros((cap, 3))
+        self.scratch_j = np.zeros(n * self.slots, dtype=np.int64)
+        self.scratch_key = np.zeros(cap, dtype=np.int64)
+        self.scratch_hist = np.zeros((cap, 3))
+        self.counts = np.zeros(n, dtype=np.int64)
+        self.offsets = np.zeros(n + 1, dtype=np.int64)
+        self.cell_of = np.zeros(n, dtype=np.int64)
+        self.cell_start = np.zeros(self.cell_capacity + 1, dtype=np.int64)
+        self.cell_particles = np.zeros(n, dtype=np.int64)
+        self.part_start = np.zeros(n + 1, dtype=np.int64)
+        self.part_pairs = np.zeros(2 * cap, dtype=np.int64)
+        self.pf = np.zeros((cap, 3))
+        self.pt = np.zeros((2 * cap, 3))
+
+    @classmethod
+    def for_spheres(cls, n: int) -> PairList:
+        """A list sized for a dense packing of n equal spheres (regrown when it overflows)."""
+        return cls(n=n, capacity=max(16, 8 * n), cell_capacity=max(64, 4 * n))
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of valid pairs."""
+        return int(self.counters[0])
+
+    @property
+    def builds(self) -> int:
+        """Number of builds so far."""
+        return int(self.counters[1])
+
+    def as_tuple(self) -> tuple:
+        """Kernel tuple ``nb`` (:mod:`dem.kernels.integrate`)."""
+        return (
+            self.x_ref,
+            self.pair_i,
+            self.pair_j,
+            self.pair_key,
+            self.hist,
+            self.scratch_j,
+            self.scratch_key,
+            self.scratch_hist,
+            self.counts,
+            self.offsets,
+            self.cell_of,
+            self.cell_start,
+            self.cell_particles,
+            self.part_start,
+            self.part_pairs,
+            self.pf,
+            self.pt,
+        )
+
+    def grow(self, status: int, need: int) -> None:
+        """Regrow after a kernel reported overflow ``status`` needing ``need``; keeps the pairs."""
+        if status == OVERFLOW_SLOTS:
+            self.slots = int(need * DEM_GROWTH_FACTOR) + 1
+            self.scratch_j = np.zeros(self.n * self.slots, dtype=np.int64)
+            return
+        if status == OVERFLOW_CELLS:
+            self.cell_capacity = int(need * DEM_GROWTH_FACTOR) + 1
+            self.cell_start = np.zeros(self.cell_capacity + 1, dtype=np.int64)
+            return
+        if status != OVERFLOW_PAIRS:
+            raise ValueError(f"unknown overflow status {status}")
+        old = self.n_pairs
+        keep = {
+            name: getattr(self, name)[:old].copy()
+            for name in ("pair_i", "pair_j", "pair_key", "hist")
+        }
+        counters = self.counters.copy()
+        x_ref = self.x_ref.copy()
+        self.capacity = int(need * DEM_GROWTH_FACTOR) + 1
+        self.__post_init__()
+        self.counters[:] = counters
+        self.x_ref[:] = x_ref
+        for name, values in keep.items():
+            getattr(self, name)[:old] = values
+
+
+def random_fill(
+    n: int,
+    radius: float,
+    length: float,
+    width: float,
+    rng: np.random.Generator,
+    *,
+    height: float | None = None,
+) -> tuple[np.ndarray, float]:
+    """Random sequential placement of n non-overlapping spheres in the trough.
+
+    Centres are drawn uniformly in x in [0, length), y in [-width/2 + r, width/2 - r],
+    z in [r, height - r] and kept if they overlap no earlier sphere (periodic in x). After
+    ``DEM_FILL_TRIES`` failed tries for one sphere the box is made 25 % taller.
+
+    Args:
+        n: Number of spheres.
+        radius: Sphere radius, m.
+        length, width: Trough section, m.
+        rng: Random generator (seeded by the caller).
+        height: Initial box height, m; default ``DEM_FILL_HEIGHT_FACTOR`` times the height of a
+            dense bed (packing fraction 0.6) plus a diameter.
+
+    Returns:
+        (positions (n, 3) in m, final box height in m).
+
+    """
+    if width <= 2.0 * radius:
+        raise ValueError(f"trough width {width} m leaves no room for spheres of radius {radius} m")
+    if height is None:
+        bed = n * 4.0 / 3.0 * math.pi * radius**3 / (0.6 * length * width)
+        height = DEM_FILL_HEIGHT_FACTOR * bed + 2.0 * radius
+    pos = np.empty((n, 3))
+    d2_min = (2.0 * radius) ** 2
+    placed = 0
+    while placed < n:
+        for _ in range(DEM_FILL_TRIES):
+            c = np.array(
+                [
+                    rng.uniform(0.0, length),
+                    rng.uniform(-0.5 * width + radius, 0.5 * width - radius),
+                    rng.uniform(radius, max(radius, height - radius)),
+                ]
+            )
+            d = pos[:placed] - c
+            d[:, 0] -= length * np.round(d[:, 0] / length)
+            if placed == 0 or np.min(np.einsum("ij,ij->i", d, d)) >= d2_min:
+                pos[placed] = c
+                placed += 1
+                break
+        else:
+            height *= 1.25
+    return pos, height

@@ -1,0 +1,177 @@
+"""Contact laws: forces against a brute-force twin, conservation, two-sphere impacts."""
+
+import math
+
+import numpy as np
+import pytest
+from naive_dem import all_forces
+
+from dem.kernels import contacts
+from dem.simulation import ContactLaw, Simulation
+from dem.state import Spheres
+from dem.trough import Trough
+
+LENGTH, WIDTH = 0.012, 0.010
+
+
+def _packing(rng, n=40, length=LENGTH, width=WIDTH, zmax=0.006):
+    r = rng.uniform(1.0e-3, 1.5e-3, n)
+    x = np.column_stack(
+        [
+            rng.uniform(0, length, n),
+            rng.uniform(-width / 2, width / 2, n),
+            rng.uniform(0.5e-3, zmax, n),
+        ]
+    )
+    return x, r
+
+
+def _coefficients(model, e, mu, mu_roll, limit):
+    return {
+        "kn": 2.0e3, "kt_ratio": 0.4, "E": 1.0e7, "nu": 0.25, "e": e, "mu": mu,
+        "mu_roll": mu_roll, "limit": limit,
+    }  # fmt: skip
+
+
+def _law(model, c):
+    return ContactLaw(
+        model,
+        contacts.make_params(
+            stiffness=c["kn"], tangential_stiffness_ratio=c["kt_ratio"], youngs_modulus=c["E"],
+            poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
+            rolling_friction=c["mu_roll"], limit_force=c["limit"],
+        ),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("model", "e", "mu", "mu_roll", "limit", "dt"),
+    [
+        ("linear", 0.5, 0.3, 0.0, False, 1e-5),
+        ("linear", 0.0, 0.3, 0.1, True, 1e-3),
+        ("hertz_mindlin", 0.3, 0.5, 0.05, False, 1e-5),
+        ("hertz_mindlin", 0.9, 0.2, 0.0, True, 1e-3),
+    ],
+)
+def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt):
+    """Forces and torques equal an O(N^2) NumPy twin, over periodic images and walls, twice:
+    the second evaluation after a move and a rebuild uses the carried-over tangential history."""
+    rng = np.random.default_rng(7)
+    x, r = _packing(rng)
+    c = _coefficients(model, e, mu, mu_roll, limit)
+    spheres = Spheres.create(x, r, 2500.0)
+    sim = Simulation(spheres, Trough(LENGTH, WIDTH, inclination=0.1), _law(model, c), dt)
+    history = {}
+    crossing = 0
+    for _ in range(2):
+        spheres.v[:] = rng.normal(0, 0.3, (len(r), 3))
+        spheres.omega[:] = rng.normal(0, 300.0, (len(r), 3))
+        sim.compute_forces()
+        f_ref, t_ref = all_forces(
+            model, c, spheres.x, spheres.v, spheres.omega, spheres.radius, spheres.mass,
+            LENGTH, WIDTH, sim.gravity, dt, history,
+        )  # fmt: skip
+        scale = np.max(np.abs(f_ref))
+        np.testing.assert_allclose(spheres.force, f_ref, rtol=0, atol=1e-10 * scale)
+        np.testing.assert_allclose(spheres.torque, t_ref, rtol=0, atol=1e-10 * scale * r.max())
+        spheres.x += rng.normal(0, 1e-4, spheres.x.shape)
+        crossing += sum(1 for (i, j) in history if j >= 0 and abs(x[i, 0] - x[j, 0]) > 0.5 * LENGTH)
+    assert len(history) > 30  # many contacts, walls included
+    assert crossing > 0  # some through the periodic boundary
+
+
+def test_internal_forces_conserve_momentum_and_angular_momentum():
+    rng = np.random.default_rng(3)
+    n = 50
+    length, width = 0.2, 0.2
+    x, r = _packing(rng, n=n, length=0.015, width=0.015, zmax=0.012)
+    x[:, 0] += 0.09  # away from the periodic boundary: plain coordinates are the positions
+    x[:, 2] += 0.02  # away from the floor
+    c = _coefficients("hertz_mindlin", 0.4, 0.4, 0.1, False)
+    spheres = Spheres.create(x, r, 2500.0)
+    sim = Simulation(spheres, Trough(length, width), _law("hertz_mindlin", c), 1e-4)
+    sim.gravity[:] = 0.0
+    spheres.v[:] = rng.normal(0, 0.5, (n, 3))
+    spheres.omega[:] = rng.normal(0, 500.0, (n, 3))
+    sim.compute_forces()
+    scale = np.max(np.abs(spheres.force))
+    assert scale > 0 and sim.pairs.n_pairs > 20
+    np.testing.assert_allclose(spheres.force.sum(axis=0), 0.0, atol=1e-12 * scale * n)
+    total_torque = np.cross(spheres.x, spheres.force).sum(axis=0) + spheres.torque.sum(axis=0)
+    np.testing.assert_allclose(total_torque, 0.0, atol=1e-12 * scale * n * 0.1)
+
+
+def test_beta_is_critical_at_zero_restitution():
+    assert contacts.damping_beta(0.0) == -1.0
+    assert contacts.damping_beta(1.0) == 0.0
+    b = contacts.damping_beta(0.5)
+    assert math.isclose(math.exp(math.pi * b / math.sqrt(1 - b * b)), 0.5)
+
+
+def _head_on(law, radius, density, speed, dt):
+    """Two equal spheres colliding head-on along x; returns (restitution, contact time)."""
+    x = np.array([[0.05 - radius - 1e-6, 0.0, 0.05], [0.05 + radius + 1e-6, 0.0, 0.05]])
+    spheres = Spheres.create(x, radius, density)
+    spheres.v[0, 0] = 0.5 * speed
+    spheres.v[1, 0] = -0.5 * speed
+    sim = Simulation(spheres, Trough(0.1, 0.1), law, dt, rotation=False)
+    sim.gravity[:] = 0.0
+    gaps = [spheres.x[1, 0] - spheres.x[0, 0] - 2 * radius]
+    for _ in range(200000):
+        sim._advance(1)
+        gaps.append(spheres.x[1, 0] - spheres.x[0, 0] - 2 * radius)
+        if gaps[-1] > 0 and min(gaps) < 0:
+            break
+    g = np.array(gaps)
+    inside = np.flatnonzero(g < 0)
+    a, b = inside[0], inside[-1]
+    t_in = (a - 1 + g[a - 1] / (g[a - 1] - g[a])) * dt  # linear interpolation of gap = 0
+    t_out = (b + g[b] / (g[b] - g[b + 1])) * dt
+    e = (spheres.v[1, 0] - spheres.v[0, 0]) / speed
+    return e, t_out - t_in
+
+
+@pytest.mark.parametrize("e", [0.9, 0.5, 0.2])
+def test_linear_head_on_restitution_and_contact_time_are_exact(e):
+    """Linear law: e and t_c = pi / sqrt(k/m* - (gamma/2m*)^2) hold exactly (to O(dt))."""
+    kn, radius, density = 1.0e4, 1.0e-3, 2500.0
+    law = ContactLaw("linear", contacts.make_params(stiffness=kn, restitution=e))
+    m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
+    t_c = contacts.linear_collision_time(kn, m_eff, contacts.damping_beta(e))
+    e_sim, t_sim = _head_on(law, radius, density, 0.5, t_c / 2000)
+    assert e_sim == pytest.approx(e, rel=1e-3)
+    assert t_sim == pytest.approx(t_c, rel=1e-3)
+
+
+def test_hertz_head_on_contact_time_is_hertzian():
+    """Elastic Hertz impact: t_c = 2.9432 delta_max / v (2.87 (m*^2/(R* Y*^2 v))^(1/5))."""
+    youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
+    law = ContactLaw(
+        "hertz_mindlin",
+        contacts.make_params(youngs_modulus=youngs, poisson_ratio=nu, restitution=1.0),
+    )
+    m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
+    ystar = youngs / (2 * (1 - nu**2))
+    delta_max = contacts.hertz_max_overlap(ystar, radius / 2, m_eff, speed)
+    # t_c = 2 delta_max / v * int_0^1 dx / sqrt(1 - x^(5/2)) = (4/5) B(2/5, 1/2) delta_max / v
+    t_exact = 0.8 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9) * delta_max / speed
+    assert t_exact == pytest.approx(
+        contacts.hertz_collision_time(ystar, radius / 2, m_eff, speed), rel=2e-3
+    )
+    e_sim, t_sim = _head_on(law, radius, density, speed, t_exact / 2000)
+    assert e_sim == pytest.approx(1.0, abs=1e-4)
+    assert t_sim == pytest.approx(t_exact, rel=2e-3)
+
+
+@pytest.mark.parametrize("e", [0.8, 0.5, 0.2])
+def test_hertz_head_on_restitution_follows_liggghts_beta(e):
+    """Hertz with LIGGGHTS damping gives the set e within 0.005 (measured 2e-4, dt = t_H/2000)."""
+    youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
+    law = ContactLaw(
+        "hertz_mindlin",
+        contacts.make_params(youngs_modulus=youngs, poisson_ratio=nu, restitution=e),
+    )
+    m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
+    t_h = contacts.hertz_collision_time(youngs / (2 * (1 - nu**2)), radius / 2, m_eff, speed)
+    e_sim, _ = _head_on(law, radius, density, speed, t_h / 2000)
+    assert e_sim == pytest.approx(e, abs=5e-3)

@@ -1,0 +1,197 @@
+"""Time integration: energy, order, rest, friction on an incline, the point mass, run_case."""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from dem.case import load_case
+from dem.config import GRAVITY
+from dem.errors import InputError, SimulationError
+from dem.kernels import contacts
+from dem.simulation import ContactLaw, Simulation, run_case
+from dem.state import Spheres
+from dem.trough import Trough
+
+RADIUS, DENSITY = 2.0e-3, 7800.0
+MASS = DENSITY * 4 / 3 * math.pi * RADIUS**3
+
+
+def _linear(kn=1.0e5, e=0.0, mu=0.35, ratio=2 / 7):
+    return ContactLaw(
+        "linear",
+        contacts.make_params(
+            stiffness=kn, restitution=e, friction=mu, tangential_stiffness_ratio=ratio
+        ),
+    )
+
+
+def _energy(sim, kn):
+    """Kinetic + gravitational + spring energy of a linear elastic, frictionless system, J."""
+    s = sim.spheres
+    e = sim.kinetic_energy() - np.sum(s.mass * (s.x @ sim.gravity))
+    x, r, n = s.x, s.radius, s.n
+    for i in range(n):
+        d = x[i] - x[i + 1 :]
+        d[:, 0] -= sim.trough.length * np.round(d[:, 0] / sim.trough.length)
+        delta = r[i] + r[i + 1 :] - np.sqrt(np.sum(d * d, axis=1))
+        e += 0.5 * kn * np.sum(delta[delta > 0] ** 2)
+    half = 0.5 * sim.trough.width
+    for gap in (x[:, 2], x[:, 1] + half, half - x[:, 1]):
+        delta = r - gap
+        e += 0.5 * kn * np.sum(delta[delta > 0] ** 2)
+    return e
+
+
+def test_energy_is_conserved_without_damping_and_friction():
+    """Elastic, frictionless grains bouncing in the trough for 40,000 steps (dt = t_c / 50):
+    |E - E0| / E0 < 2e-4 (measured 4.3e-5; 1.3e-5 at t_c / 100: a bounded O(dt^2) error of
+    velocity Verlet, no drift)."""
+    rng = np.random.default_rng(2)
+    n, kn = 30, 1.0e5
+    k = np.arange(n)
+    x = np.column_stack(
+        [0.0045 * (k % 6), rng.uniform(-0.007, 0.007, n), 0.0025 + 0.0045 * (k // 6)]
+    )
+    law = _linear(kn=kn, e=1.0, mu=0.0)
+    t_c = contacts.linear_collision_time(kn, 0.5 * MASS, 0.0)
+    sim = Simulation(Spheres.create(x, RADIUS, DENSITY), Trough(0.03, 0.02), law, t_c / 50)
+    sim.spheres.v[:] = rng.normal(0, 0.3, (n, 3))
+    e0 = _energy(sim, kn)
+    drift = []
+    for _ in range(40):
+        sim.run(1000)
+        drift.append(abs(_energy(sim, kn) - e0) / e0)
+    assert sim.pairs.builds > 10
+    assert max(drift) < 2e-4
+
+
+def _oscillation_error(dt, t_end=2e-3, kn=1.0e4):
+    """Sphere resting on the floor, pushed down by a: z = z_eq - a cos(w t) while in contact."""
+    z_eq = RADIUS - MASS * GRAVITY / kn
+    a = 0.5 * MASS * GRAVITY / kn
+    sim = Simulation(
+        Spheres.create(np.array([[0.01, 0.0, z_eq - a]]), RADIUS, DENSITY),
+        Trough(0.02, 0.02),
+        _linear(kn=kn, e=1.0, mu=0.0),
+        dt,
+    )
+    steps = int(round(t_end / dt))
+    sim.run(steps)
+    w = math.sqrt(kn / MASS)
+    return abs(sim.spheres.x[0, 2] - (z_eq - a * math.cos(w * steps * dt)))
+
+
+def test_velocity_verlet_is_second_order():
+    errors = [_oscillation_error(2e-5 / 2**k) for k in range(3)]
+    ratios = [errors[k] / errors[k + 1] for k in range(2)]
+    assert all(3.6 < q < 4.4 for q in ratios), (errors, ratios)
+
+
+def _block(inclination_deg, mu=0.35, rotation=False):
+    kn = 1.0e5
+    z0 = RADIUS - MASS * GRAVITY * math.cos(math.radians(inclination_deg)) / kn
+    law = _linear(kn=kn, e=0.0, mu=mu)
+    dt = contacts.linear_collision_time(kn, MASS, -1.0) / 50
+    trough = Trough(0.02, 0.02, inclination=math.radians(inclination_deg))
+    spheres = Spheres.create(np.array([[0.01, 0.0, z0]]), RADIUS, DENSITY)
+    return Simulation(spheres, trough, law, dt, rotation=rotation)
+
+
+def test_sphere_on_still_trough_stays_put():
+    sim = _block(0.0, rotation=True)
+    sim.run(int(0.5 / sim.dt))
+    assert np.all(np.abs(sim.spheres.x[0, :2] - [0.01, 0.0]) < 1e-12)
+    assert sim.spheres.x[0, 2] == pytest.approx(RADIUS - MASS * GRAVITY / 1.0e5, abs=1e-10)
+    assert np.all(np.abs(sim.spheres.v) < 1e-9) and np.all(sim.spheres.omega == 0)
+
+
+def test_block_sticks_below_friction_angle():
+    """tan(15 deg) < mu = 0.35: the block creeps only by its tangential spring (m g sin a / k_t)."""
+    sim = _block(15.0)
+    sim.run(int(0.3 / sim.dt))
+    x1 = sim.spheres.x[0, 0]
+    sim.run(int(0.3 / sim.dt))
+    spring = MASS * GRAVITY * math.sin(math.radians(15.0)) / (2 / 7 * 1.0e5)
+    assert abs(x1 - 0.01) < 2 * spring
+    assert abs(sim.spheres.x[0, 0] - x1) < 1e-12
+    assert np.all(sim.spheres.omega == 0)
+
+
+def test_block_slides_with_coulomb_acceleration_above_friction_angle():
+    """tan(25 deg) > mu: dv_x/dt = -g (sin a - mu cos a) (downhill is -x), once sliding."""
+    sim = _block(25.0)
+    steps = int(round(0.1 / sim.dt))
+    sim.run(steps)
+    v1 = sim.spheres.v[0, 0]
+    sim.run(steps)
+    a = math.radians(25.0)
+    expected = -GRAVITY * (math.sin(a) - 0.35 * math.cos(a))
+    assert (sim.spheres.v[0, 0] - v1) / (steps * sim.dt) == pytest.approx(expected, rel=1e-6)
+
+
+def _single_sphere(throw_number):
+    """cases/single-sphere at another throw number, with the contact of validation/single-grain:
+    k_n = 1e6 N/m and eps_n = 0.5 (no flight below Gamma = 1, so eps_n does not enter the point
+    mass; it sets the tangential dashpot gamma_t = gamma_n, whose lag tau = gamma_t / k_t is the
+    DEM's main departure from the point mass)."""
+    case = load_case("cases/single-sphere")
+    d = case.drive
+    amplitude = d.amplitude * throw_number / d.throw_number
+    return dataclasses.replace(
+        case,
+        drive=dataclasses.replace(d, amplitude=amplitude, throw_number=throw_number),
+        contact=dataclasses.replace(case.contact, stiffness=1.0e6),
+        material=dataclasses.replace(case.material, restitution_normal=0.5),
+        run=dataclasses.replace(case.run, settle_cycles=4, cycles=4),
+    )
+
+
+@pytest.mark.parametrize("throw_number", [0.4, 0.9])
+def test_sliding_block_matches_point_mass(tmp_path, throw_number):
+    """Sliding block (phi 25 deg, mu 0.35, rotation locked) within 2 % of the point mass."""
+    pytest.importorskip("dem.pointmass")
+    summary = run_case(_single_sphere(throw_number), tmp_path, progress=False)
+    reference = summary["pointmass_velocity_norm"]
+    assert abs(reference) > 0.05
+    assert summary["mean_velocity_norm"] == pytest.approx(reference, rel=0.02)
+
+
+def test_user_timestep_above_stability_limit_is_refused():
+    case = load_case("cases/single-sphere")
+    case = dataclasses.replace(case, run=dataclasses.replace(case.run, timestep=1e-3))
+    with pytest.raises(InputError, match="run.timestep"):
+        Simulation.from_case(case)
+
+
+def test_instability_is_reported():
+    kn = 1.0e5
+    dt = 2.2 / math.sqrt(kn / MASS)  # beyond the stability limit 2 / w0 of velocity Verlet
+    spheres = Spheres.create(np.array([[0.01, 0.0, 0.01]]), RADIUS, DENSITY)
+    spheres.v[0, 1] = 1e-3  # squeezed between the side walls: an unstable spring pair
+    sim = Simulation(spheres, Trough(0.02, 1.98 * RADIUS), _linear(kn=kn, e=1.0), dt)
+    with pytest.raises(SimulationError, match="timestep"):
+        sim.run(5000)
+
+
+def test_run_case_writes_summary(tmp_path):
+    case = load_case("cases/sphere-bed")
+    case = dataclasses.replace(
+        case,
+        particles=dataclasses.replace(case.particles, count=60),
+        trough=dataclasses.replace(case.trough, length=0.03, width=0.02),
+        run=dataclasses.replace(case.run, settle_cycles=1),
+    )
+    summary = run_case(case, tmp_path, cycles=2, progress=False)
+    on_disk = json.loads((tmp_path / "summary.json").read_text())
+    for key in (
+        "mean_velocity", "mean_velocity_stderr", "mean_velocity_norm", "mass_flow_rate",
+        "mass_flow_rate_per_width", "amplitude", "throw_number", "frequency", "angle",
+        "inclination", "grains", "spheres", "timestep", "steps", "wall_time_s",
+        "particle_steps_per_s", "pointmass_velocity_norm",
+    ):  # fmt: skip
+        assert key in on_disk
+    assert on_disk["spheres"] == 60 and summary["steps"] > 0
+    assert math.isfinite(summary["mean_velocity"])
