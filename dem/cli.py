@@ -277,11 +277,19 @@ def _pointmass_parser(sub) -> None:
 
 def _cmd_run(args) -> int:
     from dem.case import load_case
-    from dem.simulation import run_case
+    from dem.runner import RunInterrupted, run_case
 
     case = load_case(args.case_dir)
     out = Path(args.out) if args.out else case.directory / "output"
-    summary = run_case(case, out, cycles=args.cycles, threads=args.threads, progress=True)
+    try:
+        summary = run_case(
+            case, out, cycles=args.cycles, threads=args.threads, progress=True,
+            overwrite=args.overwrite, resume=args.resume, frames=not args.no_frames,
+        )  # fmt: skip
+    except RunInterrupted as stop:
+        print(f"dem: stopped by {stop}", file=sys.stderr)
+        print(f"dem: continue with: dem run {args.case_dir} --resume", file=sys.stderr)
+        return 128 + stop.signum
     keys = (
         "mean_velocity",
         "mean_velocity_stderr",
@@ -294,6 +302,18 @@ def _cmd_run(args) -> int:
         if key in summary:
             print(f"{key:26s} {summary[key]}")
     print(f"wrote {out / 'summary.json'}")
+    return 0
+
+
+def _cmd_report(args) -> int:
+    from dem.report import make_report
+
+    for out in args.out_dirs:
+        if not (Path(out) / "summary.json").is_file():
+            raise InputError("OUT", out, "a run output folder holding summary.json")
+    paths = make_report([Path(p) for p in args.out_dirs], Path(args.dest) if args.dest else None)
+    for path in paths:
+        print(f"wrote {path}")
     return 0
 
 
@@ -322,7 +342,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default CASE_DIR/output)")
     p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
+    mode.add_argument("--resume", action="store_true", help="continue an interrupted run")
+    p.add_argument("--no-frames", action="store_true", help="write no VTK/HDF5 particle frames")
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("report", help="figures and a summary of one or more finished runs")
+    p.add_argument("out_dirs", nargs="+", help="run output folders (holding summary.json)")
+    p.add_argument("--dest", help="where to write the report (default OUT/report)")
+    p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("export", help="export a case to another code")
     es = p.add_subparsers(dest="export_command", required=True, parser_class=_Parser)

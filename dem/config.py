@@ -83,3 +83,5 @@ DEM_PARALLEL_MIN_SPHERES = 256
 #: particle-steps/s, sphere-bed, 2 vs 1 thread) where TBB and workqueue make 2 threads 2-3x
 #: slower than one (a parallel region costs them tens of microseconds; a step has two).
 DEM_THREADING_LAYER = "omp"
+#: A running case writes checkpoint.npz every this many cycles (and on SIGINT/SIGTERM).
+DEM_CHECKPOINT_EVERY = 10

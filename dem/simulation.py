@@ -1,4 +1,4 @@
-"""The DEM step loop: fill, settle, drive, measure; ``run_case`` behind ``dem run``.
+"""The DEM step loop: fill, settle, drive; :mod:`dem.runner` runs it behind ``dem run``.
 
 Order of operations in one step n -> n + 1 (t_n = n dt, drive time counted from the moment the
 drive was switched on), all inside :func:`dem.kernels.integrate.advance`:
@@ -22,11 +22,8 @@ make them) and raises :class:`dem.errors.SimulationError` naming the cause and t
 
 from __future__ import annotations
 
-import json
 import math
-import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numba
 import numpy as np
@@ -361,6 +358,64 @@ class Simulation:
         s = self.spheres
         return float(np.sum(s.mass * s.v[:, 0]) / np.sum(s.mass))
 
+    def contact_counts(self) -> np.ndarray:
+        """Touching neighbours plus touching walls (floor, side walls) per sphere, (n,) int64."""
+        s, p = self.spheres, self.pairs
+        count = np.zeros(s.n, dtype=np.int64)
+        k = p.n_pairs
+        if k:
+            i, j = p.pair_i[:k], p.pair_j[:k]
+            d = s.x[i] - s.x[j]
+            d[:, 0] -= self.trough.length * np.round(d[:, 0] / self.trough.length)
+            touch = np.einsum("ij,ij->i", d, d) < (s.radius[i] + s.radius[j]) ** 2
+            np.add.at(count, i[touch], 1)
+            np.add.at(count, j[touch], 1)
+        half = 0.5 * self.trough.width
+        count += s.x[:, 2] < s.radius
+        count += s.x[:, 1] + half < s.radius
+        count += half - s.x[:, 1] < s.radius
+        return count
+
+    # --- checkpoints ---------------------------------------------------------------------------
+
+    def state_dict(self) -> dict[str, np.ndarray]:
+        """Everything the step loop reads, as arrays: restoring it continues bit for bit.
+
+        Sphere arrays (``sph.*``), the pair list with its contact history, scratch and CSR
+        index (``nb.*``, capacities included), the step counters and the stored forces (a
+        fresh force evaluation would update the contact history a second time).
+        """
+        state = {f"sph.{k}": v for k, v in vars(self.spheres).items()}
+        state |= {f"nb.{k}": v for k, v in vars(self.pairs).items() if isinstance(v, np.ndarray)}
+        state["nb.sizes"] = np.array(
+            [self.pairs.n, self.pairs.capacity, self.pairs.cell_capacity, self.pairs.slots]
+        )
+        state["sim.counters"] = np.array(
+            [self.step_index, self.drive_start_step, int(self.drive_on), int(self._forces_valid)]
+        )
+        state["sim.stats"] = self.stats
+        state["sim.dt"] = np.array(self.dt)
+        return state
+
+    def load_state(self, state: dict[str, np.ndarray]) -> None:
+        """Restore :meth:`state_dict` output (same case; refuses a different sphere count)."""
+        n, capacity, cell_capacity, slots = (int(v) for v in state["nb.sizes"])
+        if n != self.spheres.n or float(state["sim.dt"]) != self.dt:
+            raise SimulationError(
+                f"checkpoint holds {n} spheres at dt = {float(state['sim.dt'])} s, the case "
+                f"{self.spheres.n} at dt = {self.dt} s: it belongs to another case"
+            )
+        for key in vars(self.spheres):
+            setattr(self.spheres, key, np.ascontiguousarray(state[f"sph.{key}"]).copy())
+        self.pairs = PairList(n, capacity, cell_capacity, slots)
+        for key, value in vars(self.pairs).items():
+            if isinstance(value, np.ndarray):
+                setattr(self.pairs, key, np.ascontiguousarray(state[f"nb.{key}"]).copy())
+        step, drive_start, drive_on, forces_valid = (int(v) for v in state["sim.counters"])
+        self.step_index, self.drive_start_step = step, drive_start
+        self.drive_on, self._forces_valid = bool(drive_on), bool(forces_valid)
+        self.stats[:] = state["sim.stats"]
+
     # --- construction from a case --------------------------------------------------------------
 
     @classmethod
@@ -407,127 +462,3 @@ class Simulation:
         sim.fill_height = height
         sim.timestep_limit = limit
         return sim
-
-
-def _set_threads(threads: int | None) -> int:
-    n = config.default_threads() if threads is None else int(threads)
-    n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))
-    numba.set_num_threads(n)
-    return n
-
-
-def _pointmass_norm(case) -> float | None:
-    try:
-        from dem import pointmass
-    except ImportError:  # pragma: no cover - the point-mass package is a sibling module
-        return None
-    result = pointmass.velocity(
-        throw_number=case.drive.throw_number,
-        angle=case.drive.angle,
-        friction=case.material.friction,
-        inclination=case.trough.inclination,
-        eps_t=case.material.restitution_tangential,
-        eps_n=case.material.restitution_normal,
-    )
-    return float(result.velocity_norm)
-
-
-def run_case(
-    case,
-    out_dir: Path,
-    *,
-    cycles: int | None = None,
-    threads: int | None = None,
-    progress: bool = True,
-) -> dict:
-    """Fill, settle, drive ``settle_cycles + cycles`` cycles, measure; write summary.json.
-
-    Args:
-        case: A :class:`dem.case.Case`.
-        out_dir: Output directory (created).
-        cycles: Measured cycles (default ``case.run.cycles``).
-        threads: numba threads (default all cores or NUMBA_NUM_THREADS).
-        progress: Show a tqdm progress bar.
-
-    Returns:
-        The summary (also written to ``out_dir/summary.json``).
-
-    """
-    from dem import measure
-
-    n_threads = _set_threads(threads)
-    cycles = case.run.cycles if cycles is None else int(cycles)
-    if cycles < 1:
-        raise InputError("cycles", cycles, ">= 1")
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    sim = Simulation.from_case(case)
-    t0 = time.perf_counter()
-    settle_time = sim.settle()
-    t_settle = time.perf_counter() - t0
-    sim.start_drive()
-    total = case.run.settle_cycles + cycles
-    period = sim.trough.period
-    per_cycle = []
-    steps = 0
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=total, unit="cycle", desc=f"dem {case.name}")
-    t_loop = 0.0
-    for c in range(total):
-        end = int(round((c + 1) * period / sim.dt)) + sim.drive_start_step
-        n = end - sim.step_index
-        sim.stats[:] = 0.0
-        t1 = time.perf_counter()
-        sim.run(n)
-        t_loop += time.perf_counter() - t1
-        steps += n
-        if c >= case.run.settle_cycles:
-            per_cycle.append(sim.stats[0] / (sim.stats[1] * float(np.sum(sim.spheres.mass))))
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
-        bar.close()
-    stat = measure.conveying_velocity(
-        np.array(per_cycle), amplitude=case.drive.amplitude, omega=case.drive.omega,
-        angle=case.drive.angle,
-    )  # fmt: skip
-    total_mass = float(np.sum(sim.spheres.mass))
-    flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
-    summary = {
-        "case": case.name,
-        "mean_velocity": stat.mean,
-        "mean_velocity_stderr": stat.stderr,
-        "mean_velocity_norm": stat.norm,
-        "mean_velocity_norm_stderr": stat.norm_stderr,
-        "mass_flow_rate": flow,
-        "mass_flow_rate_per_width": flow / case.trough.width,
-        "amplitude": case.drive.amplitude,
-        "throw_number": case.drive.throw_number,
-        "frequency": case.drive.frequency,
-        "angle": case.drive.angle,
-        "inclination": case.trough.inclination,
-        "friction": case.material.friction,
-        "contact_model": case.contact.model,
-        "grains": case.particles.count,
-        "spheres": sim.spheres.n,
-        "total_mass": total_mass,
-        "timestep": sim.dt,
-        "timestep_limit": sim.timestep_limit,
-        "steps": steps,
-        "settle_cycles": case.run.settle_cycles,
-        "cycles": cycles,
-        "per_cycle_velocity": [float(u) for u in per_cycle],
-        "settle_time_s": settle_time,
-        "settle_wall_time_s": t_settle,
-        "wall_time_s": t_loop,
-        "particle_steps_per_s": sim.spheres.n * steps / t_loop if t_loop > 0 else None,
-        "neighbour_builds": sim.pairs.builds,
-        "threads": n_threads,
-        "seed": case.run.seed,
-        "pointmass_velocity_norm": _pointmass_norm(case),
-    }
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    return summary

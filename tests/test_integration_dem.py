@@ -11,7 +11,8 @@ from dem.case import load_case
 from dem.config import GRAVITY
 from dem.errors import InputError, SimulationError
 from dem.kernels import contacts
-from dem.simulation import ContactLaw, Simulation, run_case
+from dem.runner import run_case
+from dem.simulation import ContactLaw, Simulation
 from dem.state import Spheres
 from dem.trough import Trough
 

@@ -80,6 +80,8 @@ class ResultsWriter:
         seed: Random seed.
         timestep: Time step, s.
         format_version: Layout version written to the file.
+        resume_at: (cycles, frames) already in an interrupted file at ``path``: reopen it,
+            trimmed to that many rows, instead of starting a new file.
 
     """
 
@@ -92,6 +94,7 @@ class ResultsWriter:
         seed: int,
         timestep: float,
         format_version: int = FORMAT_VERSION,
+        resume_at: tuple[int, int] | None = None,
     ):
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -100,6 +103,9 @@ class ResultsWriter:
         self._n_frames = 0
         self._n_spheres: int | None = None
         self._closed = False
+        if resume_at is not None:
+            self._resume(*resume_at)
+            return
         with h5py.File(self.path, "w", locking=False) as f:
             f.attrs["format_version"] = int(format_version)
             f.attrs["seed"] = int(seed)
@@ -218,6 +224,22 @@ class ResultsWriter:
             g["time"].resize((k + 1,))
             g["time"][k] = float(time)
         self._n_frames += 1
+
+    def _resume(self, n_cycles: int, n_frames: int) -> None:
+        """Reopen an interrupted file, trimmed back to its first n_cycles rows and n_frames."""
+        with h5py.File(self.path, "a", locking=False) as f:
+            cycles, frames = f["cycles"], f["frames"]
+            keys = tuple(cycles.keys())
+            for key in keys:
+                cycles[key].resize((n_cycles,))
+            if "time" in frames:
+                for name in (*_FRAME_VECTORS, "contact_count", "time"):
+                    frames[name].resize(n_frames, axis=0)
+                self._n_spheres = int(frames["radius"].shape[0])
+            f.attrs["complete"] = False
+        self._cycle_keys = keys or None
+        self._n_cycles = n_cycles
+        self._n_frames = n_frames
 
     def flush(self) -> None:
         """Nothing to do: every append closes (and so flushes) the file; kept for callers."""

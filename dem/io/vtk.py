@@ -102,6 +102,7 @@ class VTKSeriesWriter:
         *,
         lab_frame: bool = False,
         wall_height: float | None = None,
+        entries: list[tuple[float, str, str]] | None = None,
     ):
         if trough_length <= 0 or trough_width <= 0:
             raise ValueError(
@@ -116,8 +117,14 @@ class VTKSeriesWriter:
         self.lab_frame = bool(lab_frame)
         self.wall_height = 0.5 * self.width if wall_height is None else float(wall_height)
         self.pvd_path = self.out_dir / PVD_NAME
-        self._entries: list[tuple[float, str, str]] = []  # (time, particles file, trough file)
+        # (time, particles file, trough file); a resumed run passes the entries it had
+        self._entries: list[tuple[float, str, str]] = [tuple(e) for e in entries or []]
         self._trough_fixed: pv.PolyData | None = None
+
+    @property
+    def entries(self) -> list[tuple[float, str, str]]:
+        """(time, particles file, trough file) of every frame so far (for a checkpoint)."""
+        return list(self._entries)
 
     @property
     def frame_count(self) -> int:

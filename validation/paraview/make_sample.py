@@ -28,27 +28,6 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
 
-def contact_count(sim: Simulation) -> np.ndarray:
-    """Touching neighbours plus touching walls (floor, side walls) per sphere."""
-    s, p = sim.spheres, sim.pairs
-    n = s.n
-    count = np.zeros(n, dtype=np.int64)
-    k = p.n_pairs
-    if k:
-        i, j = p.pair_i[:k], p.pair_j[:k]
-        d = s.x[i] - s.x[j]
-        d[:, 0] -= sim.trough.length * np.round(d[:, 0] / sim.trough.length)
-        touch = np.einsum("ij,ij->i", d, d) < (s.radius[i] + s.radius[j]) ** 2
-        np.add.at(count, i[touch], 1)
-        np.add.at(count, j[touch], 1)
-    half = 0.5 * sim.trough.width
-    r = s.radius
-    count += (s.x[:, 2] < r).astype(np.int64)
-    count += (s.x[:, 1] + half < r).astype(np.int64)
-    count += (half - s.x[:, 1] < r).astype(np.int64)
-    return count
-
-
 def write(writer: VTKSeriesWriter, sim: Simulation) -> None:
     s = sim.spheres
     ids = np.asarray(s.body, dtype=np.int64)
@@ -60,7 +39,7 @@ def write(writer: VTKSeriesWriter, sim: Simulation) -> None:
         velocity=s.v,
         grain_id=ids,
         clump_id=ids,
-        contact_count=contact_count(sim),
+        contact_count=sim.contact_counts(),
         drive_displacement=sim.trough.displacement(t) if sim.drive_on else np.zeros(3),
     )
 

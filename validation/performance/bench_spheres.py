@@ -184,11 +184,12 @@ DEM_CHILD = """
 import dataclasses, json, sys
 sys.path.insert(0, {root!r})
 from dem.case import load_case
-from dem.simulation import run_case
+from dem.runner import run_case
 case = load_case({case!r})
 run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r})
 case = dataclasses.replace(case, run=run)
-run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False)
+run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
+         overwrite=True, frames=False)
 """
 
 

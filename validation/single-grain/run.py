@@ -22,7 +22,7 @@ import numpy as np
 from dem import pointmass
 from dem.case import load_case
 from dem.config import GRAVITY
-from dem.simulation import run_case
+from dem.runner import run_case
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -66,7 +66,9 @@ def sweep(stiffness, restitution_normal, settle_cycles, cycles, out_csv):
                     settle_cycles, cycles,
                 )  # fmt: skip
                 t0 = time.perf_counter()
-                s = run_case(case, HERE / "output", progress=False, threads=1)
+                s = run_case(
+                    case, HERE / "output", progress=False, threads=1, overwrite=True, frames=False
+                )
                 pm = pointmass.velocity(throw_number=float(gamma), angle=angle, friction=friction)
                 dem_v, pm_v = s["mean_velocity_norm"], pm.velocity_norm
                 rows.append(

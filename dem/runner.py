@@ -1,0 +1,334 @@
+"""``dem run``: a case from fill to summary, with frames, results, checkpoints and resume.
+
+What one run does, in order:
+
+1. refuse an output folder that holds an earlier run (unless ``overwrite`` or ``resume``);
+2. fill and settle (:class:`dem.simulation.Simulation`), then switch the drive on at phase 0;
+3. for each cycle (``settle_cycles`` unmeasured, then ``cycles`` measured), in
+   ``frames_per_cycle`` chunks: advance, write a VTK frame and a results.h5 frame; at the end of
+   the cycle append its statistics to results.h5;
+4. every ``DEM_CHECKPOINT_EVERY`` cycles, and when SIGINT or SIGTERM arrives (checked between
+   chunks), write ``checkpoint.npz`` (state, pair history, loop counters, writer positions);
+   a signal then ends the run with :class:`RunInterrupted`;
+5. write ``summary.json`` (DESIGN.md section 6) and mark results.h5 complete.
+
+``resume=True`` reloads the checkpoint, trims results.h5 and the VTK collection back to what
+the checkpoint had seen, and continues: the result is bit-identical to an uninterrupted run,
+because the whole kernel state (contact history and stored forces included) is restored and
+the chunk boundaries are the same.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import signal
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from dem import config, measure
+from dem.errors import InputError
+from dem.io.hdf5 import ResultsWriter, package_versions
+from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
+from dem.simulation import Simulation
+
+CHECKPOINT = "checkpoint.npz"
+SUMMARY = "summary.json"
+RESULTS = "results.h5"
+#: Files and folders a run writes; only these are removed by ``overwrite``.
+RUN_OUTPUTS = (SUMMARY, RESULTS, CHECKPOINT, PVD_NAME, FRAMES_DIR)
+
+
+class RunInterrupted(Exception):
+    """SIGINT/SIGTERM arrived; a checkpoint was written. ``signum`` says which."""
+
+    def __init__(self, signum: int, checkpoint: Path, cycle: int):
+        self.signum = signum
+        self.checkpoint = checkpoint
+        self.cycle = cycle
+        name = signal.Signals(signum).name
+        super().__init__(f"{name} at cycle {cycle}; checkpoint written to {checkpoint}")
+
+
+def _set_threads(threads: int | None) -> int:
+    n = config.default_threads() if threads is None else int(threads)
+    n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))
+    numba.set_num_threads(n)
+    return n
+
+
+def _pointmass_norm(case) -> float:
+    from dem import pointmass
+
+    return pointmass.velocity(
+        throw_number=case.drive.throw_number,
+        angle=case.drive.angle,
+        friction=case.material.friction,
+        inclination=case.trough.inclination,
+        eps_t=case.material.restitution_tangential,
+        eps_n=case.material.restitution_normal,
+    ).velocity_norm
+
+
+def _prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
+    """Refuse to overwrite an earlier run silently; clear it only when asked to."""
+    earlier = [name for name in RUN_OUTPUTS if (out_dir / name).exists()]
+    if resume:
+        if not (out_dir / CHECKPOINT).exists():
+            raise InputError(
+                "--resume", str(out_dir), f"needs {CHECKPOINT} of an interrupted run in the folder"
+            )
+        return
+    if earlier and not overwrite:
+        raise InputError(
+            "--out",
+            str(out_dir),
+            f"holds an earlier run ({', '.join(earlier)}): choose another --out, pass "
+            "--overwrite to replace it, or --resume an interrupted run",
+        )
+    for name in earlier:
+        path = out_dir / name
+        shutil.rmtree(path) if path.is_dir() else path.unlink()
+    out_dir.mkdir(parents=True, exist_ok=True)
+
+
+class _SignalFlag:
+    """Record SIGINT/SIGTERM instead of dying, so the loop can checkpoint between chunks."""
+
+    def __init__(self):
+        self.signum: int | None = None
+        self._old: dict[int, object] = {}
+
+    def __enter__(self) -> _SignalFlag:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._old[sig] = signal.signal(sig, self._handle)
+            except ValueError:  # not the main thread: signals stay as they are
+                pass
+        return self
+
+    def _handle(self, signum, frame) -> None:
+        self.signum = signum
+
+    def __exit__(self, *exc) -> None:
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
+
+
+def _write_checkpoint(path: Path, sim: Simulation, loop: dict) -> None:
+    state = sim.state_dict()
+    state["loop.json"] = np.array(json.dumps(loop))
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(tmp, **state)
+    os.replace(tmp, path)
+
+
+def _read_checkpoint(path: Path) -> tuple[dict, dict]:
+    with np.load(path) as data:
+        state = {k: data[k] for k in data.files if k != "loop.json"}
+        loop = json.loads(str(data["loop.json"]))
+    return state, loop
+
+
+def run_case(
+    case,
+    out_dir: Path,
+    *,
+    cycles: int | None = None,
+    threads: int | None = None,
+    progress: bool = True,
+    overwrite: bool = False,
+    resume: bool = False,
+    frames: bool = True,
+) -> dict:
+    """Run ``case`` into ``out_dir``; returns the summary (also written to summary.json).
+
+    Args:
+        case: A :class:`dem.case.Case`.
+        out_dir: Output folder: summary.json, results.h5, particles.pvd + frames/.
+        cycles: Measured cycles (default ``case.run.cycles``).
+        threads: numba threads (default all cores or NUMBA_NUM_THREADS).
+        progress: Show a progress bar (cycles done, ETA).
+        overwrite: Replace an earlier run in ``out_dir`` (otherwise it is refused).
+        resume: Continue the interrupted run whose checkpoint is in ``out_dir``.
+        frames: Write VTK and HDF5 particle frames (``output.frames_per_cycle`` per cycle).
+
+    Raises:
+        RunInterrupted: SIGINT or SIGTERM arrived; a checkpoint was written first.
+
+    """
+    cycles = case.run.cycles if cycles is None else int(cycles)
+    if cycles < 1:
+        raise InputError("--cycles", cycles, "a whole number >= 1")
+    out_dir = Path(out_dir)
+    _prepare_output(out_dir, overwrite=overwrite, resume=resume)
+    n_threads = _set_threads(threads)
+    sim = Simulation.from_case(case)
+    total = case.run.settle_cycles + cycles
+    per_frame = case.output.frames_per_cycle if frames else 1
+    checkpoint = out_dir / CHECKPOINT
+
+    if resume:
+        state, loop = _read_checkpoint(checkpoint)
+        if loop["total_cycles"] != total:
+            started = loop["total_cycles"] - case.run.settle_cycles
+            raise InputError(
+                "--cycles", cycles, f"the interrupted run has {started}: resume with the same"
+            )
+        sim.load_state(state)
+    else:
+        t0 = time.perf_counter()
+        settle_time = sim.settle()
+        sim.start_drive()
+        sim.stats[:] = 0.0
+        loop = {
+            "cycle": 0,
+            "chunk": 0,
+            "total_cycles": total,
+            "steps": 0,
+            "wall_time_s": 0.0,
+            "settle_time_s": settle_time,
+            "settle_wall_time_s": time.perf_counter() - t0,
+            "per_cycle": [],
+            "vtk_entries": [],
+            "h5_cycles": 0,
+            "h5_frames": 0,
+        }
+    vtk = results = None
+    if frames:
+        vtk = VTKSeriesWriter(
+            out_dir, case.trough.length, case.trough.width, case.trough.inclination,
+            entries=[tuple(e) for e in loop["vtk_entries"]],
+        )  # fmt: skip
+    results = ResultsWriter(
+        out_dir / RESULTS,
+        case=case.as_dict(),
+        versions=package_versions(),
+        seed=case.run.seed,
+        timestep=sim.dt,
+        resume_at=(loop["h5_cycles"], loop["h5_frames"]) if resume else None,
+    )
+    if frames and not resume:
+        _write_frame(sim, vtk, results)
+        loop["vtk_entries"] = vtk.entries
+        loop["h5_frames"] = 1
+
+    period = sim.trough.period
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, initial=loop["cycle"], unit="cycle", desc=f"dem {case.name}")
+    try:
+        with _SignalFlag() as flag:
+            while loop["cycle"] < total:
+                c = loop["cycle"]
+                k = loop["chunk"]
+                end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
+                n = end - sim.step_index
+                t1 = time.perf_counter()
+                sim.run(n)
+                loop["wall_time_s"] += time.perf_counter() - t1
+                loop["steps"] += n
+                if frames:
+                    _write_frame(sim, vtk, results)
+                    loop["h5_frames"] += 1
+                    loop["vtk_entries"] = vtk.entries
+                loop["chunk"] = k + 1
+                if loop["chunk"] == per_frame:
+                    _end_cycle(sim, case, results, loop)
+                    if bar is not None:
+                        bar.update(1)
+                    if loop["cycle"] % config.DEM_CHECKPOINT_EVERY == 0:
+                        _write_checkpoint(checkpoint, sim, loop)
+                if flag.signum is not None and loop["cycle"] < total:
+                    _write_checkpoint(checkpoint, sim, loop)
+                    raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
+    finally:
+        if bar is not None:
+            bar.close()
+
+    summary = _summary(case, sim, loop, cycles, n_threads)
+    (out_dir / SUMMARY).write_text(json.dumps(summary, indent=2) + "\n")
+    results.close()
+    if vtk is not None:
+        vtk.close()
+    checkpoint.unlink(missing_ok=True)
+    return summary
+
+
+def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
+    s = sim.spheres
+    counts = sim.contact_counts()
+    t = sim.drive_time
+    vtk.write_frame(t, s.x, s.radius, s.v, s.body, s.body, counts)
+    results.append_frame(t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts)
+
+
+def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
+    """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums."""
+    total_mass = float(np.sum(sim.spheres.mass))
+    velocity = float(sim.stats[0] / (sim.stats[1] * total_mass)) if sim.stats[1] else math.nan
+    measured = loop["cycle"] >= case.run.settle_cycles
+    if measured:
+        loop["per_cycle"].append(velocity)
+    results.append_cycle(
+        cycle=loop["cycle"],
+        time=sim.drive_time,
+        mean_velocity=velocity,
+        kinetic_energy=sim.kinetic_energy(),
+        contacts=int(sim.contact_counts().sum()),
+        measured=int(measured),
+    )
+    loop["h5_cycles"] += 1
+    sim.stats[:] = 0.0
+    loop["cycle"] += 1
+    loop["chunk"] = 0
+
+
+def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> dict:
+    per_cycle = np.array(loop["per_cycle"])
+    stat = measure.conveying_velocity(
+        per_cycle, amplitude=case.drive.amplitude, omega=case.drive.omega, angle=case.drive.angle
+    )
+    total_mass = float(np.sum(sim.spheres.mass))
+    flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
+    wall = loop["wall_time_s"]
+    return {
+        "case": case.name,
+        "mean_velocity": stat.mean,
+        "mean_velocity_stderr": stat.stderr,
+        "mean_velocity_norm": stat.norm,
+        "mean_velocity_norm_stderr": stat.norm_stderr,
+        "mass_flow_rate": flow,
+        "mass_flow_rate_per_width": flow / case.trough.width,
+        "amplitude": case.drive.amplitude,
+        "throw_number": case.drive.throw_number,
+        "frequency": case.drive.frequency,
+        "angle": case.drive.angle,
+        "inclination": case.trough.inclination,
+        "friction": case.material.friction,
+        "contact_model": case.contact.model,
+        "grains": case.particles.count,
+        "spheres": sim.spheres.n,
+        "total_mass": total_mass,
+        "timestep": sim.dt,
+        "timestep_limit": sim.timestep_limit,
+        "steps": loop["steps"],
+        "settle_cycles": case.run.settle_cycles,
+        "cycles": cycles,
+        "per_cycle_velocity": [float(u) for u in per_cycle],
+        "settle_time_s": loop["settle_time_s"],
+        "settle_wall_time_s": loop["settle_wall_time_s"],
+        "wall_time_s": wall,
+        "particle_steps_per_s": sim.spheres.n * loop["steps"] / wall if wall > 0 else None,
+        "neighbour_builds": sim.pairs.builds,
+        "threads": n_threads,
+        "seed": case.run.seed,
+        "pointmass_velocity_norm": _pointmass_norm(case),
+    }

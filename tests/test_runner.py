@@ -1,0 +1,138 @@
+"""dem run end to end: refusing to overwrite, signals, checkpoints and bit-identical resume."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dem.case import load_case
+from dem.errors import InputError
+from dem.io.hdf5 import read_results
+from dem.runner import run_case
+
+CASE = """
+[trough]
+length = 0.03
+width = 0.02
+
+[drive]
+frequency = 60.0
+angle = 25.0
+amplitude = 0.0005
+
+[material]
+density = 7800.0
+friction = 0.35
+
+[contact]
+model = "hertz_mindlin"
+youngs_modulus = 5.0e7
+
+[particles]
+shape = "sphere"
+count = 120
+radius = 0.002
+
+[run]
+settle_cycles = 2
+cycles = {cycles}
+seed = 3
+
+[output]
+frames_per_cycle = 3
+"""
+
+
+def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:
+    d = tmp_path / "case"
+    d.mkdir(exist_ok=True)
+    (d / "case.toml").write_text(CASE.format(cycles=cycles))
+    return d
+
+
+def test_refuses_to_overwrite_an_earlier_run(tmp_path):
+    case = load_case(_case_dir(tmp_path, cycles=1))
+    out = tmp_path / "out"
+    run_case(case, out, progress=False)
+    before = (out / "summary.json").read_bytes()
+    with pytest.raises(InputError) as info:
+        run_case(case, out, progress=False)
+    assert "--overwrite" in str(info.value) and "summary.json" in str(info.value)
+    assert (out / "summary.json").read_bytes() == before  # nothing lost
+    run_case(case, out, progress=False, overwrite=True)
+    with pytest.raises(InputError, match="--resume"):
+        run_case(case, tmp_path / "empty", progress=False, resume=True)
+
+
+def _start(case_dir: Path, out: Path) -> subprocess.Popen:
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    return subprocess.Popen(
+        [sys.executable, "-m", "dem.cli", "run", str(case_dir), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+
+
+def _wait_for_frames(out: Path, frames: int, proc: subprocess.Popen, limit: float = 600.0):
+    start = time.monotonic()
+    while time.monotonic() - start < limit:
+        if proc.poll() is not None:
+            pytest.fail(f"run ended before the signal: {proc.stderr.read()}")
+        try:
+            if read_results(out / "results.h5")["frame_count"] >= frames:
+                return
+        except (OSError, KeyError):
+            pass
+        time.sleep(0.05)
+    pytest.fail("run did not reach the frame to interrupt in time")
+
+
+def test_interrupt_and_resume_is_bit_identical(tmp_path):
+    case_dir = _case_dir(tmp_path)
+    case = load_case(case_dir)
+    reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
+
+    out = tmp_path / "interrupted"
+    proc = _start(case_dir, out)
+    _wait_for_frames(out, 8, proc)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "checkpoint written" in err and "--resume" in err
+    assert "Traceback" not in err
+    assert (out / "checkpoint.npz").exists() and not (out / "summary.json").exists()
+
+    resumed = run_case(case, out, progress=False, threads=1, resume=True)
+    assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
+    assert resumed["steps"] == reference["steps"]
+    a = read_results(tmp_path / "straight" / "results.h5")
+    b = read_results(out / "results.h5")
+    assert b["complete"] and b["frame_count"] == a["frame_count"]
+    np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
+    np.testing.assert_array_equal(a["cycles"]["mean_velocity"], b["cycles"]["mean_velocity"])
+    assert not (out / "checkpoint.npz").exists()
+    pvd = (out / "particles.pvd").read_text()
+    assert pvd.count('part="0"') == a["frame_count"]
+
+
+def test_results_of_a_killed_run_are_readable(tmp_path):
+    case_dir = _case_dir(tmp_path)
+    out = tmp_path / "killed"
+    proc = _start(case_dir, out)
+    _wait_for_frames(out, 5, proc)
+    proc.kill()  # SIGKILL: no handler runs
+    proc.communicate(timeout=60)
+    r = read_results(out / "results.h5")
+    assert not r["complete"]
+    assert r["frame_count"] >= 5
+    last = r["frames"][r["frame_count"] - 1]
+    assert np.all(np.isfinite(last["positions"])) and last["positions"].shape == (120, 3)
+    assert json.loads(json.dumps(r["case"]))["particles"]["count"] == 120
