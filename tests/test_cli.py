@@ -160,3 +160,54 @@ def test_console_script_exit_status():
         proc.stderr.strip()
         == "dem: error: --angle = 100.0: vibration angle must be in (0, 90) degrees"
     )
+
+
+GOOD_CASE = """
+[trough]
+length = 0.03
+width = 0.02
+
+[drive]
+frequency = 60.0
+angle = 25.0
+amplitude = 0.0005
+
+[material]
+density = 7800.0
+friction = 0.35
+
+[contact]
+model = "hertz_mindlin"
+youngs_modulus = 5.0e7
+
+[particles]
+shape = "sphere"
+count = 20
+radius = 0.002
+"""
+
+
+@pytest.mark.parametrize(
+    "old,new,needles",
+    [
+        ("count = 20\n", "", ["particles.count", "missing"]),
+        ("count = 20", "count = 0", ["particles.count = 0"]),
+        ("radius = 0.002", "radius = -0.002", ["particles.radius = -0.002"]),
+        ("radius = 0.002", 'radius = "big"', ["particles.radius", "'big'"]),
+        ("friction = 0.35", "friction = 0.35\nfricton = 0.3", ["fricton", "did you mean"]),
+        ("width = 0.02", "width = 0.003", ["trough.width = 0.003"]),
+        ("amplitude = 0.0005", "amplitude = 0.0005\nthrow_number = 2.0", ["throw_number"]),
+        ("angle = 25.0", "angle = 25.0 =", ["line"]),
+        ("length = 0.03", 'length = 0.03\nmesh = "geometry/none.stl"', ["none.stl"]),
+    ],
+)
+def test_bad_case_file_one_line_exit_2(capsys, tmp_path, old, new, needles):
+    assert old in GOOD_CASE
+    (tmp_path / "case.toml").write_text(GOOD_CASE.replace(old, new))
+    code, out, err = run(capsys, "run", str(tmp_path), "--out", str(tmp_path / "out"))
+    assert code == 2, err
+    assert str(tmp_path / "case.toml") in err
+    for needle in needles:
+        assert needle in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "out").exists()  # nothing written before the case is valid
