@@ -285,6 +285,7 @@ def _cmd_run(args) -> int:
         summary = run_case(
             case, out, cycles=args.cycles, threads=args.threads, progress=True,
             overwrite=args.overwrite, resume=args.resume, frames=not args.no_frames,
+            lab_frame=args.lab_frame,
         )  # fmt: skip
     except RunInterrupted as stop:
         print(f"dem: stopped by {stop}", file=sys.stderr)
@@ -346,6 +347,9 @@ def build_parser() -> argparse.ArgumentParser:
     mode.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
     mode.add_argument("--resume", action="store_true", help="continue an interrupted run")
     p.add_argument("--no-frames", action="store_true", help="write no VTK/HDF5 particle frames")
+    p.add_argument(
+        "--lab-frame", action="store_true", help="VTK frames in the lab frame (trough shakes)"
+    )
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")

@@ -145,6 +145,7 @@ def run_case(
     overwrite: bool = False,
     resume: bool = False,
     frames: bool = True,
+    lab_frame: bool = False,
 ) -> dict:
     """Run ``case`` into ``out_dir``; returns the summary (also written to summary.json).
 
@@ -157,6 +158,9 @@ def run_case(
         overwrite: Replace an earlier run in ``out_dir`` (otherwise it is refused).
         resume: Continue the interrupted run whose checkpoint is in ``out_dir``.
         frames: Write VTK and HDF5 particle frames (``output.frames_per_cycle`` per cycle).
+        lab_frame: Write the VTK frames in the lab frame: grains and trough displaced by the
+            drive s(t) and velocities plus ds/dt, so ParaView shows the trough shaking.
+            Otherwise (default) in the trough frame. results.h5 is always in the trough frame.
 
     Raises:
         RunInterrupted: SIGINT or SIGTERM arrived; a checkpoint was written first.
@@ -203,7 +207,7 @@ def run_case(
     if frames:
         vtk = VTKSeriesWriter(
             out_dir, case.trough.length, case.trough.width, case.trough.inclination,
-            entries=[tuple(e) for e in loop["vtk_entries"]],
+            entries=[tuple(e) for e in loop["vtk_entries"]], lab_frame=lab_frame,
         )  # fmt: skip
     results = ResultsWriter(
         out_dir / RESULTS,
@@ -266,7 +270,12 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     s = sim.spheres
     counts = sim.contact_counts()
     t = sim.drive_time
-    vtk.write_frame(t, s.x, s.radius, s.v, s.body, s.body, counts)
+    shift = sim.trough.displacement(t) if sim.drive_on else np.zeros(3)
+    lab_v = sim.trough.velocity(t) if sim.drive_on else np.zeros(3)
+    vtk.write_frame(
+        t, s.x, s.radius, s.v, s.body, s.body, counts,
+        drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
+    )  # fmt: skip
     results.append_frame(t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts)
 
 
