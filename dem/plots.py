@@ -8,6 +8,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+def _save(fig, path: str | Path) -> Path:
+    """Lay out, write and close a figure; returns the path."""
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 def optimum_figure(opt, path: str | Path) -> Path:
     """Plot the scanned objective of an :class:`dem.pointmass.sweep.Optimum` and mark the best."""
     x = opt.curve[opt.over]
@@ -23,11 +32,7 @@ def optimum_figure(opt, path: str | Path) -> Path:
     ax.set_title(f"holding {opt.hold}: {held}", fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def velocity_cycles_figure(
@@ -69,11 +74,7 @@ def velocity_cycles_figure(
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def pointmass_comparison_figure(
@@ -122,11 +123,7 @@ def pointmass_comparison_figure(
     ax.set_ylabel("v / (A omega cos phi)")
     ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _save(fig, path)
 
 
 def bed_snapshot_figure(

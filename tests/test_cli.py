@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import pytest
+from small_case import SMALL_CASE
 
 from dem.cli import main
 
@@ -162,36 +163,14 @@ def test_console_script_exit_status():
     )
 
 
-GOOD_CASE = """
-[trough]
-length = 0.03
-width = 0.02
-
-[drive]
-frequency = 60.0
-angle = 25.0
-amplitude = 0.0005
-
-[material]
-density = 7800.0
-friction = 0.35
-
-[contact]
-model = "hertz_mindlin"
-youngs_modulus = 5.0e7
-
-[particles]
-shape = "sphere"
-count = 20
-radius = 0.002
-"""
+GOOD_CASE = SMALL_CASE
 
 
 @pytest.mark.parametrize(
     "old,new,needles",
     [
-        ("count = 20\n", "", ["particles.count", "missing"]),
-        ("count = 20", "count = 0", ["particles.count = 0"]),
+        ("count = 120\n", "", ["particles.count", "missing"]),
+        ("count = 120", "count = 0", ["particles.count = 0"]),
         ("radius = 0.002", "radius = -0.002", ["particles.radius = -0.002"]),
         ("radius = 0.002", 'radius = "big"', ["particles.radius", "'big'"]),
         ("friction = 0.35", "friction = 0.35\nfricton = 0.3", ["fricton", "did you mean"]),

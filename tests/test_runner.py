@@ -10,50 +10,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from small_case import SMALL_CASE, write_case
 
 from dem.case import load_case
 from dem.errors import InputError
 from dem.io.hdf5 import read_results
 from dem.runner import run_case
 
-CASE = """
-[trough]
-length = 0.03
-width = 0.02
-
-[drive]
-frequency = 60.0
-angle = 25.0
-amplitude = 0.0005
-
-[material]
-density = 7800.0
-friction = 0.35
-
-[contact]
-model = "hertz_mindlin"
-youngs_modulus = 5.0e7
-
-[particles]
-shape = "sphere"
-count = 120
-radius = 0.002
-
-[run]
-settle_cycles = 2
-cycles = {cycles}
-seed = 3
-
-[output]
-frames_per_cycle = 3
-"""
-
 
 def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:
-    d = tmp_path / "case"
-    d.mkdir(exist_ok=True)
-    (d / "case.toml").write_text(CASE.format(cycles=cycles))
-    return d
+    return write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", f"cycles = {cycles}"))
 
 
 def test_refuses_to_overwrite_an_earlier_run(tmp_path):

@@ -1,0 +1,42 @@
+"""A small valid sphere case (case.toml text) shared by the command-line and runner tests."""
+
+from pathlib import Path
+
+SMALL_CASE = """
+[trough]
+length = 0.03
+width = 0.02
+
+[drive]
+frequency = 60.0
+angle = 25.0
+amplitude = 0.0005
+
+[material]
+density = 7800.0
+friction = 0.35
+
+[contact]
+model = "hertz_mindlin"
+youngs_modulus = 5.0e7
+
+[particles]
+shape = "sphere"
+count = 120
+radius = 0.002
+
+[run]
+settle_cycles = 2
+cycles = 6
+seed = 3
+
+[output]
+frames_per_cycle = 3
+"""
+
+
+def write_case(directory: Path, text: str = SMALL_CASE) -> Path:
+    """Write ``text`` as directory/case.toml (directory created); returns the directory."""
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "case.toml").write_text(text)
+    return directory
