@@ -5,7 +5,7 @@ Regenerates results.csv and velocity.png in this folder:
     .venv/bin/python validation/single-grain/run.py
 
 Base case: cases/single-sphere (r = 2 mm, rho = 7800, linear contact, rotation locked), with
-k_n = 1e6 N/m and eps_n = 0.5 (see README.md for why), swept over phi in {15, 25, 45} deg,
+k_n = 4e6 N/m and eps_n = 0.5 (see README.md for why), swept over phi in {15, 25, 45} deg,
 mu in {0.25, 0.35, 0.6} and Gamma in [0.2, 0.95] (no flight: the point mass never leaves the
 floor, so eps_n and eps_t do not enter it).
 """
