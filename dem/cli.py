@@ -321,10 +321,15 @@ def _cmd_report(args) -> int:
 def _cmd_export_liggghts(args) -> int:
     from dem.case import load_case
     from dem.io.liggghts import write_deck
+    from dem.simulation import Simulation
 
     case = load_case(args.case_dir)
-    path = write_deck(case, Path(args.out_dir))
-    print(f"wrote {path}")
+    # dem's own time step (explicit or automatic, checked against the stability limit), so
+    # the deck integrates with the step a dem run of this case would take
+    timestep = args.timestep or Simulation.from_case(case).dt
+    steps = int(round(case.run.cycles / case.drive.frequency / timestep))
+    path = write_deck(case, Path(args.out_dir), timestep=timestep, steps=steps)
+    print(f"wrote {path} (dt = {timestep:.4g} s, {steps} measured steps)")
     return 0
 
 
@@ -362,6 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
     e = es.add_parser("liggghts", help="write an equivalent LIGGGHTS-PUBLIC 3.8 deck")
     e.add_argument("case_dir")
     e.add_argument("out_dir")
+    e.add_argument("--timestep", type=_number, help="dt in s (default: dem's for this case)")
     e.set_defaults(func=_cmd_export_liggghts)
     return parser
 

@@ -190,3 +190,21 @@ def test_bad_case_file_one_line_exit_2(capsys, tmp_path, old, new, needles):
         assert needle in err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not (tmp_path / "out").exists()  # nothing written before the case is valid
+
+
+def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
+    case_dir = tmp_path / "case"
+    case_dir.mkdir()
+    (case_dir / "case.toml").write_text(SMALL_CASE)
+    code, out, err = run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "deck"))
+    assert code == 0, err
+    from dem.case import load_case
+    from dem.simulation import Simulation
+
+    deck = (tmp_path / "deck" / "in.dem").read_text().splitlines()
+    (line,) = [x for x in deck if x.startswith("timestep ")]
+    assert float(line.split()[1]) == Simulation.from_case(load_case(case_dir)).dt
+    code, _, err = run(
+        capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d2"), "--timestep", "-1"
+    )
+    assert code == 2 and "timestep" in err
