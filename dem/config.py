@@ -85,3 +85,8 @@ DEM_PARALLEL_MIN_SPHERES = 256
 DEM_THREADING_LAYER = "omp"
 #: A running case writes checkpoint.npz every this many cycles (and on SIGINT/SIGTERM).
 DEM_CHECKPOINT_EVERY = 10
+#: OpenMP wait policy for the DEM kernels' threads (applied by dem.kernels unless the environment
+#: sets OMP_WAIT_POLICY). With libgomp's default the threads spin between parallel regions; on
+#: 2 shared cores that made 2 threads erratic (2e5 to 3.5e6 particle-steps/s at load 2.5)
+#: where PASSIVE gave a steady 1.8e7 (validation/liggghts-bulk, 2026-11-21).
+DEM_OMP_WAIT_POLICY = "PASSIVE"
