@@ -82,7 +82,19 @@ def test_every_shipped_case_loads(directory):
     )
     assert d.throw_number == pytest.approx(gamma, rel=1e-12)
     assert case.particles.count >= 1
-    assert t.width >= 2 * case.particles.radius
+    p = case.particles
+    r_max = p.radius if p.shape == "sphere" else float(max(p.grain.radii))
+    assert t.width >= 2 * r_max
+
+
+def test_screw_trough_is_the_issue_spec():
+    case = load_case(CASES_DIR / "screw-trough")
+    p, d = case.particles, case.drive
+    assert (p.shape, p.count, p.rotation) == ("screw", 200, True)
+    assert p.grain.mass == pytest.approx(0.0025, rel=1e-12)
+    assert p.grain.density == pytest.approx(7765, rel=1e-3)  # steel, from mass / union volume
+    assert (d.frequency, d.angle, d.throw_number) == (60.0, 25.0, 1.8)
+    assert case.material.friction == 0.35
 
 
 def test_sphere_bed_is_the_issue_spec():
