@@ -206,6 +206,15 @@ class Simulation:
                 f"at least 2 (2 r + skin) = {2 * (2 * r_max + self.skin):.6g} m "
                 "(the periodic image must be unique)",
             )
+        if bodies is not None:
+            reach = float(np.max(np.linalg.norm(bodies.offsets, axis=1)))
+            if trough.length <= 2.0 * reach:
+                raise InputError(
+                    "trough.length",
+                    trough.length,
+                    f"more than twice the largest member offset, {2 * reach:.6g} m (a clump's "
+                    "members must lie within half a period of its centre of mass)",
+                )
         self.pairs = PairList.for_spheres(spheres.n)
         self.geom = np.array([trough.length, trough.width, self.skin, self.dt])
         self.gravity = trough.gravity

@@ -243,3 +243,10 @@ def test_rotation_false_locks_the_orientation(tmp_path):
     np.testing.assert_array_equal(sim.bodies.q, q0)
     assert np.max(np.abs(sim.bodies.v)) > 0.01  # they fell, without turning
     assert np.all((sim.bodies.x[:, 0] >= 0.0) & (sim.bodies.x[:, 0] < 0.04))  # X_x wrapped
+
+
+def test_trough_shorter_than_a_clump_is_refused():
+    from dem.errors import InputError
+
+    with pytest.raises(InputError, match="trough.length"):
+        _screw_sim(_linear(), _dt(), [[0.005, 0.0, 0.01]], [[1.0, 0, 0, 0]], Trough(0.015, 0.03))
