@@ -250,3 +250,20 @@ def test_trough_shorter_than_a_clump_is_refused():
 
     with pytest.raises(InputError, match="trough.length"):
         _screw_sim(_linear(), _dt(), [[0.005, 0.0, 0.01]], [[1.0, 0, 0, 0]], Trough(0.015, 0.03))
+
+
+def test_body_force_acts_at_the_centre_of_mass():
+    """Free fall in the shaken frame: g + A w^2 sin(w t) e moves the screw but never turns it."""
+    omega = 2 * math.pi * 60.0
+    trough = Trough(0.04, 0.03, amplitude=3e-4, omega=omega, angle=math.radians(25.0))
+    q = np.random.default_rng(1).standard_normal((1, 4))
+    sim = _screw_sim(_linear(), _dt(), [[0.02, 0.0, 0.05]], q, trough)
+    sim.start_drive()
+    steps = 2000
+    sim.run(steps)
+    assert np.all(sim.bodies.ang_mom == 0.0) and np.all(sim.spheres.omega == 0.0)
+    t = steps * sim.dt
+    a = trough.amplitude * omega**2
+    drive = a * (1 - math.cos(omega * t)) / omega  # integral of A w^2 sin(w t) dt
+    expected = trough.gravity * t + drive * trough.direction
+    np.testing.assert_allclose(sim.bodies.v[0], expected, rtol=1e-5)  # trapezoid rule
