@@ -21,7 +21,7 @@ import math
 import re
 import tomllib
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +34,7 @@ CASE_FILE = "case.toml"
 #: Grain shapes the schema knows.
 SHAPES = ("sphere", "screw", "clump")
 #: Grain shapes the engine can run today. Lifting a restriction is adding the name here.
-SUPPORTED_SHAPES = ("sphere",)
+SUPPORTED_SHAPES = ("sphere", "screw", "clump")
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
 CONTACT_MODELS = ("hertz_mindlin", "linear")
 #: Default k_t / k_n of the linear model: 2/7 makes the tangential and normal oscillations of a
@@ -142,9 +142,11 @@ class ParticlesSpec:
         length: Screw length, m (screw, reserved).
         shank_radius: Screw shank sphere radius, m (screw, reserved).
         head_radius: Screw head sphere radius, m (screw, reserved).
-        mass: Target grain mass, kg (screw, reserved); None keeps the union-volume mass.
-        template: Absolute path of a clump template, lines ``x y z r`` in metres (clump,
-            reserved).
+        mass: Target grain mass, kg (screw, clump); None: material.density times the union
+            volume.
+        template: Absolute path of a clump template, lines ``x y z r`` in metres (clump).
+        grain: The :class:`dem.shapes.Template` built at load (screw, clump), else None; not
+            part of :meth:`Case.as_dict`.
 
     """
 
@@ -157,6 +159,7 @@ class ParticlesSpec:
     head_radius: float | None = None
     mass: float | None = None
     template: Path | None = None
+    grain: Any = field(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -221,7 +224,9 @@ class Case:
                 return str(value)
             return value
 
-        return plain(asdict(self))
+        data = plain(asdict(replace(self, particles=replace(self.particles, grain=None))))
+        data["particles"].pop("grain")
+        return data
 
 
 # --- reading -------------------------------------------------------------------------------------
@@ -455,11 +460,11 @@ def _read_particles(t: _Table) -> ParticlesSpec:
     own = {
         "sphere": ("radius",),
         "screw": ("length", "shank_radius", "head_radius", "mass"),
-        "clump": ("template",),
+        "clump": ("template", "mass"),
     }
     for other, keys in own.items():
         for key in keys:
-            if other != shape and key in t.data:
+            if other != shape and key in t.data and key not in own[shape]:
                 raise t.error(key, t.data[key], f"a key of shape = {other!r}, not of {shape!r}")
     count = t.integer("count", check=lambda n: n >= 1, allowed=">= 1")
     m = "> 0 (m)"
@@ -519,7 +524,30 @@ def _grain_diameter(particles: ParticlesSpec) -> float | None:
         return 2.0 * particles.radius
     if particles.shape == "screw":
         return 2.0 * max(particles.head_radius, particles.shank_radius)
+    if particles.grain is not None:
+        return 2.0 * float(max(particles.grain.radii))
     return None
+
+
+def _build_grain(particles: ParticlesSpec, density: float, t: _Table) -> ParticlesSpec:
+    """Attach the grain template of a screw or clump (mass if given, else the density)."""
+    from dem import shapes
+
+    if particles.shape == "sphere":
+        return particles
+    mass = particles.mass
+    rho = None if mass is not None else density
+    try:
+        if particles.shape == "screw":
+            grain = shapes.screw(
+                particles.length, particles.shank_radius, particles.head_radius,
+                mass=mass, density=rho,
+            )  # fmt: skip
+        else:
+            grain = shapes.clump_from_file(particles.template, mass=mass, density=rho)
+    except InputError as exc:
+        raise t.error(exc.key, exc.value, exc.allowed) from exc
+    return replace(particles, grain=grain)
 
 
 def load_case(path: str | Path) -> Case:
@@ -571,7 +599,9 @@ def load_case(path: str | Path) -> Case:
     drive = _read_drive(table("drive"), trough.inclination)
     material = _read_material(table("material"))
     contact = _read_contact(table("contact"))
-    particles = _read_particles(table("particles"))
+    particles = _build_grain(
+        _read_particles(table("particles")), material.density, table("particles")
+    )
     run = _read_run(table("run"))
     output = _read_output(table("output"))
 

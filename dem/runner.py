@@ -268,12 +268,13 @@ def run_case(
 
 def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
     s = sim.spheres
+    orientation = sim.bodies.q if sim.bodies is not None else None
     counts = sim.contact_counts()
     t = sim.drive_time
     shift = sim.trough.displacement(t) if sim.drive_on else np.zeros(3)
     lab_v = sim.trough.velocity(t) if sim.drive_on else np.zeros(3)
     vtk.write_frame(
-        t, s.x, s.radius, s.v, s.body, s.body, counts,
+        t, s.x, s.radius, s.v, s.body, s.body, counts, orientation,
         drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
     )  # fmt: skip
     results.append_frame(t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts)
@@ -281,7 +282,7 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
 
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
     """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums."""
-    total_mass = float(np.sum(sim.spheres.mass))
+    total_mass = sim.total_mass
     velocity = float(sim.stats[0] / (sim.stats[1] * total_mass)) if sim.stats[1] else math.nan
     measured = loop["cycle"] >= case.run.settle_cycles
     if measured:
@@ -305,7 +306,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
     stat = measure.conveying_velocity(
         per_cycle, amplitude=case.drive.amplitude, omega=case.drive.omega, angle=case.drive.angle
     )
-    total_mass = float(np.sum(sim.spheres.mass))
+    total_mass = sim.total_mass
     flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
     wall = loop["wall_time_s"]
     return {
@@ -323,7 +324,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "inclination": case.trough.inclination,
         "friction": case.material.friction,
         "contact_model": case.contact.model,
-        "grains": case.particles.count,
+        "grains": sim.n_grains,
         "spheres": sim.spheres.n,
         "total_mass": total_mass,
         "timestep": sim.dt,

@@ -15,6 +15,12 @@ The trajectory does not depend on the number of threads, bit for bit: every forc
 in the same order whatever the threads (per-pair rows, then a per-sphere gather in CSR order);
 only the momentum sum of the measurement is a parallel reduction (last-bit differences).
 
+Rigid clumps (screws, clumps from a file) replace items 1 and 4 by the rigid-body update of
+:func:`dem.kernels.integrate.advance_clumps`: bodies half kick, drift and free rotation, members
+placed; after the per-member gather (walls, no body force) the forces and torques are reduced to
+the bodies, M a_body is added at each centre of mass and the closing half kick places the members
+again. Members of one clump never contact each other. Plain spheres keep the sphere integrator.
+
 Every ``DEM_CHECK_INTERVAL`` steps Python checks for instability (non-finite values, overlaps
 beyond ``DEM_MAX_OVERLAP_FRACTION`` of the radius, grains far faster than drive and gravity can
 make them) and raises :class:`dem.errors.SimulationError` naming the cause and the fix.
@@ -31,9 +37,17 @@ import numpy as np
 from dem import config
 from dem.errors import InputError, SimulationError
 from dem.kernels import contacts
-from dem.kernels.integrate import DONE, advance, build, evaluate_forces
+from dem.kernels.integrate import (
+    DONE,
+    advance,
+    advance_clumps,
+    build,
+    evaluate_forces,
+    evaluate_forces_clumps,
+)
 from dem.kernels.neighbours import OK
-from dem.state import PairList, Spheres, random_fill
+from dem.kernels.rigid import rotational_energy
+from dem.state import Bodies, PairList, Spheres, random_fill, random_fill_clumps
 from dem.trough import Trough
 
 
@@ -84,8 +98,12 @@ def timestep_limits(
     pairs: bool = True,
     youngs_modulus: float = 0.0,
     poisson_ratio: float = 0.3,
+    mass: float | None = None,
 ) -> tuple[float, float]:
     """Automatic time step and stability limit, s, for equal spheres.
+
+    ``mass`` replaces the sphere's own mass (a clump member: the clump's effective mass at the
+    member, see :meth:`Simulation.from_case`).
 
     Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
     the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
@@ -98,7 +116,8 @@ def timestep_limits(
     Hertz collision time at ``impact_speed``; never above the stability limit.
     """
     p = law.params
-    mass = density * 4.0 / 3.0 * math.pi * radius**3
+    if mass is None:
+        mass = density * 4.0 / 3.0 * math.pi * radius**3
     beta = p[contacts.P_BETA]
     tangential_factor = 3.5 if rotation else 1.0
     contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
@@ -152,6 +171,8 @@ class Simulation:
         rotation: False locks rotation (spins stay zero, torques are not integrated).
         skin: Verlet skin, m; default ``DEM_SKIN_FRACTION`` times the largest radius.
         reference_speed: Speed scale for the instability check, m/s (drive and free fall).
+        bodies: Rigid clumps owning the spheres (:meth:`dem.state.Bodies.create`), or None for
+            plain spheres.
 
     """
 
@@ -165,12 +186,17 @@ class Simulation:
         rotation: bool = True,
         skin: float | None = None,
         reference_speed: float | None = None,
+        bodies: Bodies | None = None,
     ):
         self.spheres = spheres
+        self.bodies = bodies
         self.trough = trough
         self.law = law
         self.dt = float(dt)
         self.rotation = bool(rotation)
+        if bodies is not None and not self.rotation:
+            bodies.ang_mom[:] = 0.0
+            bodies.place(spheres)
         r_max = float(np.max(spheres.radius))
         self.skin = config.DEM_SKIN_FRACTION * r_max if skin is None else float(skin)
         if trough.length < 2.0 * (2.0 * r_max + self.skin):
@@ -180,6 +206,15 @@ class Simulation:
                 f"at least 2 (2 r + skin) = {2 * (2 * r_max + self.skin):.6g} m "
                 "(the periodic image must be unique)",
             )
+        if bodies is not None:
+            reach = float(np.max(np.linalg.norm(bodies.offsets, axis=1)))
+            if trough.length <= 2.0 * reach:
+                raise InputError(
+                    "trough.length",
+                    trough.length,
+                    f"more than twice the largest member offset, {2 * reach:.6g} m (a clump's "
+                    "members must lie within half a period of its centre of mass)",
+                )
         self.pairs = PairList.for_spheres(spheres.n)
         self.geom = np.array([trough.length, trough.width, self.skin, self.dt])
         self.gravity = trough.gravity
@@ -216,8 +251,8 @@ class Simulation:
     def _build(self) -> None:
         while True:
             status, need = build(
-                self.spheres.n, self.spheres.as_tuple(), self.pairs.as_tuple(),
-                self.pairs.counters, self.geom,
+                self.spheres.n, self.spheres.as_tuple(), self.spheres.body,
+                self.pairs.as_tuple(), self.pairs.counters, self.geom,
             )  # fmt: skip
             if status == OK:
                 return
@@ -230,6 +265,14 @@ class Simulation:
         contact forces plus m a_body.
         """
         self._build()
+        if self.bodies is not None:
+            evaluate_forces_clumps(
+                self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_tuple(),
+                self.pairs.as_tuple(), self.pairs.n_pairs, self.geom, self.drive_time,
+                self.gravity, self._drive(), self.bodies.as_tuple(),
+            )  # fmt: skip
+            self._forces_valid = True
+            return
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
             self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.n_pairs, self.geom,
@@ -252,12 +295,20 @@ class Simulation:
         done = 0
         resume = False
         while done < n_steps:
-            status, steps, need = advance(
-                n_steps - done, self.step_index - self.drive_start_step, resume,
-                self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-                self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.counters, self.geom,
-                self.gravity, self._drive(), self.stats,
-            )  # fmt: skip
+            if self.bodies is None:
+                status, steps, need = advance(
+                    n_steps - done, self.step_index - self.drive_start_step, resume,
+                    self.spheres.n, self.law.model_id, self.law.params, self.rotation,
+                    self.spheres.as_tuple(), self.spheres.body, self.pairs.as_tuple(),
+                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
+                )  # fmt: skip
+            else:
+                status, steps, need = advance_clumps(
+                    n_steps - done, self.step_index - self.drive_start_step, resume,
+                    self.spheres.n, self.law.model_id, self.law.params, self.rotation,
+                    self.spheres.as_tuple(), self.bodies.as_tuple(), self.pairs.as_tuple(),
+                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
+                )  # fmt: skip
             done += steps
             self.step_index += steps
             if status == DONE:
@@ -321,8 +372,23 @@ class Simulation:
                 "contact or a smaller drive.throw_number"
             )
 
+    @property
+    def n_grains(self) -> int:
+        """Number of grains: bodies for clumps, spheres otherwise."""
+        return self.spheres.n if self.bodies is None else self.bodies.n
+
+    @property
+    def total_mass(self) -> float:
+        """Total grain mass, kg (clump members carry the clump mass, so bodies are summed)."""
+        b = self.bodies
+        return float(np.sum(self.spheres.mass if b is None else b.mass))
+
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy in the trough frame, J."""
+        b = self.bodies
+        if b is not None:
+            trans = 0.5 * np.sum(b.mass * np.einsum("ij,ij->i", b.v, b.v))
+            return float(trans + rotational_energy(b.q, b.ang_mom, b.moments))
         s = self.spheres
         trans = 0.5 * np.sum(s.mass * np.einsum("ij,ij->i", s.v, s.v))
         rot = 0.5 * np.sum(np.einsum("ij,ij->i", s.omega, s.omega) / s.inv_inertia)
@@ -355,6 +421,9 @@ class Simulation:
 
     def mean_velocity_x(self) -> float:
         """Mass-weighted mean x-velocity now (trough frame), m/s."""
+        if self.bodies is not None:
+            b = self.bodies
+            return float(np.sum(b.mass * b.v[:, 0]) / np.sum(b.mass))
         s = self.spheres
         return float(np.sum(s.mass * s.v[:, 0]) / np.sum(s.mass))
 
@@ -386,6 +455,8 @@ class Simulation:
         fresh force evaluation would update the contact history a second time).
         """
         state = {f"sph.{k}": v for k, v in vars(self.spheres).items()}
+        if self.bodies is not None:
+            state |= {f"body.{k}": v for k, v in vars(self.bodies).items()}
         state |= {f"nb.{k}": v for k, v in vars(self.pairs).items() if isinstance(v, np.ndarray)}
         state["nb.sizes"] = np.array(
             [self.pairs.n, self.pairs.capacity, self.pairs.cell_capacity, self.pairs.slots]
@@ -407,6 +478,10 @@ class Simulation:
             )
         for key in vars(self.spheres):
             setattr(self.spheres, key, np.ascontiguousarray(state[f"sph.{key}"]).copy())
+        if self.bodies is not None:
+            for key in vars(self.bodies):
+                setattr(self.bodies, key, np.ascontiguousarray(state[f"body.{key}"]).copy())
+            self.spheres.body = self.bodies.body_of
         self.pairs = PairList(n, capacity, cell_capacity, slots)
         for key, value in vars(self.pairs).items():
             if isinstance(value, np.ndarray):
@@ -420,29 +495,50 @@ class Simulation:
 
     @classmethod
     def from_case(cls, case, *, timestep: float | None = None) -> Simulation:
-        """Fill the case's trough with spheres (seeded) and set up the time step.
+        """Fill the case's trough with grains (seeded) and set up the time step.
+
+        Spheres: :func:`dem.state.random_fill`. Screws and clumps: N copies of the case's grain
+        template at random positions and orientations without member overlap
+        (:func:`dem.state.random_fill_clumps`). The stability limit of a clump takes the
+        smallest effective mass a member contact can see, 1 / (1/M + r_b^2 / I_min) with r_b the
+        largest member offset and I_min the smallest principal moment, for every member radius.
 
         The time step is ``timestep``, else ``case.run.timestep``, else automatic; a given value
         above the stability limit raises InputError naming ``run.timestep``. An automatic step is
         shortened so that a drive period holds a whole number of steps.
         """
         pt, mat = case.particles, case.material
-        if pt.shape != "sphere":
-            raise InputError("particles.shape", pt.shape, "'sphere' (the engine runs spheres)")
         if case.trough.mesh is not None:
             raise InputError(
                 "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
             )
+        grain = pt.grain
+        if pt.shape != "sphere" and grain is None:
+            raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")
         trough = Trough.from_case(case)
         law = ContactLaw.from_case(case)
         rng = np.random.default_rng(case.run.seed)
-        positions, height = random_fill(pt.count, pt.radius, trough.length, trough.width, rng)
+        if pt.shape == "sphere":
+            positions, height = random_fill(pt.count, pt.radius, trough.length, trough.width, rng)
+            sizes = [(pt.radius, None)]
+            density = mat.density
+        else:
+            centres, quats, height = random_fill_clumps(
+                pt.count, grain, trough.length, trough.width, rng
+            )
+            lever2 = float(np.max(np.einsum("ij,ij->i", grain.centres, grain.centres)))
+            m_eff = 1.0 / (1.0 / grain.mass + lever2 / float(np.min(grain.moments)))
+            sizes = [(float(r), m_eff) for r in np.unique(grain.radii)]
+            density = grain.density
         impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
-        auto, limit = timestep_limits(
-            law, pt.radius, mat.density, impact, rotation=pt.rotation, pairs=pt.count > 1,
-            youngs_modulus=case.contact.youngs_modulus or 0.0,
-            poisson_ratio=case.contact.poisson_ratio,
-        )  # fmt: skip
+        auto, limit = math.inf, math.inf
+        for radius, mass in sizes:
+            a, b = timestep_limits(
+                law, radius, density, impact, rotation=pt.rotation, pairs=pt.count > 1,
+                youngs_modulus=case.contact.youngs_modulus or 0.0,
+                poisson_ratio=case.contact.poisson_ratio, mass=mass,
+            )  # fmt: skip
+            auto, limit = min(auto, a), min(limit, b)
         user = timestep if timestep is not None else case.run.timestep
         if user is not None:
             if user > limit:
@@ -457,8 +553,14 @@ class Simulation:
             dt = float(user)
         else:
             dt = trough.period / math.ceil(trough.period / auto)
-        spheres = Spheres.create(positions, pt.radius, mat.density)
-        sim = cls(spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact)
+        bodies = None
+        if pt.shape == "sphere":
+            spheres = Spheres.create(positions, pt.radius, mat.density)
+        else:
+            bodies, spheres = Bodies.create(grain, centres, quats)
+        sim = cls(
+            spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact, bodies=bodies
+        )
         sim.fill_height = height
         sim.timestep_limit = limit
         return sim

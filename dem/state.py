@@ -1,12 +1,13 @@
-"""Structure-of-arrays state: spheres (the contact members) and the neighbour pair list.
+"""Structure-of-arrays state: spheres (the contact members), rigid bodies and the pair list.
 
 Spheres are what touch: positions, velocities, spins, forces and torques are per sphere, and the
-kernels accumulate contact forces per sphere. A grain (``body``) is a sphere today; a rigid clump
-will own several spheres (``body[s]`` is the grain of sphere s) and a reduction sphere -> body
-(force, torque about the clump's centre of mass) followed by a rigid-body update slots in between
-the force gather and the kick without touching the pair loop.
+kernels accumulate contact forces per sphere. A grain is a sphere, or a rigid clump
+(:class:`Bodies`) that owns several member spheres (``body[s]`` is the grain of sphere s); a
+reduction sphere -> body (force, torque about the clump's centre of mass) and the rigid-body
+update of :mod:`dem.kernels.rigid` slot in between the force gather and the kick without touching
+the pair loop. A run of plain spheres has no :class:`Bodies` and keeps the sphere integrator.
 
-All arrays are float64 C-contiguous unless stated; n spheres, ``cap`` pair capacity.
+All arrays are float64 C-contiguous unless stated; n spheres, B bodies, ``cap`` pair capacity.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES, DEM_GROWTH_FACTOR
 from dem.kernels.forces import N_WALLS
 from dem.kernels.neighbours import OVERFLOW_CELLS, OVERFLOW_PAIRS, OVERFLOW_SLOTS
+from dem.kernels.rigid import angular_velocity, quat_to_matrix, update_members
 
 
 @dataclass
@@ -94,6 +96,132 @@ class Spheres:
             self.inv_mass,
             self.inv_inertia,
             self.wall_hist,
+        )
+
+
+@dataclass
+class Bodies:
+    """Rigid clumps of member spheres (all copies of one template).
+
+    Attributes:
+        x: Centres of mass X, trough frame, (B, 3), m (x wrapped into [0, length) each step).
+        v: Centre-of-mass velocities V relative to the trough, (B, 3), m/s.
+        q: Orientations, unit quaternions (w, x, y, z), body -> trough frame, (B, 4).
+        ang_mom: Angular momenta L about X, trough frame, (B, 3), kg m^2/s.
+        inv_mass: 1 / M, (B,), 1/kg.
+        mass: M, (B,), kg.
+        moments: Principal moments of inertia (body frame), (B, 3), kg m^2.
+        force: Force F_b of the last evaluation (contacts + M a_body), (B, 3), N.
+        torque: Torque T_b about X of the last evaluation, trough frame, (B, 3), N m.
+        omega: Angular velocities, trough frame, (B, 3), rad/s.
+        start: CSR start of each body's members in ``members``, int64 (B + 1,).
+        members: Sphere indices grouped by body, int64 (n,).
+        offsets: Member offsets d_s from X in the body frame, (n, 3), m.
+        body_of: Body of each sphere, int64 (n,) (the same array as ``Spheres.body``).
+
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    q: np.ndarray
+    ang_mom: np.ndarray
+    inv_mass: np.ndarray
+    mass: np.ndarray
+    moments: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+    omega: np.ndarray
+    start: np.ndarray
+    members: np.ndarray
+    offsets: np.ndarray
+    body_of: np.ndarray
+
+    @classmethod
+    def create(
+        cls, template, positions: np.ndarray, orientations: np.ndarray
+    ) -> tuple[Bodies, Spheres]:
+        """Clumps of ``template`` at rest; returns the bodies and their member spheres.
+
+        ``positions`` (B, 3) are the centres of mass, m; ``orientations`` (B, 4) unit
+        quaternions (normalised here).
+
+        Member spheres are numbered body by body (sphere b k + i is member i of body b). They
+        carry the clump mass M as ``mass`` (the contact law's effective mass m* = M_a M_b /
+        (M_a + M_b), M against a wall, as LIGGGHTS multisphere does) and the sphere inertia of
+        M as ``inv_inertia`` (unused: members do not rotate on their own).
+        """
+        x = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3).copy()
+        q = np.ascontiguousarray(orientations, dtype=np.float64).reshape(-1, 4).copy()
+        q /= np.linalg.norm(q, axis=1)[:, None]
+        n_bodies, k = x.shape[0], template.count
+        n = n_bodies * k
+        mass = float(template.mass)
+        body_of = np.repeat(np.arange(n_bodies, dtype=np.int64), k)
+        offsets = np.tile(np.asarray(template.centres, dtype=np.float64), (n_bodies, 1))
+        radius = np.tile(np.asarray(template.radii, dtype=np.float64), n_bodies)
+        bodies = cls(
+            x=x,
+            v=np.zeros((n_bodies, 3)),
+            q=q,
+            ang_mom=np.zeros((n_bodies, 3)),
+            inv_mass=np.full(n_bodies, 1.0 / mass),
+            mass=np.full(n_bodies, mass),
+            moments=np.tile(np.asarray(template.moments, dtype=np.float64), (n_bodies, 1)),
+            force=np.zeros((n_bodies, 3)),
+            torque=np.zeros((n_bodies, 3)),
+            omega=np.zeros((n_bodies, 3)),
+            start=np.arange(0, n + 1, k, dtype=np.int64),
+            members=np.arange(n, dtype=np.int64),
+            offsets=np.ascontiguousarray(offsets),
+            body_of=body_of,
+        )
+        member_mass = np.full(n, mass)
+        spheres = Spheres(
+            x=np.zeros((n, 3)),
+            v=np.zeros((n, 3)),
+            omega=np.zeros((n, 3)),
+            force=np.zeros((n, 3)),
+            torque=np.zeros((n, 3)),
+            radius=radius,
+            mass=member_mass,
+            inv_mass=1.0 / member_mass,
+            inv_inertia=1.0 / (0.4 * member_mass * radius**2),
+            wall_hist=np.zeros((N_WALLS * n, 3)),
+            body=body_of,
+        )
+        bodies.place(spheres)
+        return bodies, spheres
+
+    @property
+    def n(self) -> int:
+        """Number of bodies B."""
+        return self.x.shape[0]
+
+    def place(self, spheres: Spheres) -> None:
+        """Set omega from L and the members' positions, velocities and spins from the bodies."""
+        angular_velocity(self.q, self.ang_mom, self.moments, self.omega)
+        update_members(
+            self.x, self.v, self.q, self.omega, self.offsets, self.body_of, spheres.x, spheres.v,
+            spheres.omega,
+        )  # fmt: skip
+
+    def as_tuple(self) -> tuple:
+        """Kernel tuple ``bod`` (:func:`dem.kernels.integrate.advance_clumps`)."""
+        return (
+            self.x,
+            self.v,
+            self.q,
+            self.ang_mom,
+            self.inv_mass,
+            self.mass,
+            self.moments,
+            self.force,
+            self.torque,
+            self.omega,
+            self.start,
+            self.members,
+            self.offsets,
+            self.body_of,
         )
 
 
@@ -260,3 +388,91 @@ def random_fill(
         else:
             height *= 1.25
     return pos, height
+
+
+def random_orientations(n: int, rng: np.random.Generator) -> np.ndarray:
+    """Uniformly distributed unit quaternions (w, x, y, z) with w >= 0, (n, 4)."""
+    q = rng.standard_normal((n, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    q[q[:, 0] < 0] *= -1.0
+    return q
+
+
+def random_fill_clumps(
+    n: int,
+    template,
+    length: float,
+    width: float,
+    rng: np.random.Generator,
+    *,
+    height: float | None = None,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Random sequential placement of n clumps at random positions and orientations.
+
+    Each try draws a centre of mass uniformly in x in [0, length), y across the trough and z in
+    [r_min, height] and a uniform random orientation, and keeps it if every member sphere lies
+    inside the walls (z >= r, |y| <= width/2 - r) and overlaps no member of an earlier clump
+    (periodic in x). After ``DEM_FILL_TRIES`` failed tries the box is made 25 % taller.
+
+    Args:
+        n: Number of clumps.
+        template: A :class:`dem.shapes.Template`.
+        length, width: Trough section, m.
+        rng: Random generator (seeded by the caller).
+        height: Initial box height, m; default ``DEM_FILL_HEIGHT_FACTOR`` times the height of a
+            loose bed (packing fraction 0.3) plus the bounding diameter.
+
+    Returns:
+        (centres of mass (n, 3) in m, quaternions (n, 4), final box height in m).
+
+    """
+    centres = np.asarray(template.centres, dtype=np.float64)
+    radii = np.asarray(template.radii, dtype=np.float64)
+    r_min, r_max = float(radii.min()), float(radii.max())
+    bound = template.bounding_radius
+    if width <= 2.0 * r_max:
+        raise ValueError(f"trough width {width} m leaves no room for spheres of radius {r_max} m")
+    if height is None:
+        bed = n * template.volume / (0.3 * length * width)
+        height = DEM_FILL_HEIGHT_FACTOR * bed + 2.0 * bound
+    k = len(radii)
+    pos = np.empty((n, 3))
+    quat = np.empty((n, 4))
+    members = np.empty((n * k, 3))
+    member_r = np.tile(radii, n)
+    y_max = 0.5 * width - r_min
+    placed = 0
+    while placed < n:
+        for _ in range(DEM_FILL_TRIES):
+            c = np.array(
+                [
+                    rng.uniform(0.0, length),
+                    rng.uniform(-y_max, y_max),
+                    rng.uniform(r_min, max(r_min, height - r_min)),
+                ]
+            )
+            q = random_orientations(1, rng)[0]
+            xs = c + centres @ quat_to_matrix(q).T
+            if np.any(xs[:, 2] < radii) or np.any(np.abs(xs[:, 1]) > 0.5 * width - radii):
+                continue
+            m = placed * k
+            if placed:
+                near = pos[:placed] - c
+                near[:, 0] -= length * np.round(near[:, 0] / length)
+                close = np.einsum("ij,ij->i", near, near) < (2.0 * bound) ** 2
+                if np.any(close):
+                    idx = (np.flatnonzero(close)[:, None] * k + np.arange(k)).ravel()
+                    d = members[idx][None, :, :] - xs[:, None, :]
+                    d[..., 0] -= length * np.round(d[..., 0] / length)
+                    dist2 = np.einsum("abi,abi->ab", d, d)
+                    reach = radii[:, None] + member_r[idx][None, :]
+                    if np.any(dist2 < reach**2):
+                        continue
+            pos[placed] = c
+            quat[placed] = q
+            members[m : m + k] = xs
+            placed += 1
+            break
+        else:
+            height *= 1.25
+    return pos, quat, height

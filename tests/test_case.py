@@ -82,7 +82,19 @@ def test_every_shipped_case_loads(directory):
     )
     assert d.throw_number == pytest.approx(gamma, rel=1e-12)
     assert case.particles.count >= 1
-    assert t.width >= 2 * case.particles.radius
+    p = case.particles
+    r_max = p.radius if p.shape == "sphere" else float(max(p.grain.radii))
+    assert t.width >= 2 * r_max
+
+
+def test_screw_trough_is_the_issue_spec():
+    case = load_case(CASES_DIR / "screw-trough")
+    p, d = case.particles, case.drive
+    assert (p.shape, p.count, p.rotation) == ("screw", 200, True)
+    assert p.grain.mass == pytest.approx(0.0025, rel=1e-12)
+    assert p.grain.density == pytest.approx(7765, rel=1e-3)  # steel, from mass / union volume
+    assert (d.frequency, d.angle, d.throw_number) == (60.0, 25.0, 1.8)
+    assert case.material.friction == 0.35
 
 
 def test_sphere_bed_is_the_issue_spec():
@@ -179,10 +191,38 @@ def test_unsupported_shape_is_easy_to_lift(tmp_path, monkeypatch):
         }
     )
     path = write_case(tmp_path, tables)
+    monkeypatch.setattr(dem.case, "SUPPORTED_SHAPES", ("sphere",))
     with pytest.raises(InputError, match="not supported yet"):
         load_case(path)
     monkeypatch.setattr(dem.case, "SUPPORTED_SHAPES", ("sphere", "screw"))
     assert load_case(path).particles.head_radius == 0.003
+
+
+def test_screw_and_clump_build_their_template(tmp_path):
+    screw = with_changes(
+        {
+            "particles.radius": None,
+            "particles.shape": "screw",
+            "particles.length": 0.02,
+            "particles.shank_radius": 0.0015,
+            "particles.head_radius": 0.003,
+            "particles.mass": 0.0025,
+        }
+    )
+    (tmp_path / "screw").mkdir()
+    case = load_case(write_case(tmp_path / "screw", screw))
+    assert case.particles.grain.name == "screw"
+    assert case.particles.grain.mass == pytest.approx(0.0025)
+    assert "grain" not in case.as_dict()["particles"]
+    (tmp_path / "clump").mkdir()
+    (tmp_path / "clump" / "pair.spheres").write_text("0 0 0 0.002\n0.003 0 0 0.002\n")
+    clump = with_changes(
+        {"particles.radius": None, "particles.shape": "clump", "particles.template": "pair.spheres"}
+    )
+    case = load_case(write_case(tmp_path / "clump", clump))
+    grain = case.particles.grain
+    assert grain.count == 2
+    assert grain.mass == pytest.approx(case.material.density * grain.volume)
 
 
 # --- bad input -----------------------------------------------------------------------------------
@@ -261,22 +301,16 @@ BAD = [
         "x.spheres",
     ),
     (
-        "screw-not-yet",
+        "screw-shank-above-head",
         {
             "particles.radius": None,
             "particles.shape": "screw",
             "particles.length": 0.02,
-            "particles.shank_radius": 0.0015,
+            "particles.shank_radius": 0.004,
             "particles.head_radius": 0.003,
         },
-        "particles.shape",
-        "not supported yet",
-    ),
-    (
-        "clump-not-yet",
-        {"particles.radius": None, "particles.shape": "clump", "particles.template": "case.toml"},
-        "particles.shape",
-        "not supported yet",
+        "particles.shank_radius",
+        "<= head_radius",
     ),
     ("stiffness-with-hertz", {"contact.stiffness": 2000.0}, "contact.stiffness", "remove it"),
     ("radius-with-screw", {"particles.shape": "screw"}, "particles.radius", "shape = 'sphere'"),

@@ -26,6 +26,13 @@ import numba
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
 from dem.kernels.forces import pair_forces, sphere_force
 from dem.kernels.neighbours import OK, max_displacement_sq, rebuild
+from dem.kernels.rigid import (
+    kick_drift_bodies,
+    kick_drift_one,
+    place_members_of,
+    reduce_to_bodies,
+    update_members,
+)
 
 #: status returned by :func:`advance` when all steps were done.
 DONE = OK
@@ -123,12 +130,15 @@ def evaluate_forces(
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def build(n, sph, nb, counters, geom):
-    """Rebuild the pair list of ``nb`` (counters[0] = number of pairs); returns (status, need)."""
+def build(n, sph, body, nb, counters, geom):
+    """Rebuild the pair list of ``nb`` (counters[0] = number of pairs); returns (status, need).
+
+    ``body`` (n,) int64 is the rigid body of each sphere: spheres of one body are not paired.
+    """
     x, radius = sph[0], sph[5]
     status, n_pairs, need = rebuild(
-        x, radius, n, geom[2], geom[0], geom[1], nb[0], nb[1], nb[2], nb[3], nb[4], counters[0],
-        nb[5], nb[6], nb[7], nb[8], nb[9], nb[10], nb[11], nb[12], nb[13], nb[14],
+        x, radius, body, n, geom[2], geom[0], geom[1], nb[0], nb[1], nb[2], nb[3], nb[4],
+        counters[0], nb[5], nb[6], nb[7], nb[8], nb[9], nb[10], nb[11], nb[12], nb[13], nb[14],
     )  # fmt: skip
     counters[0] = n_pairs
     if status == OK:
@@ -138,7 +148,7 @@ def build(n, sph, nb, counters, geom):
 
 @numba.njit(**NUMBA_OPTIONS)
 def advance(
-    n_steps, step0, resume, n, model, p, rotation, sph, nb, counters, geom, gravity, drive,
+    n_steps, step0, resume, n, model, p, rotation, sph, body, nb, counters, geom, gravity, drive,
     out_stats,
 ):  # fmt: skip
     """Advance ``n_steps`` velocity-Verlet steps from step index ``step0`` (t = step dt).
@@ -149,6 +159,7 @@ def advance(
             neighbour-list overflow).
         n, model, p, rotation: Sphere count, contact law id and parameters, rotation on/off.
         sph, nb: Array tuples (module docstring).
+        body: Grain of each sphere, int64 (n,) (``0..n-1`` here: every grain is one sphere).
         counters: int64 (2,): number of pairs, number of builds; updated.
         geom: float64 (4,): length, width, skin, dt.
         gravity: float64 (3,), m/s^2, trough frame.
@@ -169,7 +180,7 @@ def advance(
         if s == 0 and not resume:
             kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation)
         if max_displacement_sq(x, nb[0], n, length) > limit:
-            status, need = build(n, sph, nb, counters, geom)
+            status, need = build(n, sph, body, nb, counters, geom)
             if status != OK:
                 return status, s, need
         t = (step0 + s + 1) * dt
@@ -178,5 +189,183 @@ def advance(
             s < n_steps - 1,
         )  # fmt: skip
         out_stats[0] += px
+        out_stats[1] += 1.0
+    return DONE, n_steps, 0
+
+
+# --- rigid clumps ---------------------------------------------------------------------------------
+# Bodies travel as ``bod = (X, V, q, L, inv_mass, mass, moments, force, torque, omega, start,
+# members, offsets, body_of)`` (shapes in :class:`dem.state.Bodies`). Member spheres carry the
+# clump mass M in ``sph.mass`` (the contact law's effective mass, as LIGGGHTS multisphere); their
+# own kick and drift is replaced by the rigid-body update of :mod:`dem.kernels.rigid`.
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def _wrap_bodies(body_x, length):
+    """Wrap the centres of mass into [0, length) along x (members follow at update_members)."""
+    for b in numba.prange(body_x.shape[0]):
+        body_x[b, 0] -= math.floor(body_x[b, 0] / length) * length
+        if body_x[b, 0] >= length:
+            body_x[b, 0] = 0.0
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def _add_body_force(body_force, mass, ax, ay, az):
+    """F_b += M_b a_body at the centre of mass (no torque: the frame does not rotate)."""
+    for b in numba.prange(body_force.shape[0]):
+        body_force[b, 0] += mass[b] * ax
+        body_force[b, 1] += mass[b] * ay
+        body_force[b, 2] += mass[b] * az
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, drive, bod):
+    """Pair forces, per-member gather (walls, no body force), reduction to the bodies + M a_body.
+
+    Leaves ``sph.force``/``torque`` with the members' contact forces and the bodies'
+    ``force``/``torque`` (about X) with F_b = sum F_s + M a_body, T_b = sum (T_s + r_s x F_s).
+    """
+    x, v, omega, radius, mass = sph[0], sph[1], sph[2], sph[5], sph[6]
+    length, width, dt = geom[0], geom[1], geom[3]
+    pair_forces(
+        model, p, x, v, omega, radius, mass, nb[1], nb[2], n_pairs, nb[4], length, dt, nb[15],
+        nb[16],
+    )  # fmt: skip
+    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False)
+    reduce_to_bodies(
+        sph[3], sph[4], x, bod[0], bod[10], bod[11], length, bod[7], bod[8],
+    )  # fmt: skip
+    ax, ay, az = body_acceleration(t, gravity, drive)
+    _add_body_force(bod[7], bod[5], ax, ay, az)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _bodies_half_step(dt, drift, rotation, bod, sph, length):
+    """Body kick (+ drift, free rotation, wrap), then place the members (x, v, spin)."""
+    kick_drift_bodies(
+        dt, drift, rotation, bod[0], bod[1], bod[2], bod[3], bod[7], bod[8], bod[4], bod[6],
+        bod[9],
+    )  # fmt: skip
+    if drift:
+        _wrap_bodies(bod[0], length)
+    update_members(bod[0], bod[1], bod[2], bod[9], bod[12], bod[13], sph[0], sph[1], sph[2])
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def bodies_forces_kick(
+    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
+):  # fmt: skip
+    """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
+
+    Body b gathers the forces of its members (:func:`dem.kernels.forces.sphere_force`, walls, no
+    body force), reduces them to F_b, T_b about X_b as :func:`dem.kernels.rigid.reduce_to_bodies`
+    does (same order of sums), adds M a_body, takes the closing half kick and, with
+    ``next_drift``, the next step's half kick, drift, free rotation and wrap; then places its
+    members. Each body writes only its own rows and its members' rows: race-free.
+
+    Returns:
+        sum_b M_b V_x,b after the closing half kick, kg m/s.
+
+    """
+    x, v, omega, force, torque, radius, mass, wall_hist = (
+        sph[0], sph[1], sph[2], sph[3], sph[4], sph[5], sph[6], sph[9]
+    )  # fmt: skip
+    part_start, part_pairs, pf, pt = nb[13], nb[14], nb[15], nb[16]
+    body_x, body_v, q, ang_mom, inv_mass, body_mass, moments = (
+        bod[0], bod[1], bod[2], bod[3], bod[4], bod[5], bod[6]
+    )  # fmt: skip
+    body_force, body_torque, body_omega, start, members, offsets = (
+        bod[7], bod[8], bod[9], bod[10], bod[11], bod[12]
+    )  # fmt: skip
+    px = 0.0
+    for b in numba.prange(body_x.shape[0]):
+        fx = fy = fz = 0.0
+        tx = ty = tz = 0.0
+        for e in range(start[b], start[b + 1]):
+            s = members[e]
+            f = sphere_force(
+                s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+                part_pairs, pf, pt, 0.0, 0.0, 0.0,
+            )  # fmt: skip
+            for c in range(3):
+                force[s, c] = f[c]
+                torque[s, c] = f[3 + c]
+            rx = x[s, 0] - body_x[b, 0]
+            rx -= length * math.floor(rx / length + 0.5)
+            ry = x[s, 1] - body_x[b, 1]
+            rz = x[s, 2] - body_x[b, 2]
+            fx += f[0]
+            fy += f[1]
+            fz += f[2]
+            tx += f[3] + ry * f[2] - rz * f[1]
+            ty += f[4] + rz * f[0] - rx * f[2]
+            tz += f[5] + rx * f[1] - ry * f[0]
+        m = body_mass[b]
+        body_force[b, 0] = fx + m * ax
+        body_force[b, 1] = fy + m * ay
+        body_force[b, 2] = fz + m * az
+        body_torque[b, 0] = tx
+        body_torque[b, 1] = ty
+        body_torque[b, 2] = tz
+        kick_drift_one(
+            b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+            moments, body_omega,
+        )  # fmt: skip
+        px += m * body_v[b, 0]
+        if next_drift:
+            kick_drift_one(
+                b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
+                inv_mass, moments, body_omega,
+            )  # fmt: skip
+            body_x[b, 0] -= math.floor(body_x[b, 0] / length) * length
+            if body_x[b, 0] >= length:
+                body_x[b, 0] = 0.0
+        place_members_of(
+            b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega
+        )  # fmt: skip
+    return px
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def advance_clumps(
+    n_steps, step0, resume, n, model, p, rotation, sph, bod, nb, counters, geom, gravity, drive,
+    out_stats,
+):  # fmt: skip
+    """Advance ``n_steps`` steps of rigid clumps (arguments and return as :func:`advance`).
+
+    One step n -> n + 1 (:mod:`dem.kernels.rigid`):
+
+    1. bodies: V += dt/2 F/M, L += dt/2 T (rotation on), X += dt V, q <- Phi_free(dt) q, X_x
+       wrapped into [0, length); members x, v, spin from the bodies;
+    2. neighbour list rebuilt if a member moved more than skin/2 (same-body pairs excluded);
+    3. pair forces (parallel over pairs);
+    4. per body (:func:`bodies_forces_kick`, parallel over bodies): gather of the members with
+       the walls (no body force per member), reduction to F_b, T_b about X_b, plus M a_body at
+       the centre of mass; V += dt/2 F/M, L += dt/2 T; out_stats += sum M V_x; members placed
+       (within one call, step n+1's item 1 runs in this same loop).
+
+    Two parallel regions per step, as the sphere integrator.
+    """
+    length, width, skin, dt = geom[0], geom[1], geom[2], geom[3]
+    limit = 0.25 * skin * skin
+    body_of = bod[13]
+    x, v, omega, radius, mass = sph[0], sph[1], sph[2], sph[5], sph[6]
+    for s in range(n_steps):
+        if s == 0 and not resume:
+            _bodies_half_step(dt, True, rotation, bod, sph, length)
+        if max_displacement_sq(x, nb[0], n, length) > limit:
+            status, need = build(n, sph, body_of, nb, counters, geom)
+            if status != OK:
+                return status, s, need
+        t = (step0 + s + 1) * dt
+        pair_forces(
+            model, p, x, v, omega, radius, mass, nb[1], nb[2], counters[0], nb[4], length, dt,
+            nb[15], nb[16],
+        )  # fmt: skip
+        ax, ay, az = body_acceleration(t, gravity, drive)
+        out_stats[0] += bodies_forces_kick(
+            model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, s < n_steps - 1, bod,
+            length,
+        )  # fmt: skip
         out_stats[1] += 1.0
     return DONE, n_steps, 0

@@ -11,6 +11,7 @@ A build:
    surrounding cells and writes them, sorted by j, into i's own fixed block of slots (parallel
    over i, race-free: each i writes only its own block and count);
 3. compacts the blocks at the prefix-sum offsets, so the pair keys i N + j come out sorted;
+   Members of one rigid clump are never paired (no contacts inside a clump);
 4. carries the tangential history over from the previous list by one merge of the sorted new
    and old keys (pairs not found start from zero);
 5. builds the CSR index sphere -> its pairs (``part_start``, ``part_pairs``; an entry 2 k means
@@ -69,9 +70,12 @@ def _cell_coords(x, i, ncx, ncy, ncz, sx, sy, sz, zmin, width):
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def _scan_neighbours(
-    x, radius, n, skin, length, width, grid, cell_start, cell_particles, out_count, out_slots,
+    x, radius, body, n, skin, length, width, grid, cell_start, cell_particles, out_count,
+    out_slots,
 ):  # fmt: skip
     """Neighbours j > i of each i into its slots ``out_slots[i s : i s + s]``, sorted by j.
+
+    Spheres of the same rigid body (``body[i] == body[j]``) are never neighbours.
 
     s = len(out_slots) // n slots per sphere; ``out_count[i]`` is the true number of neighbours
     (more than s means the slots overflowed and only the first s found were kept).
@@ -88,6 +92,7 @@ def _scan_neighbours(
         yi = x[i, 1]
         zi = x[i, 2]
         ri = radius[i] + skin
+        bi = body[i]
         for oz in range(-1, 2):
             iz = cz + oz
             if iz < 0 or iz >= ncz:
@@ -106,7 +111,7 @@ def _scan_neighbours(
                     c = row + ix
                     for m in range(cell_start[c], cell_start[c + 1]):
                         j = cell_particles[m]
-                        if j <= i:
+                        if j <= i or body[j] == bi:
                             continue
                         dx = xi - x[j, 0]
                         if dx > half:
@@ -154,7 +159,7 @@ def _carry_history(new_keys, n_new, old_keys, old_hist, n_old, out_hist):
 
 @numba.njit(**NUMBA_OPTIONS)
 def rebuild(
-    x, radius, n, skin, length, width, x_ref, pair_i, pair_j, pair_key, hist, n_pairs_old,
+    x, radius, body, n, skin, length, width, x_ref, pair_i, pair_j, pair_key, hist, n_pairs_old,
     scratch_j, scratch_key, scratch_hist, counts, offsets, cell_of, cell_start, cell_particles,
     part_start, part_pairs,
 ):  # fmt: skip
@@ -163,6 +168,7 @@ def rebuild(
     Args:
         x: Positions, shape (n, 3), m; x is wrapped into [0, length) in place.
         radius: Radii, shape (n,), m.
+        body: Rigid body of each sphere, int64 (n,); members of one body are never paired.
         n: Number of spheres.
         skin: Verlet skin, m.
         length, width: Periodic length and wall distance, m.
@@ -210,7 +216,8 @@ def rebuild(
         fill_pos[c] += 1
     # neighbours into per-sphere slots, then check capacities
     _scan_neighbours(
-        x, radius, n, skin, length, width, grid, cell_start, cell_particles, counts, scratch_j,
+        x, radius, body, n, skin, length, width, grid, cell_start, cell_particles, counts,
+        scratch_j,
     )  # fmt: skip
     slots = scratch_j.shape[0] // n
     offsets[0] = 0

@@ -450,3 +450,58 @@ def update_members(
         out_omega[s, 0] = ox
         out_omega[s, 1] = oy
         out_omega[s, 2] = oz
+
+
+# --- one body at a time (for fused loops over bodies, e.g. dem.kernels.integrate) -------------
+@numba.njit(**NUMBA_OPTIONS)
+def kick_drift_one(
+    b, dt, drift, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass, inertia,
+    out_omega,
+):  # fmt: skip
+    """:func:`kick_drift_bodies` for body b only (the same operations, bit for bit)."""
+    h = 0.5 * dt
+    a = h * inv_mass[b]
+    for c in range(3):
+        body_v[b, c] += a * body_force[b, c]
+        if rotation:
+            ang_mom[b, c] += h * body_torque[b, c]
+    if drift:
+        for c in range(3):
+            body_x[b, c] += dt * body_v[b, c]
+        w, qx, qy, qz = _free_rotation_one(
+            q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
+            inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
+        )  # fmt: skip
+        q[b, 0] = w
+        q[b, 1] = qx
+        q[b, 2] = qy
+        q[b, 3] = qz
+    o0, o1, o2 = _omega_one(
+        q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
+        inertia[b, 0], inertia[b, 1], inertia[b, 2],
+    )  # fmt: skip
+    out_omega[b, 0] = o0
+    out_omega[b, 1] = o1
+    out_omega[b, 2] = o2
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def place_members_of(
+    b, body_x, body_v, q, body_omega, offsets, body_start, body_members, out_x, out_v, out_omega,
+):  # fmt: skip
+    """:func:`update_members` for the members of body b only (CSR ``body_start/members``)."""
+    ox, oy, oz = body_omega[b, 0], body_omega[b, 1], body_omega[b, 2]
+    for e in range(body_start[b], body_start[b + 1]):
+        s = body_members[e]
+        rx, ry, rz = _rotate(
+            q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
+        )
+        out_x[s, 0] = body_x[b, 0] + rx
+        out_x[s, 1] = body_x[b, 1] + ry
+        out_x[s, 2] = body_x[b, 2] + rz
+        out_v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
+        out_v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
+        out_v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
+        out_omega[s, 0] = ox
+        out_omega[s, 1] = oy
+        out_omega[s, 2] = oz
