@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from small_case import write_case
 
 from dem import shapes
 from dem.case import load_case
@@ -15,7 +16,6 @@ from dem.runner import run_case
 from dem.simulation import ContactLaw, Simulation
 from dem.state import Bodies, Spheres
 from dem.trough import Trough
-from tests.small_case import write_case
 
 RADIUS, DENSITY = 2.0e-3, 7800.0
 SCREW = dict(length=0.016, shank_radius=0.0014, head_radius=0.0028)
