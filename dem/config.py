@@ -85,8 +85,10 @@ DEM_PARALLEL_MIN_SPHERES = 256
 DEM_THREADING_LAYER = "omp"
 #: A running case writes checkpoint.npz every this many cycles (and on SIGINT/SIGTERM).
 DEM_CHECKPOINT_EVERY = 10
-#: OpenMP wait policy for the DEM kernels' threads (applied by dem.kernels unless the environment
-#: sets OMP_WAIT_POLICY). With libgomp's default the threads spin between parallel regions; on
-#: 2 shared cores that made 2 threads erratic (2e5 to 3.5e6 particle-steps/s at load 2.5)
-#: where PASSIVE gave a steady 1.8e7 (validation/liggghts-bulk, 2026-11-21).
-DEM_OMP_WAIT_POLICY = "PASSIVE"
+#: OpenMP wait policy for the DEM kernels' threads, applied by dem.kernels unless the environment
+#: sets OMP_WAIT_POLICY; None leaves libgomp's default (spin, then sleep). A trade-off measured on
+#: the 2-core machines (sphere-bed, 2 threads, 2026-11-21): with both cores free the default gave
+#: 1.7e7 particle-steps/s and PASSIVE 0.7-0.9e7; with another process holding a core the default
+#: (and ACTIVE) fell to 0.08-0.27e7 while PASSIVE kept 0.7-0.9e7. Set OMP_WAIT_POLICY=PASSIVE, or
+#: run with --threads 1, on a shared machine.
+DEM_OMP_WAIT_POLICY: str | None = None

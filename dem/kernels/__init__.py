@@ -4,7 +4,7 @@ Importing this package
 
 - selects the threading layer ``dem.config.DEM_THREADING_LAYER`` for numba's parallel loops,
   unless NUMBA_THREADING_LAYER is set or the layer is not installed, and OpenMP's wait policy
-  ``dem.config.DEM_OMP_WAIT_POLICY`` unless OMP_WAIT_POLICY is set (before OpenMP starts);
+  ``dem.config.DEM_OMP_WAIT_POLICY`` (if not None) unless OMP_WAIT_POLICY is set;
 - drops numba's on-disk cache of these kernels when any kernel source (or dem/config.py) changed
   since it was written. numba checks only the file that defines a function, not the files of the
   functions it inlines, so a kernel cached before an edit of a law it calls would otherwise run the
@@ -22,7 +22,8 @@ from dem.config import DEM_OMP_WAIT_POLICY, DEM_THREADING_LAYER
 
 _LAYER_MODULES = {"omp": "numba.np.ufunc.omppool", "tbb": "numba.np.ufunc.tbbpool"}
 
-os.environ.setdefault("OMP_WAIT_POLICY", DEM_OMP_WAIT_POLICY)
+if DEM_OMP_WAIT_POLICY is not None:
+    os.environ.setdefault("OMP_WAIT_POLICY", DEM_OMP_WAIT_POLICY)
 
 if "NUMBA_THREADING_LAYER" not in os.environ:
     _module = _LAYER_MODULES.get(DEM_THREADING_LAYER)
