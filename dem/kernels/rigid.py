@@ -386,31 +386,11 @@ def kick_drift_bodies(
         out_omega: omega, trough frame, (B, 3), rad/s.
 
     """
-    h = 0.5 * dt
     for b in numba.prange(q.shape[0]):
-        a = h * inv_mass[b]
-        for c in range(3):
-            body_v[b, c] += a * body_force[b, c]
-            if rotation:
-                ang_mom[b, c] += h * body_torque[b, c]
-        if drift:
-            for c in range(3):
-                body_x[b, c] += dt * body_v[b, c]
-            w, qx, qy, qz = _free_rotation_one(
-                q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-                inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
-            )  # fmt: skip
-            q[b, 0] = w
-            q[b, 1] = qx
-            q[b, 2] = qy
-            q[b, 3] = qz
-        o0, o1, o2 = _omega_one(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-            inertia[b, 0], inertia[b, 1], inertia[b, 2],
+        kick_drift_one(
+            b, dt, drift, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
+            inv_mass, inertia, out_omega,
         )  # fmt: skip
-        out_omega[b, 0] = o0
-        out_omega[b, 1] = o1
-        out_omega[b, 2] = o2
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
