@@ -41,6 +41,9 @@ the mass-weighted mean), averaged over windows of ``sample_steps`` steps, goes t
 from __future__ import annotations
 
 import math
+import os
+import platform
+import re
 from pathlib import Path
 
 from dem import __version__
@@ -60,6 +63,27 @@ VX_FILE = "vx_mean.txt"
 SKIN_FRACTION = 0.5
 #: Solid volume fraction of the loose column the spheres are inserted into.
 FILL_VOLUME_FRACTION = 0.2
+
+
+#: ``Loop time of T on P procs for S steps with N atoms`` of a LIGGGHTS log: (T, P, S, N).
+LOOP_RE = re.compile(
+    r"Loop time of ([0-9.eE+-]+) on (\d+) procs.*?for (\d+) steps with (\d+) atoms"
+)
+#: The version banner of a LIGGGHTS log.
+VERSION_RE = re.compile(r"LIGGGHTS \(Version ([^,]+)")
+
+
+def machine_info() -> dict:
+    """Cores, CPU model and platform: the machine a reference run was made on (provenance)."""
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cores": os.cpu_count(), "cpu": cpu, "platform": platform.platform()}
 
 
 def damping_ratio(restitution: float) -> float:

@@ -311,6 +311,18 @@ def _omega_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2):
     return _rotate(w, qx, qy, qz, p0 / i0, p1 / i1, p2 / i2)
 
 
+@numba.njit(**NUMBA_OPTIONS)
+def _store_omega(b, q, ang_mom, inertia, out_omega):
+    """out_omega[b] = R I^-1 R^T L of body b."""
+    o0, o1, o2 = _omega_one(
+        q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
+        inertia[b, 0], inertia[b, 1], inertia[b, 2],
+    )  # fmt: skip
+    out_omega[b, 0] = o0
+    out_omega[b, 1] = o1
+    out_omega[b, 2] = o2
+
+
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def angular_velocity(q, ang_mom, inertia, out_omega):
     """Angular velocity omega = R I^-1 R^T L in the trough frame, (B, 3), rad/s.
@@ -321,13 +333,7 @@ def angular_velocity(q, ang_mom, inertia, out_omega):
 
     """
     for b in numba.prange(q.shape[0]):
-        o0, o1, o2 = _omega_one(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-            inertia[b, 0], inertia[b, 1], inertia[b, 2],
-        )  # fmt: skip
-        out_omega[b, 0] = o0
-        out_omega[b, 1] = o1
-        out_omega[b, 2] = o2
+        _store_omega(b, q, ang_mom, inertia, out_omega)
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -456,13 +462,7 @@ def kick_drift_one(
         q[b, 1] = qx
         q[b, 2] = qy
         q[b, 3] = qz
-    o0, o1, o2 = _omega_one(
-        q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-        inertia[b, 0], inertia[b, 1], inertia[b, 2],
-    )  # fmt: skip
-    out_omega[b, 0] = o0
-    out_omega[b, 1] = o1
-    out_omega[b, 2] = o2
+    _store_omega(b, q, ang_mom, inertia, out_omega)
 
 
 @numba.njit(**NUMBA_OPTIONS)

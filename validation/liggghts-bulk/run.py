@@ -36,8 +36,6 @@ import dataclasses
 import datetime
 import json
 import math
-import os
-import platform
 import re
 import shutil
 import subprocess
@@ -53,28 +51,19 @@ sys.path.insert(0, str(ROOT))
 
 from dem import __version__, pointmass  # noqa: E402
 from dem.case import load_case  # noqa: E402
-from dem.io.liggghts import DECK_NAME, VX_FILE, write_deck  # noqa: E402
+from dem.io.liggghts import (  # noqa: E402
+    DECK_NAME,
+    LOOP_RE,
+    VERSION_RE,
+    VX_FILE,
+    machine_info,
+    write_deck,
+)
 
 ANGLES = (5.0, 15.0, 25.0, 35.0, 45.0, 55.0)
 RESTITUTION = 0.06
-LOOP_RE = re.compile(
-    r"Loop time of ([0-9.eE+-]+) on (\d+) procs.*?for (\d+) steps with (\d+) atoms"
-)
-VERSION_RE = re.compile(r"LIGGGHTS \(Version ([^,]+)")
 TAU_RE = re.compile(r"variable tau equal \(step-(\d+)\)\*")
 POINTMASS_EPS_T, POINTMASS_EPS_N = 0.8, 0.0
-
-
-def machine() -> dict:
-    cpu = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {"cores": os.cpu_count(), "cpu": cpu, "platform": platform.platform()}
 
 
 def make_case(base, angle: float, args):
@@ -421,7 +410,7 @@ def main(argv=None) -> None:
             "cycles": args.cycles,
             "seed": args.seed,
             "dem_version": __version__,
-            "machine": machine(),
+            "machine": machine_info(),
         }
     )
     results.setdefault("points", {})

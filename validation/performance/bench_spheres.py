@@ -27,8 +27,6 @@ import dataclasses
 import datetime
 import json
 import os
-import platform
-import re
 import shutil
 import subprocess
 import sys
@@ -41,30 +39,13 @@ sys.path.insert(0, str(ROOT))
 
 from dem import __version__  # noqa: E402
 from dem.case import load_case  # noqa: E402
-from dem.io.liggghts import DECK_NAME, write_deck  # noqa: E402
-
-LOOP_RE = re.compile(
-    r"Loop time of ([0-9.eE+-]+) on (\d+) procs.*?for (\d+) steps with (\d+) atoms"
-)
-VERSION_RE = re.compile(r"LIGGGHTS \(Version ([^,]+)")
+from dem.io.liggghts import DECK_NAME, LOOP_RE, VERSION_RE, machine_info, write_deck  # noqa: E402
 
 
 def machine() -> dict:
-    cpu = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    """The machine, plus the load average now: the machine may be shared (fastest kept)."""
     load = [round(x, 2) for x in os.getloadavg()] if hasattr(os, "getloadavg") else None
-    return {
-        "cores": os.cpu_count(),
-        "cpu": cpu,
-        "platform": platform.platform(),
-        "load_average_at_start": load,  # the machine may be shared: the fastest repeat is kept
-    }
+    return machine_info() | {"load_average_at_start": load}
 
 
 def wait_until_quiet(args) -> float | None:
