@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import dem
+from dem import shapes
 from dem.case import load_case
 from dem.config import GRAVITY
 from dem.errors import InputError
@@ -176,6 +177,7 @@ def test_damping_ratio_inverts_restitution():
 
 def test_refuses_what_liggghts_primitives_cannot_do(tmp_path):
     case = load_case(CASES_DIR / "sphere-bed")
+    # a screw case not built by load_case has no template to write
     screw = dataclasses.replace(case, particles=dataclasses.replace(case.particles, shape="screw"))
     with pytest.raises(InputError, match="particles.shape"):
         write_deck(screw, tmp_path, timestep=5e-6, steps=10)
@@ -190,3 +192,63 @@ def test_header_names_version_and_command(bed_deck):
     assert "liggghts -in in.dem" in header and "mpirun -np 2" in header
     assert "LIGGGHTS-PUBLIC 3.8.0" in header
     assert header.isascii()
+
+
+@pytest.fixture
+def screw_deck(tmp_path):
+    case = load_case(CASES_DIR / "screw-trough")
+    deck = write_deck(case, tmp_path / "deck", timestep=3e-6, steps=1000, settle_steps=100)
+    return case, deck, parse(deck)
+
+
+def test_screw_deck_is_a_multisphere_deck(screw_deck):
+    case, deck, c = screw_deck
+    grain = case.particles.grain
+    template = fix(c, "pts")
+    assert template[2] == "particletemplate/multisphere"
+    assert int(template[template.index("nspheres") + 1]) == grain.count == 8
+    assert template[template.index("spheres") + 1 : template.index("spheres") + 5] == [
+        "file", "grain.multisphere", "scale", "1.0",
+    ]  # fmt: skip
+    # the exact mass and principal inertia of dem.shapes, not LIGGGHTS's Monte Carlo estimate
+    assert float(template[template.index("mass") + 1]) == grain.mass == 0.0025
+    i = template.index("inertia_tensor")
+    tensor = [float(v) for v in template[i + 1 : i + 7]]
+    m1, m2, m3 = grain.moments
+    assert tensor == [m1, 0.0, 0.0, m2, 0.0, m3]
+    assert "use_volume" in template and "tflag" not in template
+    # members in the body frame read back as the same grain
+    back = shapes.clump_from_file(deck.parent / "grain.multisphere", density=grain.density)
+    np.testing.assert_allclose(back.input_centres(), grain.centres, atol=1e-15)
+    np.testing.assert_array_equal(back.radii, grain.radii)
+    assert back.mass == pytest.approx(grain.mass, rel=1e-12)
+    # fix multisphere integrates the bodies and wants these settings
+    assert fix(c, "integr")[2] == "multisphere"
+    assert c["atom_modify"] == [["map", "array", "sort", "0", "0"]]
+    assert c["newton"] == [["off"]]
+    # the mean x-velocity is that of the bodies' centres of mass
+    computes = {a[0]: a[1:] for a in c["compute"]}
+    assert computes["vcm"] == ["all", "multisphere", "property", "vcm"]
+    assert computes["vxm"] == ["all", "reduce", "ave", "c_vcm[1]"]
+    # the fill check counts member spheres
+    assert f"< {case.particles.count * 8}" in deck.read_text()
+    insert = fix(c, "ins")
+    assert int(insert[insert.index("particles_in_region") + 1]) == case.particles.count
+
+
+def test_screw_deck_neighbour_skin_and_linear_damping_use_clump_values(tmp_path):
+    case = load_case(CASES_DIR / "screw-trough")
+    locked = dataclasses.replace(
+        case,
+        particles=dataclasses.replace(case.particles, rotation=False),
+        contact=dataclasses.replace(case.contact, model="linear", stiffness=2.0e4),
+        material=dataclasses.replace(case.material, restitution_normal=0.3),
+    )
+    c = parse(write_deck(locked, tmp_path, timestep=3e-6, steps=10))
+    template = fix(c, "pts")
+    assert template[-4:] == ["tflag", "off", "off", "off"]
+    assert float(c["neighbor"][0][0]) == pytest.approx(0.5 * min(case.particles.grain.radii))
+    # gamma_n = 2 zeta sqrt(k_n m*) with the clump's mass: m* = M/2 grain-grain, M grain-wall
+    zeta, m = damping_ratio(0.3), case.particles.grain.mass
+    gn = [float(v) for v in fix(c, "m_gn")[6:]]
+    assert gn == pytest.approx([2 * zeta * math.sqrt(2.0e4 * mm) for mm in (m / 2, m, m, m)])

@@ -1,4 +1,4 @@
-"""Export a sphere case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (DESIGN.md section 8).
+"""Export a case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (DESIGN.md section 8).
 
 The deck simulates the same periodic trough section in the trough's accelerating frame: the walls
 stay still (``fix wall/gran`` primitives: floor z = 0, side walls y = +-width/2, x periodic) and
@@ -30,7 +30,17 @@ Contact laws map one-to-one:
 ``limitForce`` is written out (on or off as ``[contact] limit_force``), and so is
 ``tangential_damping on`` (the LIGGGHTS default). Grains are atom type 1, walls type 2.
 
-The deck runs three stages: fill (insert N spheres at random in a loose column and let them fall
+Grains: spheres are ``fix particletemplate/sphere`` integrated by ``fix nve/sphere`` (``nve``
+with rotation locked). Screws and clumps are ``fix particletemplate/multisphere`` reading the
+members from ``grain.multisphere`` (``x y z r`` in m, body frame: centre of mass at the origin,
+principal axes, written by :func:`dem.shapes.write_clump`), with the template's exact ``mass``
+and diagonal ``inertia_tensor`` given (``use_volume``), so LIGGGHTS's Monte Carlo estimate only
+sets its volume; ``fix multisphere`` integrates the rigid bodies (``tflag off off off`` locks
+rotation) and needs ``atom_modify map array sort 0 0``. LIGGGHTS, like dem, takes the clump's
+mass as the mass of a member in a contact. The mean x-velocity is then that of the bodies'
+centres of mass (``compute multisphere property vcm``), not of the member spheres.
+
+The deck runs three stages: fill (insert N grains at random in a loose column and let them fall
 under static gravity until at rest), settle (drive on, ``settle_steps`` steps not measured) and
 measure (``steps`` driven steps). Each stage is its own ``run`` command, so LIGGGHTS prints one
 "Loop time of T on P procs for S steps" line per stage; the last one times the driven steps
@@ -50,6 +60,7 @@ from dem import __version__
 from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.shapes import write_clump
 
 #: LIGGGHTS version the decks are written for.
 LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"
@@ -63,6 +74,13 @@ VX_FILE = "vx_mean.txt"
 SKIN_FRACTION = 0.5
 #: Solid volume fraction of the loose column the spheres are inserted into.
 FILL_VOLUME_FRACTION = 0.2
+#: The same for clumps: ``insert/pack`` (random orientations, ``all_in``) placed only 174 of
+#: 200 screws of ``cases/screw-trough`` at 0.14 and all of them at 0.10.
+FILL_VOLUME_FRACTION_CLUMPS = 0.08
+#: File the clump template's members are written to, next to the deck.
+CLUMP_FILE = "grain.multisphere"
+#: Monte Carlo samples of ``particletemplate/multisphere`` (only its volume estimate uses them).
+MULTISPHERE_NTRY = 1000000
 
 
 #: ``Loop time of T on P procs for S steps with N atoms`` of a LIGGGHTS log: (T, P, S, N).
@@ -176,15 +194,16 @@ def write_deck(
     sample_steps: int | None = None,
     thermo_every: int | None = None,
 ) -> Path:
-    """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a sphere case.
+    """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a case.
 
     Args:
-        case: A validated case with ``particles.shape == "sphere"``.
-        out_dir: Directory for the deck (created); LIGGGHTS is run inside it.
+        case: A validated case (spheres, screws or clumps).
+        out_dir: Directory for the deck (created; a clump case also gets ``grain.multisphere``);
+            LIGGGHTS is run inside it.
         timestep: dt, s.
         steps: Driven steps that are measured (the last ``run``).
         settle_steps: Driven steps before measuring; default ``run.settle_cycles`` drive cycles.
-        fill_time: Time, s, for the inserted spheres to fall and come to rest under static
+        fill_time: Time, s, for the inserted grains to fall and come to rest under static
             gravity; default sqrt(2 H / g) + 0.1 s for an insertion column of height H.
         sample_steps: Window of the mean x-velocity written to ``vx_mean.txt``; default one
             output frame, 1 / (frequency * frames_per_cycle) s.
@@ -194,14 +213,14 @@ def write_deck(
         Path of the deck.
 
     Raises:
-        InputError: The case has grains other than spheres, or a mesh trough (primitive walls
-            only), or timestep/steps are not positive.
+        InputError: A mesh trough (primitive walls only), a clump case without its template,
+            or timestep/steps not positive.
 
     """
     source = str(case.source)
     p, t, d = case.particles, case.trough, case.drive
-    if p.shape != "sphere":
-        raise InputError("particles.shape", p.shape, "'sphere' for a LIGGGHTS export", source)
+    if p.shape != "sphere" and p.grain is None:
+        raise InputError("particles.shape", p.shape, "a case read by dem.case.load_case", source)
     if t.mesh is not None:
         raise InputError(
             "trough.mesh", str(t.mesh), "none (flat floor) for a LIGGGHTS export", source
@@ -213,9 +232,44 @@ def write_deck(
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    r, n = p.radius, p.count
-    sphere_volume = 4.0 / 3.0 * math.pi * r**3
-    sphere_mass = case.material.density * sphere_volume
+    n = p.count
+    seed = case.run.seed
+    s_template = _prime_at_least(15485863 + 1000 * seed)
+    s_dist = _prime_at_least(32452843 + 1000 * seed)
+    s_insert = _prime_at_least(49979687 + 1000 * seed)
+    if p.shape == "sphere":
+        r_max = r_min = p.radius
+        grain_volume = 4.0 / 3.0 * math.pi * p.radius**3
+        grain_mass = case.material.density * grain_volume
+        members = 1
+        what = f"{n} spheres r = {p.radius} m"
+        grain_lines = [
+            f"fix pts all particletemplate/sphere {s_template} atom_type 1 "
+            f"density constant {_fmt(case.material.density)} radius constant {_fmt(p.radius)}"
+        ]
+        integrator = [f"fix integr all {'nve/sphere' if p.rotation else 'nve'}"]
+        velocity = ["compute vxm all reduce ave vx"]
+    else:
+        g = p.grain
+        r_max, r_min = float(max(g.radii)), float(min(g.radii))
+        grain_volume, grain_mass, members = g.volume, g.mass, g.count
+        what = f"{n} {p.shape}s of {members} spheres, m = {g.mass:.6g} kg"
+        write_clump(out / CLUMP_FILE, g, frame="body")
+        i1, i2, i3 = (_fmt(m) for m in g.moments)
+        grain_lines = [
+            f"# {CLUMP_FILE}: members x y z r (m) in the body frame (centre of mass at the origin,",
+            "# principal axes); mass and inertia tensor exact from dem.shapes, Monte Carlo volume",
+            f"fix pts all particletemplate/multisphere {s_template} atom_type 1 "
+            f"density constant {_fmt(g.density)} nspheres {members} ntry {MULTISPHERE_NTRY} "
+            f"spheres file {CLUMP_FILE} scale 1.0 type 1 mass {_fmt(g.mass)} "
+            f"inertia_tensor {i1} 0.0 0.0 {i2} 0.0 {i3} use_volume"
+            + ("" if p.rotation else " tflag off off off"),
+        ]
+        integrator = ["fix integr all multisphere"]
+        velocity = [
+            "compute vcm all multisphere property vcm",
+            "compute vxm all reduce ave c_vcm[1]",
+        ]
     steps_per_cycle = 1.0 / (d.frequency * timestep)
     if settle_steps is None:
         settle_steps = round(case.run.settle_cycles * steps_per_cycle)
@@ -225,8 +279,12 @@ def write_deck(
         thermo_every = max(1, round(steps_per_cycle))
 
     # loose insertion column and a box tall enough that thrown grains never leave it
-    fill_height = max(n * sphere_volume / (FILL_VOLUME_FRACTION * t.length * t.width), 4.0 * r)
-    top = 3.0 * fill_height + 20.0 * r
+    if p.shape == "sphere":
+        fill_fraction, fill_min = FILL_VOLUME_FRACTION, 4.0 * r_max
+    else:
+        fill_fraction, fill_min = FILL_VOLUME_FRACTION_CLUMPS, 2.5 * p.grain.bounding_radius
+    fill_height = max(n * grain_volume / (fill_fraction * t.length * t.width), fill_min)
+    top = 3.0 * fill_height + 20.0 * r_max
     if fill_time is None:
         fill_time = math.sqrt(2.0 * fill_height / GRAVITY) + 0.1
     fill_steps = max(1, round(fill_time / timestep))
@@ -236,17 +294,12 @@ def write_deck(
     peak = d.amplitude * d.omega**2  # m/s^2
     gx0, gz0 = -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
     g0 = math.hypot(gx0, gz0)
-    seed = case.run.seed
-    s_template = _prime_at_least(15485863 + 1000 * seed)
-    s_dist = _prime_at_least(32452843 + 1000 * seed)
-    s_insert = _prime_at_least(49979687 + 1000 * seed)
-    material_lines, model, settings = _contact_block(case, sphere_mass)
-    integrator = "nve/sphere" if p.rotation else "nve"
+    material_lines, model, settings = _contact_block(case, grain_mass)
     drive_start = fill_steps
 
     lines = [
         f"# LIGGGHTS deck exported by dem {__version__} from {case.source}",
-        f"# case {case.name}: {n} spheres r = {r} m, {case.contact.model}, "
+        f"# case {case.name}: {what}, {case.contact.model}, "
         f"f = {d.frequency} Hz, phi = {d.angle} deg, A = {d.amplitude:.6g} m, "
         f"Gamma = {d.throw_number:.6g}, alpha = {t.inclination} deg",
         f"# made for {LIGGGHTS_VERSION} (Debian package 'liggghts')",
@@ -261,7 +314,7 @@ def write_deck(
         "-g cos(alpha) + A w^2 sin(w tau) sin(phi))",
         "",
         "atom_style granular",
-        "atom_modify map array",
+        "atom_modify map array" + ("" if p.shape == "sphere" else " sort 0 0"),
         "boundary p f f",
         "newton off",
         "communicate single vel yes",
@@ -271,7 +324,7 @@ def write_deck(
         f"region domain block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
         f"{_fmt(top)} units box",
         "create_box 2 domain",
-        f"neighbor {_fmt(SKIN_FRACTION * r)} bin",
+        f"neighbor {_fmt(SKIN_FRACTION * r_min)} bin",
         "neigh_modify delay 0",
         "",
         *material_lines,
@@ -286,17 +339,16 @@ def write_deck(
         "",
         f"fix grav all gravity {_fmt(g0)} vector {_fmt(gx0 / g0)} 0.0 {_fmt(gz0 / g0)}",
         "",
-        f"fix pts all particletemplate/sphere {s_template} atom_type 1 "
-        f"density constant {_fmt(case.material.density)} radius constant {_fmt(r)}",
+        *grain_lines,
         f"fix pdd all particledistribution/discrete {s_dist} 1 pts 1.0",
         f"region fill block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
         f"{_fmt(fill_height)} units box",
         f"fix ins all insert/pack seed {s_insert} distributiontemplate pdd "
         "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once overlapcheck yes all_in yes "
         f"particles_in_region {n} region fill",
-        f"fix integr all {integrator}",
+        *integrator,
         "",
-        "compute vxm all reduce ave vx",
+        *velocity,
         "thermo_style custom step atoms ke c_vxm",
         f"thermo {thermo_every}",
         "thermo_modify norm no",
@@ -305,8 +357,8 @@ def write_deck(
         f"run {fill_steps}",
         "unfix ins",
         "variable natoms equal atoms",
-        f'if "${{natoms}} < {n}" then "print \'ERROR: only ${{natoms}} of {n} spheres inserted\'" '
-        '"quit"',
+        f'if "${{natoms}} < {n * members}" then '
+        f'"print \'ERROR: only ${{natoms}} of {n * members} spheres inserted\'" "quit"',
         "variable natoms delete",
         "",
         "# --- drive: effective gravity in the accelerating frame",
