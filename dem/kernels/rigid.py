@@ -91,17 +91,26 @@ def _qmul_axis(w, qx, qy, qz, phi, nx, ny, nz):
 
 @numba.njit(**NUMBA_OPTIONS)
 def _axis_flow(k, theta, w, qx, qy, qz, p0, p1, p2):
-    """Exact flow of beta_k pi_k^2 / 2: q <- q (cos theta/2, sin theta/2 e_k), pi <- R_k^T pi."""
-    c = math.cos(theta)
-    s = math.sin(theta)
+    """Exact flow of beta_k pi_k^2 / 2: q <- q (cos theta/2, sin theta/2 e_k), pi <- R_k^T pi.
+
+    theta = 0 (beta_k = 0: the symmetric top's flow about its equal axis) is the identity and is
+    skipped, bit for bit the same; cos and sin of theta come from the half angle (two
+    trigonometric calls per flow, not four).
+    """
+    if theta == 0.0:
+        return w, qx, qy, qz, p0, p1, p2
+    ch = math.cos(0.5 * theta)
+    sh = math.sin(0.5 * theta)
+    c = (ch - sh) * (ch + sh)
+    s = 2.0 * sh * ch
     if k == 0:
-        w, qx, qy, qz = _qmul_axis(w, qx, qy, qz, theta, 1.0, 0.0, 0.0)
+        w, qx, qy, qz = w * ch - qx * sh, qx * ch + w * sh, qy * ch + qz * sh, qz * ch - qy * sh
         p1, p2 = c * p1 + s * p2, c * p2 - s * p1
     elif k == 1:
-        w, qx, qy, qz = _qmul_axis(w, qx, qy, qz, theta, 0.0, 1.0, 0.0)
+        w, qx, qy, qz = w * ch - qy * sh, qx * ch - qz * sh, qy * ch + w * sh, qz * ch + qx * sh
         p2, p0 = c * p2 + s * p0, c * p0 - s * p2
     else:
-        w, qx, qy, qz = _qmul_axis(w, qx, qy, qz, theta, 0.0, 0.0, 1.0)
+        w, qx, qy, qz = w * ch - qz * sh, qx * ch + qy * sh, qy * ch - qx * sh, qz * ch + w * sh
         p0, p1 = c * p0 + s * p1, c * p1 - s * p0
     return w, qx, qy, qz, p0, p1, p2
 
