@@ -55,6 +55,9 @@ DEM_DT_HERTZ_FRACTION = 1.0 / 50.0
 #: stiffest single contact (omega_0 = sqrt(k / m*)); the margin covers grains with several
 #: contacts (the stiffness seen by one grain adds up) and the damping.
 DEM_DT_STABILITY_FRACTION = 0.3
+#: Safety margin on a clump's sampled smallest contact mass (dem.shapes.Template.contact_mass):
+#: the time step is set as if the mass were this fraction smaller.
+DEM_CONTACT_MASS_MARGIN = 0.05
 #: Verlet skin as a fraction of the largest sphere radius; the list is rebuilt when a sphere has
 #: moved more than half the skin since the last build.
 DEM_SKIN_FRACTION = 0.25

@@ -499,9 +499,10 @@ class Simulation:
 
         Spheres: :func:`dem.state.random_fill`. Screws and clumps: N copies of the case's grain
         template at random positions and orientations without member overlap
-        (:func:`dem.state.random_fill_clumps`). The stability limit of a clump takes the
-        smallest effective mass a member contact can see, 1 / (1/M + r_b^2 / I_min) with r_b the
-        largest member offset and I_min the smallest principal moment, for every member radius.
+        (:func:`dem.state.random_fill_clumps`). The time step of a clump takes the smallest
+        effective mass a point of its surface has for a force in any direction
+        (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation locked), for
+        every member radius.
 
         The time step is ``timestep``, else ``case.run.timestep``, else automatic; a given value
         above the stability limit raises InputError naming ``run.timestep``. An automatic step is
@@ -526,15 +527,17 @@ class Simulation:
             centres, quats, height = random_fill_clumps(
                 pt.count, grain, trough.length, trough.width, rng
             )
-            lever2 = float(np.max(np.einsum("ij,ij->i", grain.centres, grain.centres)))
-            m_eff = 1.0 / (1.0 / grain.mass + lever2 / float(np.min(grain.moments)))
+            # the clump's own compliance (rotation included) is in its contact mass, so the
+            # sphere's rolling factor is not applied again below
+            m_eff = grain.contact_mass() if pt.rotation else grain.mass
             sizes = [(float(r), m_eff) for r in np.unique(grain.radii)]
             density = grain.density
         impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
         auto, limit = math.inf, math.inf
         for radius, mass in sizes:
             a, b = timestep_limits(
-                law, radius, density, impact, rotation=pt.rotation, pairs=pt.count > 1,
+                law, radius, density, impact, rotation=pt.rotation and mass is None,
+                pairs=pt.count > 1,
                 youngs_modulus=case.contact.youngs_modulus or 0.0,
                 poisson_ratio=case.contact.poisson_ratio, mass=mass,
             )  # fmt: skip
