@@ -19,9 +19,10 @@ dem_velocity_norm_free_rotation; not part of the criterion, which is the locked 
 Time step: the engine's own rule (dem.simulation.timestep_limits: 1/50 of the linear collision
 time, within the stability limit) applied to the effective mass a floor contact of the lying
 screw actually has: M with rotation locked, 1 / max_n (1/M + (p x n) . I^-1 (p x n)) with it free.
-Simulation.from_case's automatic step bounds that mass for any clump pose by
-1 / (1/M + |d_max|^2 / I_min), which for this screw is 42 times smaller than M (6.5 times shorter
-steps); ``--timestep auto`` uses it instead (the README compares the two).
+Simulation.from_case's automatic step (``--timestep auto``) bounds that mass for any pose:
+the results were made when that bound was 1 / (1/M + |d_max|^2 / I_min), 42 times smaller than M
+(the README compares the two); it is now M with rotation locked and
+dem.shapes.Template.contact_mass (0.37 g for this screw) with it free.
 
 Settling: after ``--min-settle-cycles`` driven cycles the run measures as soon as one cycle's
 mean velocity differs from the previous one by less than ``--periodic-tol`` (normalised), at most
