@@ -298,7 +298,7 @@ def write_deck(
     drive_start = fill_steps
 
     lines = [
-        f"# LIGGGHTS deck exported by dem {__version__} from {case.source}",
+        f"# LIGGGHTS deck exported by dem {__version__} (dem export liggghts)",
         f"# case {case.name}: {what}, {case.contact.model}, "
         f"f = {d.frequency} Hz, phi = {d.angle} deg, A = {d.amplitude:.6g} m, "
         f"Gamma = {d.throw_number:.6g}, alpha = {t.inclination} deg",
