@@ -1,6 +1,7 @@
-"""Speed bar: particle-steps per second of LIGGGHTS and of dem on the same sphere case.
+"""Speed bar: particle-steps per second of LIGGGHTS and of dem on the same case.
 
-particle-steps/s = spheres * time steps / wall time of the step loop (DESIGN.md section 3).
+particle-steps/s = spheres * time steps / wall time of the step loop (DESIGN.md section 3); for
+screws and clumps the spheres are the clump members (LIGGGHTS's atoms under fix multisphere).
 
 LIGGGHTS half: the case is exported with dem.io.liggghts.write_deck (fill, settle, then the
 measured driven steps as the last ``run``), run on 1 rank and, if ``mpirun`` exists, on 2 ranks;
@@ -8,16 +9,17 @@ the rate comes from LIGGGHTS's own "Loop time of T on P procs for S steps with N
 last run, so neither start-up nor the fill is timed. Skipped with a message if ``liggghts`` is not
 on PATH.
 
-dem half: ``dem.simulation.run_case`` on the same case with the same time step, 1 and 2 threads,
+dem half: ``dem.runner.run_case`` on the same case with the same time step, 1 and 2 threads,
 each in its own process (numba's thread count is fixed per process); the rate is the
 ``particle_steps_per_s`` of its summary.json. Skipped with a message if the engine is missing.
 
 Each configuration runs ``--repeat`` times and the fastest is kept (the machine is shared; the
-slowest runs measure the neighbours). Results are merged into results.json: a half that is
-skipped keeps its previous entry.
+slowest runs measure the neighbours). Results are merged into results_CASE.json: a half that is
+skipped keeps its previous entry; the deck is kept in liggghts_deck_CASE/.
 
-    .venv/bin/python validation/performance/bench_spheres.py            # both halves
-    .venv/bin/python validation/performance/bench_spheres.py --skip-dem
+    .venv/bin/python validation/performance/bench_bulk.py               # sphere-bed, both halves
+    .venv/bin/python validation/performance/bench_bulk.py --skip-dem
+    .venv/bin/python validation/performance/bench_bulk.py --case cases/screw-trough --timestep 3e-6
 """
 
 from __future__ import annotations
@@ -75,6 +77,12 @@ def bench_case(args):
     return dataclasses.replace(case, run=run)
 
 
+def spheres(case) -> int:
+    """Spheres of the case: grains times members per grain."""
+    grain = case.particles.grain
+    return case.particles.count * (1 if grain is None else grain.count)
+
+
 def mpirun_prefix(ranks: int) -> list[str] | None:
     if ranks == 1:
         return []
@@ -97,7 +105,7 @@ def run_liggghts(args, case) -> dict:
         msg = "liggghts is not on PATH: LIGGGHTS half skipped (apt-get install -y liggghts)"
         print(msg)
         return {"skipped": msg}
-    deck_dir = HERE / "liggghts_deck"
+    deck_dir = HERE / f"liggghts_deck_{case.name}"
     steps_per_cycle = 1.0 / (case.drive.frequency * args.timestep)
     steps = round(args.cycles * steps_per_cycle)
     deck = write_deck(case, deck_dir, timestep=args.timestep, steps=steps)
@@ -129,7 +137,7 @@ def run_liggghts(args, case) -> dict:
             version = found.group(1) if found else version
             loop_time, procs, n_steps, atoms = loops[-1]
             loop_time, n_steps, atoms = float(loop_time), int(n_steps), int(atoms)
-            if atoms != case.particles.count or n_steps != steps:
+            if atoms != spheres(case) or n_steps != steps:
                 raise SystemExit(f"LIGGGHTS ran {atoms} atoms x {n_steps} steps, not as asked")
             rate = atoms * n_steps / loop_time
             print(
@@ -175,7 +183,7 @@ run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
 
 
 def run_dem(args, case) -> dict:
-    """Time dem.simulation.run_case, one process per thread count."""
+    """Time dem.runner.run_case, one process per thread count."""
     try:
         import dem.simulation  # noqa: F401
     except ImportError as exc:
@@ -226,7 +234,7 @@ def run_dem(args, case) -> dict:
         best["repeats"] = args.repeat
         runs.append(best)
     return {
-        "command": "validation/performance/bench_spheres.py (dem.simulation.run_case, "
+        "command": "validation/performance/bench_bulk.py (dem.runner.run_case, "
         "NUMBA_NUM_THREADS = threads)",
         "timestep": args.timestep,
         "settle_cycles": args.settle_cycles,
@@ -251,16 +259,17 @@ def main(argv=None) -> None:
     parser.add_argument("--dem-timeout", type=float, default=300.0, help="s per dem run")
     parser.add_argument("--skip-liggghts", action="store_true")
     parser.add_argument("--skip-dem", action="store_true")
-    parser.add_argument("--results", default=str(HERE / "results.json"))
+    parser.add_argument("--results", help="default: results_CASE.json in this folder")
     args = parser.parse_args(argv)
 
     case = bench_case(args)
-    path = Path(args.results)
+    path = Path(args.results or HERE / f"results_{case.name}.json")
     results = json.loads(path.read_text()) if path.exists() else {}
     results.update(
         {
             "case": str(Path(args.case).resolve().relative_to(ROOT)),
-            "spheres": case.particles.count,
+            "grains": case.particles.count,
+            "spheres": spheres(case),
             "definition": "particle-steps/s = spheres * steps / wall time of the step loop",
         }
     )
