@@ -214,6 +214,35 @@ class Case:
     run: RunSpec
     output: OutputSpec
 
+    def with_drive(
+        self,
+        *,
+        frequency: float | None = None,
+        angle: float | None = None,
+        amplitude: float | None = None,
+        throw_number: float | None = None,
+    ) -> Case:
+        """The case with drive values changed and the dependent one recomputed.
+
+        Give at most one of amplitude and throw_number; without either, the quantity the case
+        gave is held (a throw-number case keeps Gamma at a new angle and its amplitude follows).
+        ``dataclasses.replace`` on the drive would leave A and Gamma inconsistent.
+        """
+        d = self.drive
+        if amplitude is None and throw_number is None:
+            if d.given == "amplitude":
+                amplitude = d.amplitude
+            else:
+                throw_number = d.throw_number
+        drive = resolve_drive(
+            d.frequency if frequency is None else frequency,
+            d.angle if angle is None else angle,
+            self.trough.inclination,
+            amplitude=amplitude,
+            throw_number=throw_number,
+        )
+        return replace(self, drive=drive)
+
     def as_dict(self) -> dict[str, Any]:
         """Return the resolved case as plain data (paths as strings; None kept), for output."""
 
@@ -399,8 +428,27 @@ def _read_drive(t: _Table, inclination: float) -> DriveSpec:
             "exactly one of drive.amplitude (m) and drive.throw_number"
             + (" (both are given)" if both else " (neither is given)"),
         )
+    return resolve_drive(
+        frequency, angle, inclination, amplitude=amplitude, throw_number=throw_number
+    )
+
+
+def resolve_drive(
+    frequency: float,
+    angle: float,
+    inclination: float,
+    *,
+    amplitude: float | None = None,
+    throw_number: float | None = None,
+) -> DriveSpec:
+    """The drive from exactly one of amplitude (m) and throw_number; the other is computed.
+
+    Gamma = A omega^2 sin(phi) / (g cos(alpha)), phi = ``angle`` and alpha = ``inclination`` in
+    degrees. Values are not range-checked here (``load_case`` checks a file's values first).
+    """
+    if (amplitude is None) == (throw_number is None):
+        raise ValueError("give exactly one of amplitude and throw_number")
     omega = 2.0 * math.pi * frequency
-    # Gamma = A omega^2 sin(phi) / (g cos(alpha))
     scale = (
         omega**2 * math.sin(math.radians(angle)) / (GRAVITY * math.cos(math.radians(inclination)))
     )

@@ -374,3 +374,25 @@ def test_missing_case(tmp_path):
     with pytest.raises(InputError, match="case.toml") as info:
         load_case(tmp_path / "nowhere")
     assert info.value.key == "case"
+
+
+def test_with_drive_keeps_the_given_quantity_and_recomputes_the_other():
+    """A throw-number case keeps Gamma at a new angle (A follows); an amplitude case keeps A
+    (Gamma follows); giving one of them sets it. Checked against Gamma = A w^2 sin(phi) / g."""
+    case = load_case(Path(__file__).resolve().parents[1] / "cases" / "screw-trough")
+    assert case.drive.given == "throw_number"
+    w2 = (2 * math.pi * case.drive.frequency) ** 2
+
+    turned = case.with_drive(angle=40.0)
+    assert turned.drive.throw_number == case.drive.throw_number
+    assert turned.drive.amplitude * w2 * math.sin(math.radians(40.0)) / GRAVITY == pytest.approx(
+        case.drive.throw_number, rel=1e-14
+    )
+    by_amplitude = case.with_drive(amplitude=4e-4)
+    assert by_amplitude.drive.given == "amplitude"
+    held = by_amplitude.with_drive(angle=40.0)
+    assert held.drive.amplitude == 4e-4
+    assert held.drive.throw_number == pytest.approx(
+        4e-4 * w2 * math.sin(math.radians(40.0)) / GRAVITY, rel=1e-14
+    )
+    assert case.drive.angle == 25.0  # frozen: the original is untouched

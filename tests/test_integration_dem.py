@@ -138,12 +138,9 @@ def _single_sphere(throw_number):
     k_n = 1e6 N/m and eps_n = 0.5 (no flight below Gamma = 1, so eps_n does not enter the point
     mass; it sets the tangential dashpot gamma_t = gamma_n, whose lag tau = gamma_t / k_t is the
     DEM's main departure from the point mass)."""
-    case = load_case("cases/single-sphere")
-    d = case.drive
-    amplitude = d.amplitude * throw_number / d.throw_number
+    case = load_case("cases/single-sphere").with_drive(throw_number=throw_number)
     return dataclasses.replace(
         case,
-        drive=dataclasses.replace(d, amplitude=amplitude, throw_number=throw_number),
         contact=dataclasses.replace(case.contact, stiffness=1.0e6),
         material=dataclasses.replace(case.material, restitution_normal=0.5),
         run=dataclasses.replace(case.run, settle_cycles=4, cycles=4),

@@ -68,13 +68,8 @@ POINTMASS_EPS_T, POINTMASS_EPS_N = 0.8, 0.0
 
 def make_case(base, angle: float, args):
     """The base case at vibration angle ``angle`` (fixed amplitude) with the comparison settings."""
-    d = base.drive
-    gamma = pointmass.throw_number_from_amplitude(
-        d.amplitude, angle, base.trough.inclination, d.frequency
-    )
     return dataclasses.replace(
-        base,
-        drive=dataclasses.replace(d, angle=angle, throw_number=gamma),
+        base.with_drive(angle=angle, amplitude=base.drive.amplitude),
         material=dataclasses.replace(base.material, restitution_normal=RESTITUTION),
         run=dataclasses.replace(
             base.run,

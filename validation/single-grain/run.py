@@ -13,7 +13,6 @@ floor, so eps_n and eps_t do not enter it).
 import argparse
 import csv
 import dataclasses
-import math
 import time
 from pathlib import Path
 
@@ -21,7 +20,6 @@ import numpy as np
 
 from dem import pointmass
 from dem.case import load_case
-from dem.config import GRAVITY
 from dem.runner import run_case
 
 HERE = Path(__file__).resolve().parent
@@ -37,16 +35,8 @@ def make_case(
     base, angle, friction, throw_number, stiffness, restitution_normal, settle_cycles, cycles
 ):
     """The base case at (phi, mu, Gamma) with the validation contact."""
-    d = base.drive
-    amplitude = (
-        throw_number
-        * GRAVITY
-        * math.cos(math.radians(base.trough.inclination))
-        / (d.omega**2 * math.sin(math.radians(angle)))
-    )
     return dataclasses.replace(
-        base,
-        drive=dataclasses.replace(d, angle=angle, amplitude=amplitude, throw_number=throw_number),
+        base.with_drive(angle=angle, throw_number=throw_number),
         material=dataclasses.replace(
             base.material, friction=friction, restitution_normal=restitution_normal
         ),

@@ -41,7 +41,6 @@ import numpy as np
 
 from dem import measure, pointmass
 from dem.case import load_case
-from dem.config import GRAVITY
 from dem.kernels.rigid import quat_to_matrix
 from dem.simulation import Simulation, timestep_limits
 from dem.state import Bodies
@@ -58,16 +57,8 @@ RESTING = 0.02  # |v_pm| below this (normalised): the point mass rests, no relat
 
 def make_case(base, angle, friction, throw_number, stiffness, restitution_normal, rotation):
     """cases/screw-trough at (phi, mu, Gamma) with one screw and the validation contact."""
-    d = base.drive
-    amplitude = (
-        throw_number
-        * GRAVITY
-        * math.cos(math.radians(base.trough.inclination))
-        / (d.omega**2 * math.sin(math.radians(angle)))
-    )
     return dataclasses.replace(
-        base,
-        drive=dataclasses.replace(d, angle=angle, amplitude=amplitude, throw_number=throw_number),
+        base.with_drive(angle=angle, throw_number=throw_number),
         material=dataclasses.replace(
             base.material, friction=friction, restitution_normal=restitution_normal
         ),
