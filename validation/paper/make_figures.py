@@ -17,7 +17,9 @@ Velocities are normalised by the drive velocity ``A omega cos(phi)``; the m/s pa
 paper's 60 Hz. What is held fixed while the angle changes decides where the optimum lies
 (DESIGN.md section 4): the throw number Gamma (the paper's Figs. 7-8), the amplitude A, or the
 peak trough acceleration A omega^2 = K g. At a fixed frequency the last two are the same hold
-(A = K g / omega^2); both are computed and reported, which checks that identity.
+(A = K g / omega^2); both are computed and reported, which checks that identity. A fourth
+reading holds Gamma but measures the velocity in units of the drive velocity amplitude,
+v / (A omega) = v_norm cos(phi) (``v_over_A_omega``; no frequency enters).
 """
 
 import argparse
@@ -527,16 +529,57 @@ def fig6(g: dict, out: Path, meta: dict) -> dict:
 # --- Figs. 7 and 8 and the optima -------------------------------------------------------------
 
 
-def plateau_width(x, y, level):
-    """Width of the contiguous interval around the maximum of y where y >= level * max."""
+def plateau(x, y, level, top=None):
+    """Contiguous interval (lo, hi) around the maximum of y where y >= level * top (max y)."""
     best = int(np.argmax(y))
-    above = y >= level * y[best]
+    above = y >= level * (y[best] if top is None else top)
     i = j = best
     while i > 0 and above[i - 1]:
         i -= 1
     while j < len(x) - 1 and above[j + 1]:
         j += 1
-    return float(x[j] - x[i])
+    return float(x[i]), float(x[j])
+
+
+def v_over_a_omega_row(friction, gamma, points):
+    """Optimum angle at fixed Gamma of v / (A omega) = v_norm cos(phi).
+
+    No hold of ``dem.pointmass.sweep.optimum`` has this objective, so its recipe is done here:
+    ``points`` angles on 1-89 deg, the best refined on 201 points between its neighbours (which
+    include it); the 90% plateau is relative to the refined maximum.
+    """
+    x = np.linspace(1.0, 89.0, points)
+
+    def objective(phi):
+        return velocities(gamma, phi, friction)["velocity_norm"] * np.cos(np.radians(phi))
+
+    y = objective(x)
+    best = int(np.argmax(y))
+    fine = np.linspace(x[max(best - 1, 0)], x[min(best + 1, points - 1)], 201)
+    y_fine = objective(fine)
+    phi, top = fine[np.argmax(y_fine)], y_fine.max()
+    at = velocities(gamma, np.array([phi]), friction)
+    lo, hi = plateau(x, y, 0.9, top)
+    amp = amplitude_for(gamma, phi)
+    return {
+        "friction": friction,
+        "hold": "throw_number",
+        "reading": "v_over_A_omega",
+        "held_value": gamma,
+        "optimum_angle": float(phi),
+        "plateau_90": [lo, hi],
+        "plateau_width": hi - lo,
+        "plateau_95_width": float(np.ptp(plateau(x, y, 0.95))),
+        "mu_tan_phi_at_optimum": friction * math.tan(math.radians(phi)),
+        "tail_ratio_89deg": float(y[-1] / top),
+        "throw_number_at_optimum": gamma,
+        "velocity_norm_at_optimum": float(at["velocity_norm"][0]),
+        "velocity_m_per_s_at_optimum": float(top * amp * OMEGA),
+        "v_over_A_omega_at_optimum": float(top),
+        "regime_at_optimum": REGIMES[int(at["regime_code"][0])],
+        "at_scan_bound": bool(min(abs(phi - 1.0), abs(phi - 89.0)) < 1e-6),
+        "plateau_covers_scan": bool(lo <= 1.0 and hi >= 89.0),
+    }
 
 
 def optimum_row(friction, hold, value, points):
@@ -548,35 +591,51 @@ def optimum_row(friction, hold, value, points):
     return {
         "friction": friction,
         "hold": hold,
+        "reading": hold,
         "held_value": value,
         "optimum_angle": opt.value,
         "plateau_90": list(opt.plateau),
         "plateau_width": opt.plateau[1] - opt.plateau[0],
-        "plateau_95_width": plateau_width(opt.curve["angle"], opt.curve[opt.objective], 0.95),
+        "plateau_95_width": float(
+            np.ptp(plateau(opt.curve["angle"], opt.curve[opt.objective], 0.95))
+        ),
         "mu_tan_phi_at_optimum": friction * math.tan(math.radians(opt.value)),
         "tail_ratio_89deg": float(opt.curve[opt.objective][-1] / max(opt.curve[opt.objective])),
         "throw_number_at_optimum": opt.throw_number,
         "velocity_norm_at_optimum": opt.velocity_norm,
         "velocity_m_per_s_at_optimum": opt.velocity,
+        "v_over_A_omega_at_optimum": opt.velocity_norm * math.cos(math.radians(opt.value)),
         "regime_at_optimum": opt.regime,
         "at_scan_bound": bool(min(abs(opt.value - 1.0), abs(opt.value - 89.0)) < 1e-6),
         "plateau_covers_scan": bool(opt.plateau[0] <= 1.0 and opt.plateau[1] >= 89.0),
     }
 
 
+# panels and optima rows, in this order, and what each panel plots at the optimum
+READINGS = {
+    "norm": "velocity_norm_at_optimum",
+    "drive": "v_over_A_omega_at_optimum",
+    "amp": "velocity_m_per_s_at_optimum",
+    "acc": "velocity_m_per_s_at_optimum",
+}
+
+
 def angle_figure(path, angle, families, fixed_label, title):
-    """Three panels: normalised velocity (Gamma held), m/s holding A, m/s holding A omega^2."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), dpi=120)
+    """Four panels: Gamma held (v_norm; v / (A omega)), m/s holding A, m/s holding A omega^2."""
+    fig, axes = plt.subplots(2, 2, figsize=(13, 8.6), dpi=120)
+    axes = axes.ravel()
     for k, fam in enumerate(families):
-        for ax, key, opt in zip(axes, ("norm", "amp", "acc"), fam["optima"], strict=True):
+        for ax, key, opt in zip(axes, READINGS, fam["optima"], strict=True):
             ax.plot(angle, fam[key], color=f"C{k}", lw=1.3, label=fam[f"label_{key}"])
             ax.axvspan(*opt["plateau_90"], color=f"C{k}", alpha=0.08)
             ax.plot([opt["optimum_angle"]], [fam[f"best_{key}"]], "o", color=f"C{k}", ms=5)
     axes[0].set_ylabel("v / (A omega cos phi)")
-    axes[0].set_title("Gamma held (the paper's reading)", fontsize=9)
-    axes[1].set_title(f"amplitude A held, f = {FREQUENCY:g} Hz", fontsize=9)
-    axes[2].set_title(f"peak acceleration A omega^2 = K g held, f = {FREQUENCY:g} Hz", fontsize=9)
-    for ax in axes[1:]:
+    axes[0].set_title("Gamma held, v_norm = v / (A omega cos phi)", fontsize=9)
+    axes[1].set_ylabel("v / (A omega)")
+    axes[1].set_title("Gamma held, v / (A omega) = v_norm cos phi", fontsize=9)
+    axes[2].set_title(f"amplitude A held, f = {FREQUENCY:g} Hz", fontsize=9)
+    axes[3].set_title(f"peak acceleration A omega^2 = K g held, f = {FREQUENCY:g} Hz", fontsize=9)
+    for ax in axes[2:]:
         ax.set_ylabel("v (m/s)")
     for ax in axes:
         ax.set_xlabel("vibration angle phi (deg)")
@@ -595,7 +654,8 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
     gamma0 = FIG7["throw_number"]
     amp_fixed = FIG7["amplitude"]
     k_fixed = amplitude_for(gamma0) * OMEGA**2 / config.GRAVITY  # Gamma0 at 25 deg
-    columns = {"angle": [], "friction": [], "velocity_norm": [], "regime": [], "periodic": []}
+    columns = {"angle": [], "friction": [], "velocity_norm": [], "v_over_A_omega": []}
+    columns.update(regime=[], periodic=[])
     extra = {
         "throw_number_amp": [],
         "velocity_norm_amp": [],
@@ -611,6 +671,7 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
         fam = {}
         r = sweep(gamma0, angle, mu)
         fam["norm"] = r["velocity_norm"]
+        fam["drive"] = r["velocity_norm"] * np.cos(np.radians(angle))
         for name, (hold, value) in {
             "amp": ("amplitude", amp_fixed),
             "acc": ("acceleration", k_fixed),
@@ -625,21 +686,19 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
         columns["angle"].append(angle)
         columns["friction"].append(np.full_like(angle, mu))
         columns["velocity_norm"].append(r["velocity_norm"])
+        columns["v_over_A_omega"].append(fam["drive"])
         columns["regime"].append(r["regime"])
         columns["periodic"].append(r["periodic"])
         opts = [
             optimum_row(mu, "throw_number", gamma0, g["optimum_points"]),
+            v_over_a_omega_row(mu, gamma0, g["optimum_points"]),
             optimum_row(mu, "amplitude", amp_fixed, g["optimum_points"]),
             optimum_row(mu, "acceleration", k_fixed, g["optimum_points"]),
         ]
         rows += opts
         fam["optima"] = opts
-        for key, opt in zip(("norm", "amp", "acc"), opts, strict=True):
-            fam[f"best_{key}"] = (
-                opt["velocity_norm_at_optimum"]
-                if key == "norm"
-                else opt["velocity_m_per_s_at_optimum"]
-            )
+        for key, opt in zip(READINGS, opts, strict=True):
+            fam[f"best_{key}"] = opt[READINGS[key]]
             fam[f"label_{key}"] = f"mu = {mu}: optimum {opt['optimum_angle']:.1f} deg"
         families.append(fam)
     table = {k: np.concatenate(v) for k, v in {**columns, **extra}.items()}
@@ -648,7 +707,7 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
         table,
         meta,
         {
-            "throw_number (norm columns)": gamma0,
+            "throw_number (velocity_norm, v_over_A_omega)": gamma0,
             "amplitude_m (_amp columns)": amp_fixed,
             "peak_acceleration_g (_acc columns)": k_fixed,
             "frequency_hz": FREQUENCY,
@@ -663,7 +722,7 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
         families,
         f"A = {amp_fixed * 1e3:g} mm; K = {k_fixed:.3f} (Gamma = {gamma0} at {REFERENCE_ANGLE:g}"
         f" deg)",
-        f"Fig. 7: Gamma = {gamma0} (left), eps_t = 0.8, eps_n = 0",
+        f"Fig. 7: Gamma = {gamma0} (top row), eps_t = 0.8, eps_n = 0",
     )
     return {
         "amplitude_m": amp_fixed,
@@ -686,6 +745,7 @@ def fig8(g: dict, out: Path, meta: dict) -> dict:
         "angle": [],
         "throw_number_nominal": [],
         "velocity_norm": [],
+        "v_over_A_omega": [],
         "regime": [],
         "periodic": [],
         "period": [],
@@ -699,6 +759,7 @@ def fig8(g: dict, out: Path, meta: dict) -> dict:
         fam = {}
         r = sweep(gamma0, angle, mu)
         fam["norm"] = r["velocity_norm"]
+        fam["drive"] = r["velocity_norm"] * np.cos(np.radians(angle))
         amp = amplitude_for(gamma0)
         k = amp * OMEGA**2 / config.GRAVITY
         gam, amps = held_drive(angle, "amplitude", amp)
@@ -719,6 +780,7 @@ def fig8(g: dict, out: Path, meta: dict) -> dict:
             ("angle", angle),
             ("throw_number_nominal", np.full_like(angle, gamma0)),
             ("velocity_norm", r["velocity_norm"]),
+            ("v_over_A_omega", fam["drive"]),
             ("regime", r["regime"]),
             ("periodic", r["periodic"]),
             ("period", r["period"]),
@@ -729,6 +791,7 @@ def fig8(g: dict, out: Path, meta: dict) -> dict:
             columns[key].append(values)
         opts = [
             optimum_row(mu, "throw_number", gamma0, g["optimum_points"]),
+            v_over_a_omega_row(mu, gamma0, g["optimum_points"]),
             optimum_row(mu, "amplitude", amp, g["optimum_points"]),
             optimum_row(mu, "acceleration", k, g["optimum_points"]),
         ]
@@ -736,14 +799,11 @@ def fig8(g: dict, out: Path, meta: dict) -> dict:
             o["nominal_throw_number"] = gamma0
         rows += opts
         fam["optima"] = opts
-        for key, opt in zip(("norm", "amp", "acc"), opts, strict=True):
-            fam[f"best_{key}"] = (
-                opt["velocity_norm_at_optimum"]
-                if key == "norm"
-                else opt["velocity_m_per_s_at_optimum"]
-            )
+        for key, opt in zip(READINGS, opts, strict=True):
+            fam[f"best_{key}"] = opt[READINGS[key]]
             held = {
                 "norm": f"Gamma = {gamma0}",
+                "drive": f"Gamma = {gamma0}",
                 "amp": f"A = {amp * 1e3:.3f} mm",
                 "acc": f"K = {k:.2f}",
             }[key]
@@ -787,10 +847,10 @@ def trend(values):
 
 
 def verdicts(f7: dict, f8: dict) -> dict:
-    """Claims (c) and (d) per hold, decided from the numbers."""
+    """Claims (c) and (d) per reading (hold and objective), decided from the numbers."""
     out = {"c": {}, "d": {}}
-    for hold in ("throw_number", "amplitude", "acceleration"):
-        rows = [r for r in f7["optima"] if r["hold"] == hold]
+    for hold in ("throw_number", "v_over_A_omega", "amplitude", "acceleration"):
+        rows = [r for r in f7["optima"] if r["reading"] == hold]
         angles = [r["optimum_angle"] for r in rows]
         widths = [r["plateau_width"] for r in rows]
         out["c"][hold] = {
@@ -799,13 +859,19 @@ def verdicts(f7: dict, f8: dict) -> dict:
             "falls": trend(angles) == "falls",
             "sharpens": trend(widths) == "falls",
         }
-        rows = [r for r in f8["optima"] if r["hold"] == hold]
+        rows = [r for r in f8["optima"] if r["reading"] == hold]
         angles = [r["optimum_angle"] for r in rows]
+        lo = max(r["plateau_90"][0] for r in rows)
+        hi = min(r["plateau_90"][1] for r in rows)
         out["d"][hold] = {
             "optimum_angles": angles,
             "undefined_optimum_at": [
                 r["nominal_throw_number"] for r in rows if r["plateau_covers_scan"]
             ],
+            "optimum_at_scan_bound_at": [
+                r["nominal_throw_number"] for r in rows if r["at_scan_bound"]
+            ],
+            "common_90_plateau": [lo, hi] if lo <= hi else None,
             "range_deg": float(max(angles) - min(angles)),
             "holds_within_5_deg": bool(max(angles) - min(angles) <= 5.0),
         }
@@ -816,22 +882,23 @@ def markdown(claims: dict) -> str:
     """The README's tables, generated from the numbers."""
     lines = ["## Claim (c): optimum angle against mu (Gamma = 1.8 family)", ""]
     lines.append(
-        "| hold | held value | mu | optimum phi (deg) | 90% plateau (deg) | width (deg) "
-        "| 95% width | v(89 deg) / v(opt) | Gamma at optimum | v_norm | v (m/s, 60 Hz) |"
+        "| reading | held value | mu | optimum phi (deg) | 90% plateau (deg) | width (deg) "
+        "| 95% width | v(89 deg) / v(opt) | Gamma at optimum | v_norm | v / (A omega) "
+        "| v (m/s, 60 Hz) |"
     )
-    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in claims["fig7"]["optima"]:
         lines.append(_row(r))
     lines += ["", "## Claim (d): optimum angle against Gamma (mu = 0.35)", ""]
     lines.append(
-        "| hold | held value | nominal Gamma | optimum phi (deg) | 90% plateau (deg) "
+        "| reading | held value | nominal Gamma | optimum phi (deg) | 90% plateau (deg) "
         "| width (deg) | 95% width | v(89 deg) / v(opt) | Gamma at optimum | v_norm "
-        "| v (m/s, 60 Hz) |"
+        "| v / (A omega) | v (m/s, 60 Hz) |"
     )
-    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in claims["fig8"]["optima"]:
         lines.append(_row(r, nominal=True))
-    lines += ["", "## Verdicts", "", "| claim | hold | result |", "|---|---|---|"]
+    lines += ["", "## Verdicts", "", "| claim | reading | result |", "|---|---|---|"]
     for hold, v in claims["verdicts"]["c"].items():
         lines.append(
             f"| (c) | {hold} | optimum angle {v['optimum_angle_with_rising_mu']} with mu "
@@ -842,12 +909,22 @@ def markdown(claims: dict) -> str:
         )
     for hold, v in claims["verdicts"]["d"].items():
         angles = ", ".join(f"{a:.1f}" for a in v["optimum_angles"])
-        flat = v["undefined_optimum_at"]
+        flat, edge, common = (
+            v[k] for k in ("undefined_optimum_at", "optimum_at_scan_bound_at", "common_90_plateau")
+        )
         note = (
             f"; at Gamma = {', '.join(f'{x:g}' for x in flat)} the curve is within 90% of its "
             "maximum over all of 1-89 deg (no defined optimum)"
             if flat
             else ""
+        )
+        edge = [x for x in edge if x not in flat]
+        if edge:
+            note += f"; at Gamma = {', '.join(f'{x:g}' for x in edge)}: optimum at the scan bound"
+        note += (
+            f"; 90% plateaus overlap on {common[0]:.1f}-{common[1]:.1f} deg"
+            if common
+            else "; the 90% plateaus have no common angle"
         )
         lines.append(
             f"| (d) | {hold} | optima {angles} deg, range {v['range_deg']:.1f} deg -> "
@@ -860,16 +937,18 @@ def markdown(claims: dict) -> str:
 def _row(r, nominal=False):
     held = {
         "throw_number": f"Gamma = {r['held_value']:g}",
+        "v_over_A_omega": f"Gamma = {r['held_value']:g}",
         "amplitude": f"A = {r['held_value'] * 1e3:.3f} mm",
         "acceleration": f"K = {r['held_value']:.3f} g",
-    }[r["hold"]]
+    }[r["reading"]]
     lo, hi = r["plateau_90"]
     middle = f"{r['nominal_throw_number']:g}" if nominal else f"{r['friction']:g}"
     return (
-        f"| {r['hold']} | {held} | {middle} | {r['optimum_angle']:.1f} | {lo:.1f}-{hi:.1f} "
+        f"| {r['reading']} | {held} | {middle} | {r['optimum_angle']:.1f} | {lo:.1f}-{hi:.1f} "
         f"| {r['plateau_width']:.1f} | {r['plateau_95_width']:.1f} | {r['tail_ratio_89deg']:.3f} "
         f"| {r['throw_number_at_optimum']:.3f} "
-        f"| {r['velocity_norm_at_optimum']:.4f} | {r['velocity_m_per_s_at_optimum']:.4f} |"
+        f"| {r['velocity_norm_at_optimum']:.4f} | {r['v_over_A_omega_at_optimum']:.4f} "
+        f"| {r['velocity_m_per_s_at_optimum']:.4f} |"
     )
 
 
