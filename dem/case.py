@@ -37,8 +37,10 @@ SHAPES = ("sphere", "screw", "clump")
 SUPPORTED_SHAPES = ("sphere", "screw", "clump")
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
 CONTACT_MODELS = ("hertz_mindlin", "linear")
-#: Default k_t / k_n of the linear model: 2/7 makes the tangential and normal oscillations of a
-#: solid sphere equally fast (Shaefer et al. 1996).
+#: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
+TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts")
+#: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
+#: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
 
 
@@ -94,7 +96,9 @@ class MaterialSpec:
         density: rho, kg/m^3.
         friction: Coulomb coefficient mu >= 0.
         restitution_normal: eps_n in [0, 1]; 0 maps to critical damping.
-        restitution_tangential: eps_t in [0, 1]; a target for calibration (DESIGN.md section 5).
+        restitution_tangential: eps_t in [0, 1], the paper's Eq. (12): sets the point-mass
+            prediction, the calibration target and, with ``contact.tangential = "coulomb"`` and no
+            ``tangential_stiffness_ratio``, the tangential spring (:mod:`dem.tangential`).
         rolling_friction: Rolling resistance coefficient mu_r >= 0 (0: none).
 
     """
@@ -116,9 +120,15 @@ class ContactSpec:
         youngs_modulus: Y, Pa (Hertz-Mindlin), else None.
         poisson_ratio: nu in (-1, 0.5); Hertz-Mindlin uses G = Y / (2 (1 + nu)).
         stiffness: Normal spring constant k_n, N/m (linear), else None.
-        tangential_stiffness_ratio: k_t / k_n of the linear model (default 2/7); Hertz-Mindlin
-            takes k_t from G instead.
+        tangential_stiffness_ratio: kappa = k_t / k_n (Hertz-Mindlin with "coulomb": k_t over
+            the tangent normal stiffness S_n). None: derived from eps_t ("coulomb",
+            :mod:`dem.tangential`), 2/7 (linear, "liggghts"); Hertz-Mindlin with "liggghts"
+            takes k_t from G and refuses the key.
         limit_force: True keeps the normal force repulsive (LIGGGHTS ``limitForce on``).
+        tangential: ``"coulomb"`` (total tangential force capped at mu |F_n|) or
+            ``"liggghts"`` (spring capped, dashpot on top), see :mod:`dem.kernels.contacts`.
+        tangential_damping_ratio: zeta_t of "coulomb" (None: the default,
+            :data:`dem.config.DEM_TANGENTIAL_DAMPING_RATIO`); "liggghts" refuses it.
 
     """
 
@@ -126,8 +136,10 @@ class ContactSpec:
     youngs_modulus: float | None
     poisson_ratio: float
     stiffness: float | None
-    tangential_stiffness_ratio: float
+    tangential_stiffness_ratio: float | None
     limit_force: bool = False
+    tangential: str = "coulomb"
+    tangential_damping_ratio: float | None = None
 
 
 @dataclass(frozen=True)
@@ -385,6 +397,8 @@ _CONTACT_KEYS = (
     "poisson_ratio",
     "stiffness",
     "tangential_stiffness_ratio",
+    "tangential_damping_ratio",
+    "tangential",
     "limit_force",
 )
 _PARTICLES_KEYS = (
@@ -476,17 +490,35 @@ def _read_material(t: _Table) -> MaterialSpec:
 def _read_contact(t: _Table) -> ContactSpec:
     t.check_known(_CONTACT_KEYS)
     model = t.choice("model", CONTACT_MODELS, "hertz_mindlin")
-    # Coefficients of the other model are refused rather than silently ignored.
+    tangential = t.choice("tangential", TANGENTIAL_CONVENTIONS, "coulomb")
+    # Coefficients the chosen model does not use are refused rather than silently ignored.
     foreign = {
-        "hertz_mindlin": ("stiffness", "tangential_stiffness_ratio"),
-        "linear": ("youngs_modulus",),
-    }
-    for key in foreign[model]:
+        ("hertz_mindlin", "coulomb"): ("stiffness",),
+        ("hertz_mindlin", "liggghts"): ("stiffness", "tangential_stiffness_ratio"),
+        ("linear", "coulomb"): ("youngs_modulus",),
+        ("linear", "liggghts"): ("youngs_modulus",),
+    }[model, tangential]
+    if tangential == "liggghts":
+        foreign += ("tangential_damping_ratio",)
+    for key in foreign:
         if key in t.data:
             raise t.error(
-                key, t.data[key], f"not a coefficient of contact.model = {model!r}; remove it"
+                key,
+                t.data[key],
+                f"not a coefficient of contact.model = {model!r} with contact.tangential = "
+                f"{tangential!r}; remove it",
             )
     hertz = model == "hertz_mindlin"
+    ratio = None
+    if "tangential_stiffness_ratio" in t.data:
+        ratio = t.number("tangential_stiffness_ratio", check=_positive, allowed="> 0")
+    elif not hertz and tangential == "liggghts":
+        ratio = DEFAULT_TANGENTIAL_STIFFNESS_RATIO
+    damping = None
+    if "tangential_damping_ratio" in t.data:
+        damping = t.number(
+            "tangential_damping_ratio", check=lambda x: 0.0 <= x <= 10.0, allowed="0 <= value <= 10"
+        )
     return ContactSpec(
         model=model,
         youngs_modulus=t.number("youngs_modulus", check=_positive, allowed="> 0 (Pa)")
@@ -494,10 +526,10 @@ def _read_contact(t: _Table) -> ContactSpec:
         else None,
         poisson_ratio=t.number("poisson_ratio", 0.3, lambda x: -1.0 < x < 0.5, "-1 < nu < 0.5"),
         stiffness=None if hertz else t.number("stiffness", check=_positive, allowed="> 0 (N/m)"),
-        tangential_stiffness_ratio=t.number(
-            "tangential_stiffness_ratio", DEFAULT_TANGENTIAL_STIFFNESS_RATIO, _positive, "> 0"
-        ),
+        tangential_stiffness_ratio=ratio,
         limit_force=t.boolean("limit_force", False),
+        tangential=tangential,
+        tangential_damping_ratio=damping,
     )
 
 
@@ -647,6 +679,18 @@ def load_case(path: str | Path) -> Case:
     drive = _read_drive(table("drive"), trough.inclination)
     material = _read_material(table("material"))
     contact = _read_contact(table("contact"))
+    if (
+        contact.tangential == "coulomb"
+        and contact.tangential_stiffness_ratio is None
+        and material.restitution_tangential >= 1.0
+    ):
+        raise table("material").error(
+            "restitution_tangential",
+            material.restitution_tangential,
+            "0 <= value < 1 when contact.tangential = 'coulomb' derives the tangential spring "
+            "from it (eps_t = 1 means no spring, hence no static friction); or give "
+            "contact.tangential_stiffness_ratio",
+        )
     particles = _build_grain(
         _read_particles(table("particles")), material.density, table("particles")
     )

@@ -61,6 +61,9 @@ DEM_CONTACT_MASS_MARGIN = 0.05
 #: Verlet skin as a fraction of the largest sphere radius; the list is rebuilt when a sphere has
 #: moved more than half the skin since the last build.
 DEM_SKIN_FRACTION = 0.25
+#: Default tangential damping ratio zeta_t of ``[contact] tangential = "coulomb"``
+#: (dem.tangential): damps the ringing of a resting contact within a few periods.
+DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 #: Neighbour lists are regrown to this factor times the needed size when they overflow.
 DEM_GROWTH_FACTOR = 1.5
 #: Instability checks run every this many steps.

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from dem import config
+from dem import config, tangential
 from dem.errors import InputError, SimulationError
 from dem.kernels import contacts
 from dem.kernels.integrate import (
@@ -66,21 +66,59 @@ class ContactLaw:
 
     @classmethod
     def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall)."""
-        c, m = case.contact, case.material
+        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
+
+        With ``tangential = "coulomb"`` the tangential mass factor follows the grain (a rolling
+        sphere 2/7, rotation locked 1, a clump its contact mass over its mass) and an omitted
+        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
+        """
+        c, m, pt = case.contact, case.material, case.particles
+        ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
+        if c.tangential == "coulomb":
+            factor = tangential.tangential_mass_factor(pt.shape, pt.rotation, pt.grain)
+            zeta_t = c.tangential_damping_ratio
+            if zeta_t is None:
+                zeta_t = config.DEM_TANGENTIAL_DAMPING_RATIO
+            if ratio is None:
+                ratio = tangential.tangential_stiffness_ratio(
+                    m.restitution_tangential,
+                    -contacts.damping_beta(m.restitution_normal),
+                    zeta_t,
+                    factor,
+                )
         return cls(
             model=c.model,
             params=contacts.make_params(
                 stiffness=c.stiffness or 0.0,
-                tangential_stiffness_ratio=c.tangential_stiffness_ratio,
+                tangential_stiffness_ratio=ratio or 0.0,
                 youngs_modulus=c.youngs_modulus or 0.0,
                 poisson_ratio=c.poisson_ratio,
                 restitution=m.restitution_normal,
                 friction=m.friction,
                 rolling_friction=m.rolling_friction,
                 limit_force=c.limit_force,
+                tangential=c.tangential,
+                tangential_damping_ratio=zeta_t,
+                tangential_mass_factor=factor,
             ),
         )
+
+    @property
+    def tangential(self) -> str:
+        """Tangential convention, ``"coulomb"`` or ``"liggghts"``."""
+        code = self.params[contacts.P_TANGENTIAL]
+        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
+
+    def tangential_coefficients(self) -> dict:
+        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
+        p = self.params
+        out = {"tangential": self.tangential}
+        if self.tangential == "coulomb" or self.model == "linear":
+            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
+        if self.tangential == "coulomb":
+            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
+            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+        return out
 
     @property
     def model_id(self) -> int:
@@ -107,7 +145,8 @@ def timestep_limits(
 
     Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
     the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
-    a rolling sphere's tangential effective mass is 2/7 m*), sphere-sphere (m* = m/2, R* = r/2;
+    a rolling sphere's tangential effective mass is 2/7 m*; damping ratio zeta_t with
+    ``tangential = "coulomb"``), sphere-sphere (m* = m/2, R* = r/2;
     only if ``pairs``) and sphere-wall (m* = m, R* = r). Hertz stiffnesses are the tangent
     stiffnesses S_n, S_t at the overlap of an impact at ``impact_speed``.
 
@@ -120,6 +159,7 @@ def timestep_limits(
         mass = density * 4.0 / 3.0 * math.pi * radius**3
     beta = p[contacts.P_BETA]
     tangential_factor = 3.5 if rotation else 1.0
+    liggghts = law.tangential == "liggghts"
     contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
     limit = math.inf
     auto = math.inf
@@ -133,14 +173,17 @@ def timestep_limits(
             delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
             root = math.sqrt(r_eff * delta)
             kn = 2.0 * p[contacts.P_YSTAR] * root
-            kt = 8.0 * p[contacts.P_GSTAR] * root
+            kt = 8.0 * p[contacts.P_GSTAR] * root if liggghts else p[contacts.P_KT_RATIO] * kn
             zeta = -math.sqrt(5.0 / 6.0) * beta
             auto = min(
                 auto,
                 contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
             )
         kt_eff = tangential_factor * kt
-        zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
+        if liggghts:
+            zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
+        else:
+            zeta_t = p[contacts.P_ZETA_T]
         limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
         if kt > 0:
             limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
@@ -499,45 +542,88 @@ class Simulation:
 
         Spheres: :func:`dem.state.random_fill`. Screws and clumps: N copies of the case's grain
         template at random positions and orientations without member overlap
-        (:func:`dem.state.random_fill_clumps`). The time step of a clump takes the smallest
-        effective mass a point of its surface has for a force in any direction
-        (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation locked), for
-        every member radius.
-
-        The time step is ``timestep``, else ``case.run.timestep``, else automatic; a given value
-        above the stability limit raises InputError naming ``run.timestep``. An automatic step is
-        shortened so that a drive period holds a whole number of steps.
+        (:func:`dem.state.random_fill_clumps`). The rest is :meth:`from_grains`, with the
+        impact speed of the time step taken from the fill height.
         """
-        pt, mat = case.particles, case.material
-        if case.trough.mesh is not None:
-            raise InputError(
-                "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
-            )
-        grain = pt.grain
-        if pt.shape != "sphere" and grain is None:
-            raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")
+        pt = case.particles
+        _check_buildable(case)
         trough = Trough.from_case(case)
-        law = ContactLaw.from_case(case)
         rng = np.random.default_rng(case.run.seed)
         if pt.shape == "sphere":
             positions, height = random_fill(pt.count, pt.radius, trough.length, trough.width, rng)
+            quats = None
+        else:
+            positions, quats, height = random_fill_clumps(
+                pt.count, pt.grain, trough.length, trough.width, rng
+            )
+        impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
+        sim = cls.from_grains(
+            case, positions, orientations=quats, timestep=timestep, impact_speed=impact
+        )
+        sim.fill_height = height
+        return sim
+
+    @classmethod
+    def from_grains(
+        cls,
+        case,
+        positions: np.ndarray,
+        *,
+        orientations: np.ndarray | None = None,
+        velocities: np.ndarray | None = None,
+        timestep: float | None = None,
+        impact_speed: float | None = None,
+    ) -> Simulation:
+        """The case's grains at chosen poses and velocities (the case's count is not used).
+
+        Args:
+            case: A :class:`dem.case.Case` (contact, material, grain, trough, drive, run).
+            positions: Centres (spheres) or centres of mass (clumps), trough frame, (G, 3), m.
+            orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
+                default the template's principal axes along the trough axes.
+            velocities: Centre-of-mass velocities relative to the trough, (G, 3), m/s; default 0.
+            timestep: dt, s; default ``case.run.timestep``, else automatic.
+            impact_speed: Speed of the hardest impact expected, m/s, for the automatic step and
+                the instability check; default the drive speed plus the fastest grain plus a
+                fall from the highest grain.
+
+        The time step of a clump takes the smallest effective mass a point of its surface has
+        for a force in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M
+        with rotation locked), for every member radius. A given step above the stability limit
+        raises InputError naming ``run.timestep``; an automatic step is shortened so that a
+        drive period holds a whole number of steps.
+
+        """
+        pt, mat = case.particles, case.material
+        _check_buildable(case)
+        positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
+        n = positions.shape[0]
+        grain = pt.grain
+        trough = Trough.from_case(case)
+        law = ContactLaw.from_case(case)
+        if velocities is None:
+            velocities = np.zeros((n, 3))
+        velocities = np.asarray(velocities, dtype=np.float64).reshape(n, 3)
+        if impact_speed is None:
+            top = float(np.max(positions[:, 2])) if n else 0.0
+            fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
+            impact_speed = (
+                trough.drive_speed + fastest + math.sqrt(2.0 * config.GRAVITY * max(top, 0.0))
+            )
+        if pt.shape == "sphere":
             sizes = [(pt.radius, None)]
             density = mat.density
         else:
-            centres, quats, height = random_fill_clumps(
-                pt.count, grain, trough.length, trough.width, rng
-            )
             # the clump's own compliance (rotation included) is in its contact mass, so the
             # sphere's rolling factor is not applied again below
             m_eff = grain.contact_mass() if pt.rotation else grain.mass
             sizes = [(float(r), m_eff) for r in np.unique(grain.radii)]
             density = grain.density
-        impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
         auto, limit = math.inf, math.inf
         for radius, mass in sizes:
             a, b = timestep_limits(
-                law, radius, density, impact, rotation=pt.rotation and mass is None,
-                pairs=pt.count > 1,
+                law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
+                pairs=n > 1,
                 youngs_modulus=case.contact.youngs_modulus or 0.0,
                 poisson_ratio=case.contact.poisson_ratio, mass=mass,
             )  # fmt: skip
@@ -559,11 +645,29 @@ class Simulation:
         bodies = None
         if pt.shape == "sphere":
             spheres = Spheres.create(positions, pt.radius, mat.density)
+            spheres.v[:] = velocities
         else:
-            bodies, spheres = Bodies.create(grain, centres, quats)
+            if orientations is None:
+                orientations = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+            quats = np.ascontiguousarray(orientations, dtype=np.float64).reshape(n, 4)
+            bodies, spheres = Bodies.create(grain, positions, quats)
+            bodies.v[:] = velocities
+            bodies.place(spheres)
         sim = cls(
-            spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact, bodies=bodies
-        )
-        sim.fill_height = height
+            spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact_speed,
+            bodies=bodies,
+        )  # fmt: skip
+        sim.fill_height = float(np.max(positions[:, 2])) if n else 0.0
         sim.timestep_limit = limit
         return sim
+
+
+def _check_buildable(case) -> None:
+    """Refuse what the engine cannot build yet (a mesh trough, a grain without its template)."""
+    pt = case.particles
+    if case.trough.mesh is not None:
+        raise InputError(
+            "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
+        )
+    if pt.shape != "sphere" and pt.grain is None:
+        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")

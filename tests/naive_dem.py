@@ -1,6 +1,7 @@
 """Brute-force NumPy twins of the DEM contact forces (O(N^2), plain loops, no numba).
 
-Written from the formulas (LIGGGHTS hooke / hertz + tangential history + cdt rolling), not from
+Written from the formulas (LIGGGHTS hooke / hertz + tangential history + cdt rolling, or the
+total force capped at Coulomb with ``c["tangential"] = "coulomb"``), not from
 the kernels, so that a test comparing both checks the kernels against an independent oracle.
 """
 
@@ -15,15 +16,28 @@ def coefficients(model, delta, m_eff, r_eff, c):
         beta = -1.0
     else:
         beta = math.log(c["e"]) / math.sqrt(math.log(c["e"]) ** 2 + math.pi**2)
+    coulomb = c.get("tangential", "coulomb") == "coulomb"
     if model == "linear":
         kn = c["kn"]
         gn = -2 * beta * math.sqrt(kn * m_eff)
-        return kn, gn, c["kt_ratio"] * kn, gn
+        kt = c["kt_ratio"] * kn
+        if coulomb:
+            return kn, gn, kt, 2 * c["zeta_t"] * math.sqrt(kt * c["f_t"] * m_eff)
+        return kn, gn, kt, gn
     nu, y = c["nu"], c["E"]
     ystar = 1 / (2 * (1 - nu**2) / y)
     gstar = 1 / (2 * 2 * (2 - nu) * (1 + nu) / y)
     sn = 2 * ystar * math.sqrt(r_eff * delta)
     st = 8 * gstar * math.sqrt(r_eff * delta)
+    if coulomb:
+        kt = c["kt_ratio"] * sn
+        gamma_t = 2 * c["zeta_t"] * math.sqrt(kt * c["f_t"] * m_eff)
+        return (
+            4 / 3 * ystar * math.sqrt(r_eff * delta),
+            -2 * math.sqrt(5 / 6) * beta * math.sqrt(sn * m_eff),
+            kt,
+            gamma_t,
+        )
     return (
         4 / 3 * ystar * math.sqrt(r_eff * delta),
         -2 * math.sqrt(5 / 6) * beta * math.sqrt(sn * m_eff),
@@ -41,12 +55,23 @@ def one_contact(model, c, n, delta, vr, wi, wj, ci, cj, m_eff, r_eff, shear, dt)
     vt = vr - np.dot(vr, n) * n - np.cross(ci * wi + cj * wj, n)
     s = shear + vt * dt
     s = s - np.dot(s, n) * n
+    if c.get("tangential", "coulomb") == "coulomb":
+        # total force (spring + dashpot) capped at mu |F_n|, spring reset to match
+        ft = -kt * s - gt * vt
+        if np.linalg.norm(ft) > c["mu"] * abs(fn):
+            ft = ft / np.linalg.norm(ft) * c["mu"] * abs(fn)
+            s = -(ft + gt * vt) / kt
+        return _with_torques(fn, n, ft, ci, cj, wi, wj, r_eff, c, s)
     ft = -kt * s
     if np.linalg.norm(ft) > c["mu"] * abs(fn):
         ft = ft / np.linalg.norm(ft) * c["mu"] * abs(fn) if np.linalg.norm(s) > 0 else 0 * ft
         s = -ft / kt
     else:
         ft = ft - gt * vt
+    return _with_torques(fn, n, ft, ci, cj, wi, wj, r_eff, c, s)
+
+
+def _with_torques(fn, n, ft, ci, cj, wi, wj, r_eff, c, s):
     ti = -ci * np.cross(n, ft)
     tj = -cj * np.cross(n, ft)
     wr = wi - wj

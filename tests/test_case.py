@@ -168,7 +168,20 @@ def test_linear_contact(tmp_path):
     )
     contact = load_case(write_case(tmp_path, tables)).contact
     assert contact.stiffness == 2000.0 and contact.youngs_modulus is None
+    # "coulomb" (default) derives k_t from eps_t when the ratio is not given
+    assert contact.tangential == "coulomb" and contact.tangential_stiffness_ratio is None
+    tables["contact"]["tangential"] = "liggghts"
+    contact = load_case(write_case(tmp_path, tables)).contact
     assert contact.tangential_stiffness_ratio == pytest.approx(2 / 7)
+
+
+def test_tangential_keys(tmp_path):
+    tables = with_changes(
+        {"contact.tangential_stiffness_ratio": 0.5, "contact.tangential_damping_ratio": 0.2}
+    )
+    contact = load_case(write_case(tmp_path, tables)).contact
+    assert (contact.tangential, contact.tangential_stiffness_ratio) == ("coulomb", 0.5)
+    assert contact.tangential_damping_ratio == 0.2
 
 
 def test_explicit_timestep_and_mesh(tmp_path):
@@ -313,6 +326,31 @@ BAD = [
         "<= head_radius",
     ),
     ("stiffness-with-hertz", {"contact.stiffness": 2000.0}, "contact.stiffness", "remove it"),
+    (
+        "kt-ratio-with-liggghts-hertz",
+        {"contact.tangential": "liggghts", "contact.tangential_stiffness_ratio": 0.5},
+        "contact.tangential_stiffness_ratio",
+        "remove it",
+    ),
+    (
+        "damping-with-liggghts",
+        {"contact.tangential": "liggghts", "contact.tangential_damping_ratio": 0.3},
+        "contact.tangential_damping_ratio",
+        "remove it",
+    ),
+    ("tangential-word", {"contact.tangential": "mindlin"}, "contact.tangential", "coulomb"),
+    (
+        "damping-negative",
+        {"contact.tangential_damping_ratio": -0.1},
+        "contact.tangential_damping_ratio",
+        "0 <= value <= 10",
+    ),
+    (
+        "et-1-derives-no-spring",
+        {"material.restitution_tangential": 1.0},
+        "material.restitution_tangential",
+        "0 <= value < 1",
+    ),
     ("radius-with-screw", {"particles.shape": "screw"}, "particles.radius", "shape = 'sphere'"),
     ("timestep-word", {"run.timestep": "fast"}, "run.timestep", '"auto"'),
     ("timestep-negative", {"run.timestep": -1e-6}, "run.timestep", '"auto"'),

@@ -26,10 +26,11 @@ def _packing(rng, n=40, length=LENGTH, width=WIDTH, zmax=0.006):
     return x, r
 
 
-def _coefficients(model, e, mu, mu_roll, limit):
+def _coefficients(model, e, mu, mu_roll, limit, tangential="liggghts"):
     return {
         "kn": 2.0e3, "kt_ratio": 0.4, "E": 1.0e7, "nu": 0.25, "e": e, "mu": mu,
-        "mu_roll": mu_roll, "limit": limit,
+        "mu_roll": mu_roll, "limit": limit, "tangential": tangential, "zeta_t": 0.7,
+        "f_t": 2 / 7,
     }  # fmt: skip
 
 
@@ -39,11 +40,13 @@ def _law(model, c):
         contacts.make_params(
             stiffness=c["kn"], tangential_stiffness_ratio=c["kt_ratio"], youngs_modulus=c["E"],
             poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
-            rolling_friction=c["mu_roll"], limit_force=c["limit"],
+            rolling_friction=c["mu_roll"], limit_force=c["limit"], tangential=c["tangential"],
+            tangential_damping_ratio=c["zeta_t"], tangential_mass_factor=c["f_t"],
         ),
     )  # fmt: skip
 
 
+@pytest.mark.parametrize("tangential", ["liggghts", "coulomb"])
 @pytest.mark.parametrize(
     ("model", "e", "mu", "mu_roll", "limit", "dt"),
     [
@@ -53,12 +56,12 @@ def _law(model, c):
         ("hertz_mindlin", 0.9, 0.2, 0.0, True, 1e-3),
     ],
 )
-def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt):
+def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt, tangential):
     """Forces and torques equal an O(N^2) NumPy twin, over periodic images and walls, twice:
     the second evaluation after a move and a rebuild uses the carried-over tangential history."""
     rng = np.random.default_rng(7)
     x, r = _packing(rng)
-    c = _coefficients(model, e, mu, mu_roll, limit)
+    c = _coefficients(model, e, mu, mu_roll, limit, tangential)
     spheres = Spheres.create(x, r, 2500.0)
     sim = Simulation(spheres, Trough(LENGTH, WIDTH, inclination=0.1), _law(model, c), dt)
     history = {}

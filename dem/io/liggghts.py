@@ -19,13 +19,18 @@ Contact laws map one-to-one:
   beta = ln(e) / sqrt(ln(e)^2 + pi^2); it refuses e <= 0.05, so e is clamped to
   :data:`MIN_HERTZ_RESTITUTION` and the deck says so.
 - ``linear`` -> ``model hooke/stiffness`` with ``absolute_damping on``: k_n (N/m),
-  k_t = ratio * k_n, and the damping coefficients (N s/m)
+  k_t = kappa k_n, and the damping coefficients (N s/m)
 
-      gamma_n = 2 zeta sqrt(k_n m*),   gamma_t = 2 zeta sqrt(k_t m*),
-      zeta = -ln(e) / sqrt(ln(e)^2 + pi^2)   (zeta = 1, critical, for e = 0),
+      gamma_n = 2 zeta sqrt(k_n m*),   zeta = -ln(e) / sqrt(ln(e)^2 + pi^2)   (1 for e = 0),
 
   with m* = m/2 for grain-grain (atom types 1-1) and m* = m for grain-wall contacts (1-2), so the
-  restitution is exact for both and e = 0 needs no clamp.
+  restitution is exact for both and e = 0 needs no clamp; gamma_t = gamma_n as dem's
+  ``tangential = "liggghts"`` uses it, or 2 zeta_t sqrt(k_t f_t m*) for ``"coulomb"``.
+
+LIGGGHTS has one tangential convention, the spring capped at mu F_n with the dashpot added while
+sticking: dem's ``tangential = "liggghts"``. A case with ``"coulomb"`` (dem's default) is written
+with the same coefficients and a NOTE in the deck; use ``"liggghts"`` on both sides of a
+comparison.
 
 ``limitForce`` is written out (on or off as ``[contact] limit_force``), and so is
 ``tangential_damping on`` (the LIGGGHTS default). Grains are atom type 1, walls type 2.
@@ -60,7 +65,9 @@ from dem import __version__
 from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T
 from dem.shapes import write_clump
+from dem.simulation import ContactLaw
 
 #: LIGGGHTS version the decks are written for.
 LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"
@@ -136,6 +143,15 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
     mu = _fmt(material.friction)
     lines = [
         "# grains are atom type 1, walls type 2; one material for both",
+    ]
+    if contact.tangential == "coulomb":
+        lines.append(
+            "# NOTE: the case caps the total tangential force at mu F_n ([contact] tangential = "
+            "'coulomb'); LIGGGHTS caps the spring alone and adds the dashpot while sticking, as "
+            "dem's tangential = 'liggghts'"
+            + ("" if contact.model == "linear" else ", with Mindlin's k_t = 8 G* sqrt(R* d)")
+        )
+    lines += [
         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu} {mu} {mu} {mu}",
     ]
     if contact.model == "hertz_mindlin":
@@ -156,16 +172,22 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
         model = "model hertz tangential history"
         settings = f"limitForce {limit} tangential_damping on"
     else:
+        law = ContactLaw.from_case(case)
         kn = contact.stiffness
-        kt = contact.tangential_stiffness_ratio * kn
+        kt = law.params[P_KT_RATIO] * kn
         zeta = damping_ratio(material.restitution_normal)
         # m* = m/2 grain-grain (1-1), m for grain-wall (1-2 and 2-1); type 2-2 never meets
         meff = (0.5 * sphere_mass, sphere_mass, sphere_mass, sphere_mass)
         gn = [2.0 * zeta * math.sqrt(kn * m) for m in meff]
-        gt = [2.0 * zeta * math.sqrt(kt * m) for m in meff]
+        if contact.tangential == "liggghts":
+            gt, gt_text = gn, "gamma_t = gamma_n (as dem's liggghts convention)"
+        else:
+            zeta_t, f_t = law.params[P_ZETA_T], law.params[P_MASS_T]
+            gt = [2.0 * zeta_t * math.sqrt(kt * f_t * m) for m in meff]
+            gt_text = f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {zeta_t:.6g}, f_t = {f_t:.6g}"
         lines += [
             f"# linear spring-dashpot: zeta = {zeta:.6g} from e = {material.restitution_normal}, "
-            "gamma = 2 zeta sqrt(k m*), m* = m/2 (1-1) or m (1-2)",
+            "gamma_n = 2 zeta sqrt(k m*), m* = m/2 (1-1) or m (1-2); " + gt_text,
             f"fix m_kn all property/global kn peratomtypepair 2 {' '.join([_fmt(kn)] * 4)}",
             f"fix m_kt all property/global kt peratomtypepair 2 {' '.join([_fmt(kt)] * 4)}",
             "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(_fmt, gn)),

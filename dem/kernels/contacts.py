@@ -10,32 +10,53 @@ A contact between sphere i and sphere j (or a wall, j = wall) is described by
 - the tangential spring elongation s (3 floats of contact history, per contact pair).
 
 A *law* maps (delta, m*, R*) to the four coefficients (k_n, gamma_n, k_t, gamma_t); the
-spring-dashpot routine :func:`contact_force` turns them into forces exactly as LIGGGHTS does
-(``normal_model_hooke`` / ``normal_model_hertz`` with ``tangential_model_history``):
+spring-dashpot routine :func:`contact_force` turns them into forces:
 
     F_n = k_n delta - gamma_n (v_r . n)                    (clamped to >= 0 with limit_force)
     v_t = v_r - (v_r . n) n - (c_i omega_i + c_j omega_j) x n   (slip velocity at the contact)
     s  <- s + v_t dt;  s <- s - (s . n) n                  (increment, then project)
-    F_t = -k_t s - gamma_t v_t                             if k_t |s| <= mu |F_n|
-    F_t = -mu |F_n| s / |s|,  s <- -F_t / k_t              otherwise (sliding, no damping)
     F_i = F_n n + F_t,  tau_i = -c_i n x F_t,  tau_j = -c_j n x F_t,  F_j = -F_i
+
+with the tangential force F_t by one of two conventions (``[contact] tangential``):
+
+- ``"coulomb"`` (default; Luding 2008, LAMMPS ``pair granular``): the *total* tangential force,
+  spring plus dashpot, is capped at Coulomb's limit, and the spring is reset to match:
+
+      F_t = -k_t s - gamma_t v_t;  if |F_t| > mu |F_n|:
+          F_t <- mu |F_n| F_t / |F_t|,  s <- -(F_t + gamma_t v_t) / k_t
+
+  so a contact never transmits more than mu |F_n|, and a stiff contact converges to rigid
+  Coulomb friction (stick, or slide with mu |F_n| opposing the slip).
+- ``"liggghts"`` (LIGGGHTS ``tangential_model history``, for deck equivalence): the Coulomb test
+  is made on the spring alone and the dashpot is added while sticking:
+
+      F_t = -k_t s - gamma_t v_t                            if k_t |s| <= mu |F_n|
+      F_t = -mu |F_n| s / |s|,  s <- -F_t / k_t             otherwise (sliding, no damping)
+
+  While sticking, a heavily damped contact can transmit more than mu |F_n|.
 
 Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directional torque):
 w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
 tau_j += the same.
 
-Laws (the registry is :data:`MODELS`; a new law is a new function and one entry there):
+Laws (the registry is :data:`MODELS`; a new law is a new function and one entry there). The
+normal part is that of LIGGGHTS; the tangential part depends on the convention:
 
 - linear spring-dashpot (LIGGGHTS ``hooke/stiffness`` with a restitution-derived damping):
-  k_n given, k_t = ratio k_n, gamma_n = gamma_t = -2 beta sqrt(k_n m*).
-- Hertz-Mindlin as coded in LIGGGHTS (``hertz``, tangential damping on): with
-  S_n = 2 Y* sqrt(R* delta) and S_t = 8 G* sqrt(R* delta),
-  k_n = 4/3 Y* sqrt(R* delta), gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*), k_t = S_t,
-  gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*).
+  k_n given, gamma_n = -2 beta sqrt(k_n m*); k_t = kappa k_n with kappa =
+  ``tangential_stiffness_ratio``. "liggghts": gamma_t = gamma_n. "coulomb":
+  gamma_t = 2 zeta_t sqrt(k_t f_t m*) with zeta_t = ``tangential_damping_ratio`` and f_t the
+  tangential mass factor (:func:`tangential_mass_factor`).
+- Hertz-Mindlin: with S_n = 2 Y* sqrt(R* delta) (the tangent normal stiffness),
+  k_n = 4/3 Y* sqrt(R* delta), gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*). "liggghts" (as coded in
+  LIGGGHTS, tangential damping on): k_t = S_t = 8 G* sqrt(R* delta),
+  gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*). "coulomb": k_t = kappa S_n,
+  gamma_t = 2 zeta_t sqrt(k_t f_t m*).
 
 Here beta = ln(e) / sqrt(ln(e)^2 + pi^2) for 0 < e <= 1 and beta = -1 for e = 0 (critical damping
 of the linear law; ln 0 is never evaluated), see :func:`damping_beta`. For equal materials
-Y* = Y / (2 (1 - nu^2)) and G* = Y / (4 (2 - nu)(1 + nu)).
+Y* = Y / (2 (1 - nu^2)) and G* = Y / (4 (2 - nu)(1 + nu)). How kappa and zeta_t follow from the
+tangential restitution eps_t is in :mod:`dem.tangential`.
 
 Parameters reach the kernels as one float64 array ``params`` indexed by the ``P_*`` constants.
 """
@@ -45,7 +66,7 @@ import math
 import numba
 import numpy as np
 
-from dem.config import NUMBA_OPTIONS
+from dem.config import DEM_TANGENTIAL_DAMPING_RATIO, NUMBA_OPTIONS
 
 #: Contact law selectors (the case's ``contact.model``) -> integer id used by the kernels.
 MODELS = {"linear": 0, "hertz_mindlin": 1}
@@ -63,7 +84,14 @@ P_MU_ROLL = 6  #: rolling resistance coefficient mu_r (0: off)
 P_LIMIT_FORCE = 7  #: 1.0 keeps F_n >= 0 (LIGGGHTS limitForce), else 0.0
 P_HERTZ_DAMP_N = 8  #: -2 sqrt(5/6) beta sqrt(2 Y*): gamma_n = this sqrt(m* sqrt(R* delta))
 P_HERTZ_DAMP_T = 9  #: -2 sqrt(5/6) beta sqrt(8 G*): gamma_t = this sqrt(m* sqrt(R* delta))
-N_PARAMS = 10
+P_TANGENTIAL = 10  #: tangential convention: 0.0 "coulomb", 1.0 "liggghts" (:data:`TANGENTIAL`)
+P_ZETA_T = 11  #: "coulomb": tangential damping ratio zeta_t
+P_MASS_T = 12  #: "coulomb": tangential mass factor f_t (tangential effective mass f_t m*)
+P_COULOMB_DAMP_T = 13  #: "coulomb", Hertz: 2 zeta_t sqrt(2 kappa Y* f_t): gamma_t = this q
+N_PARAMS = 14
+
+#: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
+TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0}
 
 _SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
@@ -92,11 +120,19 @@ def make_params(
     friction: float = 0.0,
     rolling_friction: float = 0.0,
     limit_force: bool = False,
+    tangential: str = "coulomb",
+    tangential_damping_ratio: float = DEM_TANGENTIAL_DAMPING_RATIO,
+    tangential_mass_factor: float = 1.0,
 ) -> np.ndarray:
     """Pack contact coefficients into the ``params`` array of the kernels, shape (N_PARAMS,).
 
     Both laws' entries are filled; the law id chosen separately selects which are used.
+    ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
+    ``tangential_damping_ratio`` zeta_t and ``tangential_mass_factor`` f_t are used by
+    ``tangential = "coulomb"`` only (module docstring).
     """
+    if tangential not in TANGENTIAL:
+        raise ValueError(f"tangential must be one of {sorted(TANGENTIAL)}, got {tangential!r}")
     p = np.zeros(N_PARAMS)
     nu = poisson_ratio
     p[P_KN] = stiffness
@@ -110,31 +146,53 @@ def make_params(
     damp = -2.0 * _SQRT_5_6 * p[P_BETA]
     p[P_HERTZ_DAMP_N] = damp * math.sqrt(2.0 * p[P_YSTAR])
     p[P_HERTZ_DAMP_T] = damp * math.sqrt(8.0 * p[P_GSTAR])
+    p[P_TANGENTIAL] = TANGENTIAL[tangential]
+    p[P_ZETA_T] = tangential_damping_ratio
+    p[P_MASS_T] = tangential_mass_factor
+    p[P_COULOMB_DAMP_T] = (
+        2.0
+        * tangential_damping_ratio
+        * math.sqrt(2.0 * tangential_stiffness_ratio * p[P_YSTAR] * tangential_mass_factor)
+    )
     return p
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def _linear_law(delta, m_eff, r_eff, p):
-    """Linear: (k_n, gamma_n, k_t, gamma_t) = (k, -2 beta sqrt(k m*), ratio k, gamma_n)."""
+    """Linear: k_n, gamma_n = -2 beta sqrt(k_n m*), k_t = kappa k_n, gamma_t by convention.
+
+    "liggghts": gamma_t = gamma_n; "coulomb": gamma_t = 2 zeta_t sqrt(k_t f_t m*).
+    """
     kn = p[P_KN]
     gn = -2.0 * p[P_BETA] * math.sqrt(kn * m_eff)
-    return kn, gn, p[P_KT_RATIO] * kn, gn
+    kt = p[P_KT_RATIO] * kn
+    if p[P_TANGENTIAL] != 0.0:
+        return kn, gn, kt, gn
+    return kn, gn, kt, 2.0 * p[P_ZETA_T] * math.sqrt(kt * p[P_MASS_T] * m_eff)
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def _hertz_law(delta, m_eff, r_eff, p):
-    """Hertz-Mindlin (LIGGGHTS): coefficients from S_n = 2 Y* sqrt(R* d), S_t = 8 G* sqrt(R* d).
+    """Hertz-Mindlin: normal part from S_n = 2 Y* sqrt(R* d); tangential part by convention.
 
-    -2 sqrt(5/6) beta sqrt(S m*) is evaluated as (-2 sqrt(5/6) beta sqrt(2 Y*)) sqrt(m* root)
-    with the constant factor precomputed: two square roots per contact instead of three.
+    "liggghts": k_t = S_t = 8 G* sqrt(R* d), gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*);
+    "coulomb": k_t = kappa S_n, gamma_t = 2 zeta_t sqrt(k_t f_t m*). Every damping is a constant
+    times q = sqrt(m* sqrt(R* d)), the constants precomputed: two square roots per contact.
     """
     root = math.sqrt(r_eff * delta)
     q = math.sqrt(m_eff * root)
+    if p[P_TANGENTIAL] != 0.0:
+        return (
+            (4.0 / 3.0) * p[P_YSTAR] * root,
+            p[P_HERTZ_DAMP_N] * q,
+            8.0 * p[P_GSTAR] * root,
+            p[P_HERTZ_DAMP_T] * q,
+        )
     return (
         (4.0 / 3.0) * p[P_YSTAR] * root,
         p[P_HERTZ_DAMP_N] * q,
-        8.0 * p[P_GSTAR] * root,
-        p[P_HERTZ_DAMP_T] * q,
+        2.0 * p[P_KT_RATIO] * p[P_YSTAR] * root,
+        p[P_COULOMB_DAMP_T] * q,
     )
 
 
@@ -144,6 +202,59 @@ def law_coefficients(model, delta, m_eff, r_eff, p):
     if model == HERTZ:
         return _hertz_law(delta, m_eff, r_eff, p)
     return _linear_law(delta, m_eff, r_eff, p)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Total tangential force capped at f_max = mu |F_n|, spring reset to match.
+
+    Returns (F_t, s) as six floats.
+    """
+    ftx = -kt * sx - gt * vtx
+    fty = -kt * sy - gt * vty
+    ftz = -kt * sz - gt * vtz
+    f_mag = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    if f_mag > f_max:
+        ratio = f_max / f_mag
+        ftx *= ratio
+        fty *= ratio
+        ftz *= ratio
+        if kt > 0.0:
+            sx = -(ftx + gt * vtx) / kt
+            sy = -(fty + gt * vty) / kt
+            sz = -(ftz + gt * vtz) / kt
+    return ftx, fty, ftz, sx, sy, sz
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Spring force capped at f_max = mu |F_n| (spring reset), dashpot added only while sticking.
+
+    Returns (F_t, s) as six floats.
+    """
+    ftx = -kt * sx
+    fty = -kt * sy
+    ftz = -kt * sz
+    s_mag = math.sqrt(sx * sx + sy * sy + sz * sz)
+    f_shear = kt * s_mag
+    if f_shear > f_max:
+        if s_mag > 0.0:
+            ratio = f_max / f_shear
+            ftx *= ratio
+            fty *= ratio
+            ftz *= ratio
+            sx = -ftx / kt
+            sy = -fty / kt
+            sz = -ftz / kt
+        else:
+            ftx = 0.0
+            fty = 0.0
+            ftz = 0.0
+    else:
+        ftx -= gt * vtx
+        fty -= gt * vty
+        ftz -= gt * vtz
+    return ftx, fty, ftz, sx, sy, sz
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -191,29 +302,11 @@ def contact_force(
     sx -= sn * nx
     sy -= sn * ny
     sz -= sn * nz
-    ftx = -kt * sx
-    fty = -kt * sy
-    ftz = -kt * sz
-    s_mag = math.sqrt(sx * sx + sy * sy + sz * sz)
-    f_shear = kt * s_mag
-    f_friction = p[P_MU] * abs(fn)
-    if f_shear > f_friction:
-        if s_mag > 0.0:
-            ratio = f_friction / f_shear
-            ftx *= ratio
-            fty *= ratio
-            ftz *= ratio
-            sx = -ftx / kt
-            sy = -fty / kt
-            sz = -ftz / kt
-        else:
-            ftx = 0.0
-            fty = 0.0
-            ftz = 0.0
+    f_max = p[P_MU] * abs(fn)
+    if p[P_TANGENTIAL] != 0.0:
+        ftx, fty, ftz, sx, sy, sz = _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz)
     else:
-        ftx -= gt * vtx
-        fty -= gt * vty
-        ftz -= gt * vtz
+        ftx, fty, ftz, sx, sy, sz = _coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz)
     hist[k, 0] = sx
     hist[k, 1] = sy
     hist[k, 2] = sz

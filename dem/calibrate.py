@@ -1,0 +1,339 @@
+"""Virtual impact tests and the fit of the tangential contact to eps_t (``dem calibrate``).
+
+A virtual impact throws one grain of a case at the floor, gravity and drive off, at an incidence
+angle theta from the floor normal (0: head on, 90: grazing) and a speed V:
+v_before = V (sin theta, 0, -cos theta). It ends when the grain leaves the floor or, where it
+does not (eps_n = 0 with ``limit_force = false``: the damped contact pulls it back to rest), when
+its normal force and normal velocity have died away (below :data:`IMPACT_END_FORCE` of their
+peak and of V): "after" is the state the point mass is put in at once by its instantaneous
+landing. Then, with centre-of-mass velocities relative to the floor (the paper's Eq. 12),
+
+    eps_n = -v_z(after) / v_z(before),   eps_t = v_x(after) / v_x(before).
+
+The impacts that matter are those conveying produces: :func:`landings` takes them from the
+point-mass model of the case's drive (relative velocity at each landing of the periodic orbit).
+:func:`calibrate` then finds the tangential stiffness ratio kappa whose mean eps_t over those
+landings is the case's ``restitution_tangential`` (for clumps averaged over random
+orientations), and says how far the target is out of reach where Coulomb friction forbids it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from dem import config
+from dem.errors import InputError
+
+#: Steps per drive cycle of the landing sampler (first order in the step).
+LANDING_STEPS = 4000
+#: An impact that does not separate has ended when its normal force and normal velocity have
+#: fallen below this fraction of their peak and of the impact speed.
+IMPACT_END_FORCE = 1e-3
+
+
+@dataclass(frozen=True)
+class Impact:
+    """Outcome of one virtual impact.
+
+    Attributes:
+        incidence: theta, deg from the floor normal.
+        speed: V, m/s.
+        eps_n: Normal restitution of the centre of mass.
+        eps_t: Tangential restitution of the centre of mass.
+        duration: From first touch to the end of the impact, s.
+
+    """
+
+    incidence: float
+    speed: float
+    eps_n: float
+    eps_t: float
+    duration: float
+
+
+def _lowest_offset(case, quat: np.ndarray | None) -> float:
+    """Height of the centre of mass above the grain's lowest surface point, m."""
+    pt = case.particles
+    if pt.shape == "sphere":
+        return pt.radius
+    from dem.kernels.rigid import quat_to_matrix
+
+    g = pt.grain
+    z = np.asarray(g.centres, dtype=np.float64) @ quat_to_matrix(quat)[2]
+    return float(-np.min(z - np.asarray(g.radii)))
+
+
+def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=200_000) -> Impact:
+    """Throw one grain of ``case`` at the floor (module docstring) and measure eps_n and eps_t.
+
+    Args:
+        case: A :class:`dem.case.Case`; its contact, material and grain are used.
+        incidence: theta in [0, 90), deg from the floor normal.
+        speed: V > 0, m/s.
+        quat: Clumps: orientation (w, x, y, z); default the template's principal axes.
+        max_steps: Give up (RuntimeError) if the impact has not ended after this many steps.
+
+    """
+    from dem.simulation import Simulation
+
+    if not 0.0 <= incidence < 90.0:
+        raise ValueError(f"incidence must lie in [0, 90) deg, got {incidence}")
+    if speed <= 0.0:
+        raise ValueError(f"speed must be > 0, got {speed}")
+    theta = math.radians(incidence)
+    v0 = np.array([speed * math.sin(theta), 0.0, -speed * math.cos(theta)])
+    if case.particles.shape != "sphere" and quat is None:
+        quat = np.array([1.0, 0.0, 0.0, 0.0])
+    q = None if quat is None else np.asarray(quat, dtype=np.float64)
+    height = _lowest_offset(case, q)
+    x0 = np.array([[0.5 * case.trough.length, 0.0, height + 1e-9]])
+    sim = Simulation.from_grains(
+        case, x0, orientations=None if q is None else q[None, :], velocities=v0[None, :],
+        impact_speed=speed,
+    )  # fmt: skip
+    sim.gravity[:] = 0.0
+    sim.drive_on = False
+    sim.compute_forces()
+    touched, peak = -1, 0.0
+    for step in range(max_steps):
+        sim.run(1)
+        fz = float(np.sum(sim.spheres.force[:, 2]))
+        v = sim.bodies.v[0] if sim.bodies is not None else sim.spheres.v[0]
+        if touched < 0:
+            if fz > 0.0:
+                touched = step
+            continue
+        peak = max(peak, abs(fz))
+        apart = fz == 0.0 and v[2] > 0.0
+        at_rest = abs(fz) < IMPACT_END_FORCE * peak and abs(v[2]) < IMPACT_END_FORCE * speed
+        if apart or at_rest:
+            eps_t = float(v[0] / v0[0]) if v0[0] != 0.0 else math.nan
+            return Impact(incidence, speed, float(-v[2] / v0[2]), eps_t, (step - touched) * sim.dt)
+    raise RuntimeError(f"the impact did not end within {max_steps} steps")
+
+
+# --- the impacts conveying produces ------------------------------------------------------------
+
+
+@numba.njit(**config.NUMBA_OPTIONS)
+def _landings(gamma, phi, mu, alpha, eps_t, eps_n, steps, transient, measured, out):
+    """Relative landing velocities (u, w) in units of A omega, by Moreau-Jean time stepping.
+
+    Units: phase omega t, velocities in A omega (tangential u along x, normal w along z).
+    Returns the number of rows of ``out`` filled.
+    """
+    s_phi = math.sin(phi)
+    c_phi = math.cos(phi)
+    # accelerations in A omega^2: drive -sin(t) e (trough frame: + sin t e for the grain),
+    # gravity g (-sin a, -cos a) = (Gamma / sin phi) (-sin a / cos a ... ) scaled below
+    g_scale = math.sin(phi) / (gamma * math.cos(alpha))  # g / (A omega^2)
+    gx = -g_scale * math.sin(alpha)
+    gz = -g_scale * math.cos(alpha)
+    h = 2.0 * math.pi / steps
+    u = 0.0
+    w = 0.0
+    z = 0.0
+    flying = False
+    n_out = 0
+    for n in range((transient + measured) * steps):
+        s = math.sin((n % steps + 0.5) * h)
+        u_free = u + h * (s * c_phi + gx)
+        w_free = w + h * (s * s_phi + gz)
+        if z + h * w_free > 0.0:
+            u, w = u_free, w_free
+            z += h * w
+            flying = True
+        elif flying:
+            if n >= transient * steps and n_out < out.shape[0]:
+                out[n_out, 0] = u_free
+                out[n_out, 1] = w_free
+                n_out += 1
+            u = eps_t * u_free
+            w = -eps_n * w_free if w_free < 0.0 else 0.0
+            z = 0.0
+            flying = w > 0.0
+        else:
+            impulse = -w_free
+            limit = mu * impulse
+            if abs(u_free) <= limit:
+                u = 0.0
+            else:
+                u = u_free - math.copysign(limit, u_free)
+            w = 0.0
+            z = 0.0
+    return n_out
+
+
+def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
+    """Landings of the point mass on the case's drive: rows (incidence deg, speed m/s), (L, 2).
+
+    The point mass (paper's impact law with the case's eps_n and eps_t) is stepped at
+    :data:`LANDING_STEPS` per cycle for ``transient`` cycles, then its landings over ``cycles``
+    cycles are recorded (relative velocity just before touching). Empty below Gamma = 1.
+    """
+    d, m = case.drive, case.material
+    out = np.zeros((cycles * 8, 2))
+    k = _landings(
+        d.throw_number, math.radians(d.angle), m.friction, math.radians(case.trough.inclination),
+        m.restitution_tangential, m.restitution_normal, LANDING_STEPS, transient, cycles, out,
+    )  # fmt: skip
+    scale = d.amplitude * d.omega
+    u, w = out[:k, 0] * scale, out[:k, 1] * scale
+    keep = w < 0.0
+    incidence = np.degrees(np.arctan2(np.abs(u[keep]), -w[keep]))
+    return np.column_stack([incidence, np.hypot(u[keep], w[keep])])
+
+
+# --- the fit -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Result of :func:`calibrate`.
+
+    Attributes:
+        target: The case's eps_t.
+        kappa: Fitted k_t / k_n ("coulomb").
+        zeta_t: Tangential damping ratio used.
+        eps_t: Mean eps_t over the impacts at the fitted kappa.
+        eps_t_spread: Standard deviation of eps_t over the impacts.
+        eps_n: Mean eps_n over the impacts.
+        residual: eps_t - target.
+        reachable: Whether |residual| <= tolerance.
+        impacts: (incidence deg, speed m/s) of the impacts measured, (L, 2).
+        before: eps_t per impact with the case's contact as given, (L,).
+        after: eps_t per impact at the fitted kappa, (L,).
+
+    """
+
+    target: float
+    kappa: float
+    zeta_t: float
+    eps_t: float
+    eps_t_spread: float
+    eps_n: float
+    residual: float
+    reachable: bool
+    impacts: np.ndarray
+    before: np.ndarray
+    after: np.ndarray
+
+
+def _with_tangential(case, kappa: float, zeta_t: float):
+    contact = dataclasses.replace(
+        case.contact, tangential_stiffness_ratio=kappa, tangential_damping_ratio=zeta_t
+    )
+    return dataclasses.replace(case, contact=contact)
+
+
+def _measure(case, impacts: np.ndarray, quats: list) -> tuple[np.ndarray, np.ndarray]:
+    eps_t, eps_n = [], []
+    for incidence, speed in impacts:
+        for q in quats:
+            r = virtual_impact(case, float(incidence), float(speed), q)
+            eps_t.append(r.eps_t)
+            eps_n.append(r.eps_n)
+    return np.array(eps_t).reshape(len(impacts), -1), np.array(eps_n)
+
+
+def calibrate(
+    case,
+    *,
+    start: float | None = None,
+    max_impacts: int = 12,
+    orientations: int = 4,
+    tolerance: float = 0.02,
+    progress=None,
+) -> Calibration:
+    """Fit kappa = k_t / k_n so that the mean eps_t of the case's landings is its eps_t.
+
+    The impacts are the point mass's landings for the case's drive (:func:`landings`, at most
+    ``max_impacts`` of them, spread over the range of incidence), or, below Gamma = 1, where the
+    grain never lands, a fan of incidences 10-70 deg at the drive speed A omega. Clumps are
+    thrown in ``orientations`` random orientations (seeded by ``run.seed``). The mean eps_t is
+    monotone in kappa over the bracket searched (a softer tangential spring takes less from a
+    sticking impact), so the fit is a bisection on log kappa within [1e-4, 10], from any start.
+
+    Raises:
+        InputError: ``contact.tangential`` is not "coulomb".
+
+    """
+    if case.contact.tangential != "coulomb":
+        raise InputError(
+            "contact.tangential",
+            case.contact.tangential,
+            "'coulomb' (the 'liggghts' convention takes k_t from Mindlin, not from eps_t)",
+            source=str(case.source),
+        )
+    from dem.kernels import contacts
+    from dem.simulation import ContactLaw
+
+    target = case.material.restitution_tangential
+    law = ContactLaw.from_case(case)
+    zeta_t = float(law.params[contacts.P_ZETA_T])
+    kappa0 = float(law.params[contacts.P_KT_RATIO])
+    impacts = landings(case)
+    if impacts.shape[0] == 0:
+        speed = case.drive.amplitude * case.drive.omega
+        impacts = np.column_stack([np.linspace(10.0, 70.0, 7), np.full(7, speed)])
+    if impacts.shape[0] > max_impacts:
+        order = np.argsort(impacts[:, 0])
+        impacts = impacts[order[np.linspace(0, len(order) - 1, max_impacts).round().astype(int)]]
+    quats: list = [None]
+    if case.particles.shape != "sphere":
+        from dem.state import random_orientations
+
+        rng = np.random.default_rng(case.run.seed)
+        quats = list(random_orientations(orientations, rng))
+
+    def mean_eps(kappa):
+        e_t, e_n = _measure(_with_tangential(case, kappa, zeta_t), impacts, quats)
+        if progress is not None:
+            progress(kappa, float(np.mean(e_t)))
+        return float(np.mean(e_t)), e_t, e_n
+
+    before = _measure(case, impacts, quats)[0].mean(axis=1)
+    lo, hi = 1e-4, 10.0
+    e_lo, e_hi = mean_eps(lo)[0], mean_eps(hi)[0]
+    if start is not None:
+        # a start narrows the bracket when it is on the right side of the root
+        e_s = mean_eps(start)[0]
+        if e_s > target:
+            lo, e_lo = start, e_s
+        else:
+            hi, e_hi = start, e_s
+    if e_lo <= target:
+        best = lo
+    elif e_hi >= target:
+        best = hi
+    else:
+        for _ in range(30):
+            mid = math.sqrt(lo * hi)
+            e_mid = mean_eps(mid)[0]
+            if e_mid > target:
+                lo = mid
+            else:
+                hi = mid
+            if hi / lo < 1.0 + 1e-3:
+                break
+        best = math.sqrt(lo * hi)
+    eps, e_t, e_n = mean_eps(best)
+    del kappa0
+    return Calibration(
+        target=target,
+        kappa=best,
+        zeta_t=zeta_t,
+        eps_t=eps,
+        eps_t_spread=float(np.std(e_t)),
+        eps_n=float(np.mean(e_n)),
+        residual=eps - target,
+        reachable=abs(eps - target) <= tolerance,
+        impacts=impacts,
+        before=before,
+        after=e_t.mean(axis=1),
+    )

@@ -1,0 +1,141 @@
+"""Tangential spring and dashpot from the tangential restitution eps_t (``"coulomb"`` contacts).
+
+**eps_t as the paper uses it** (its Eq. 12): the tangential velocity of the grain's centre of
+mass relative to the trough, after one landing over before it. "After" is the end of the impact:
+the moment the normal contact force, having pushed the grain, first falls back to zero. With
+eps_n = 0 a linear contact is critically damped and never separates, but its force
+k_n x + gamma_n dx/dt still vanishes at omega_n t = 2 (x = v t exp(-omega_n t)); under gravity
+the grain then rests on the floor and slides or sticks by Coulomb friction, as the point mass
+does after its instantaneous landing. So eps_t is defined, and measured by
+:mod:`dem.calibrate`, for a gravity-free impact of one grain on the floor.
+
+**Mapping.** The tangential part of the contact is a spring k_t with dashpot gamma_t acting on
+the tangential effective mass f_t m* (f_t: :func:`tangential_mass_factor`), with
+omega_t^2 = k_t / (f_t m*) and damping ratio zeta_t = gamma_t / (2 sqrt(k_t f_t m*)). An impact
+that sticks (tangential force below mu |F_n| throughout) starts the tangential oscillator with
+unit velocity, and eps_t is its velocity at the end of the impact t_e:
+
+    eps_t = V(omega_t t_e; zeta_t),   V(s; z) = d/ds of the unit-velocity response X(s; z)
+
+(V = exp(-z s) (cos(w s) - z / w sin(w s)), w = sqrt(1 - z^2), for z < 1), and omega_n t_e is
+the first zero of the normal force of the linear law with damping ratio zeta_n = -beta(eps_n)
+(:func:`impact_end_time`; 2 for eps_n = 0). Solving for the first root theta of
+V(theta; zeta_t) = eps_t gives
+
+    kappa = k_t / k_n = f_t (theta / (omega_n t_e))^2.
+
+This is the construction of Pournin et al. (2001) and Deen et al. (2007) -- coded in MercuryDPM
+(``setCollisionTimeAndNormalAndTangentialRestitutionCoefficient``) and Yade, whose source notes
+a factor-2 error in Pournin's damping -- with two changes: eps_t is the centre-of-mass ratio of
+the paper (positive: the grain keeps moving forward) rather than the contact-point ratio of
+Walton's model (negative for the same impact), and the end of the impact is the zero of the
+normal force, which exists for eps_n = 0 where t_c = pi / omega_d does not. For eps_n = 0,
+eps_t = 0.8 and zeta_t = 0 it gives theta = acos(0.8) and kappa = 0.1035 f_t, close to the
+0.05 that the textbook mapping gives for a rolling sphere. For Hertz the tangent stiffness S_n
+takes the place of k_n.
+
+**Limits of the construction.** It holds for impacts that stick. An impact whose tangential
+velocity is large against the normal one slides for part of the contact, and Coulomb friction
+then takes at most mu (1 + eps_n) v_n from v_t: no tangential law that respects Coulomb can give
+less than eps_t = 1 - mu (1 + eps_n) v_n / v_t there. The formula is the starting point; the
+virtual impacts of :mod:`dem.calibrate` measure what a grain actually does over the impact
+angles of conveying, rotation and the Coulomb cap included.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def unit_response(s: np.ndarray, zeta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Displacement X and velocity V of x'' + 2 zeta x' + x = 0, x(0) = 0, x'(0) = 1, at s."""
+    s = np.asarray(s, dtype=float)
+    if zeta < 1.0:
+        w = math.sqrt(1.0 - zeta * zeta)
+        e = np.exp(-zeta * s)
+        return e * np.sin(w * s) / w, e * (np.cos(w * s) - zeta / w * np.sin(w * s))
+    if zeta == 1.0:
+        e = np.exp(-s)
+        return s * e, (1.0 - s) * e
+    root = math.sqrt(zeta * zeta - 1.0)
+    r1, r2 = -zeta + root, -zeta - root
+    e1, e2 = np.exp(r1 * s), np.exp(r2 * s)
+    return (e1 - e2) / (r1 - r2), (r1 * e1 - r2 * e2) / (r1 - r2)
+
+
+def _first_crossing(f, start: float, level: float) -> float:
+    """First s > 0 where f(s) (starting above ``level``) falls to ``level``; f vectorised."""
+    hi = start
+    while True:
+        s = np.linspace(0.0, hi, 4001)
+        below = np.nonzero(f(s) <= level)[0]
+        if below.size:
+            lo, hi = s[below[0] - 1], s[below[0]]
+            break
+        hi *= 2.0
+        if hi > 1e6:
+            raise ValueError(f"no crossing of {level} found")
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if f(np.array([mid]))[0] <= level:
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
+
+
+def impact_end_time(zeta_n: float) -> float:
+    """omega_n t_e: first zero of the normal force x + 2 zeta_n x' of a unit-velocity impact.
+
+    Linear spring-dashpot, no gravity: 2 for critical damping (zeta_n = 1), pi - ... below it.
+    """
+    if zeta_n < 0.0:
+        raise ValueError(f"zeta_n must be >= 0, got {zeta_n}")
+    if zeta_n == 0.0:
+        return math.pi
+
+    def force(s):
+        x, v = unit_response(s, zeta_n)
+        return x + 2.0 * zeta_n * v
+
+    return _first_crossing(force, 4.0, 0.0)
+
+
+def tangential_stiffness_ratio(
+    eps_t: float, zeta_n: float, zeta_t: float, mass_factor: float
+) -> float:
+    """Return kappa = k_t / k_n that gives eps_t in a sticking impact (module docstring).
+
+    Args:
+        eps_t: Target centre-of-mass tangential restitution, 0 <= eps_t < 1.
+        zeta_n: Normal damping ratio -beta(eps_n) (1 for eps_n = 0).
+        zeta_t: Tangential damping ratio, >= 0.
+        mass_factor: f_t, tangential effective mass over m*.
+
+    """
+    if not 0.0 <= eps_t < 1.0:
+        raise ValueError(f"eps_t must lie in [0, 1), got {eps_t}")
+    theta = _first_crossing(lambda s: unit_response(s, zeta_t)[1], 4.0, eps_t)
+    return mass_factor * (theta / impact_end_time(zeta_n)) ** 2
+
+
+def sticking_restitution(kappa: float, zeta_n: float, zeta_t: float, mass_factor: float) -> float:
+    """eps_t of a sticking impact for kappa = k_t / k_n (the inverse of the mapping above)."""
+    theta = math.sqrt(kappa / mass_factor) * impact_end_time(zeta_n)
+    return float(unit_response(np.array([theta]), zeta_t)[1][0])
+
+
+def tangential_mass_factor(shape: str, rotation: bool, template=None) -> float:
+    """f_t: the tangential effective mass of a contact over its m*.
+
+    A solid sphere that rolls: 2/7 (the contact point of a sphere pushed tangentially moves as a
+    mass 2/7 m). Rotation locked: 1. A clump that rotates: its contact mass over its mass
+    (:meth:`dem.shapes.Template.contact_mass`: the smallest effective mass of any surface point).
+    """
+    if not rotation:
+        return 1.0
+    if shape == "sphere":
+        return 2.0 / 7.0
+    return float(template.contact_mass() / template.mass)
