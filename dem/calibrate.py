@@ -96,6 +96,21 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
         case, x0, orientations=None if q is None else q[None, :], velocities=v0[None, :],
         impact_speed=speed,
     )  # fmt: skip
+    return measure_impact(sim, max_steps=max_steps)
+
+
+def measure_impact(sim, *, max_steps: int = 200_000) -> Impact:
+    """Run one grain's impact on the floor (gravity and drive off) and measure it.
+
+    ``sim`` holds one grain (a sphere or a clump) just above the floor, moving towards it; its
+    velocity now is "before". Raises RuntimeError if the impact has not ended in ``max_steps``.
+    """
+    def velocity():
+        return (sim.bodies.v if sim.bodies is not None else sim.spheres.v)[0].copy()
+
+    v0 = velocity()
+    speed = float(np.linalg.norm(v0))
+    incidence = math.degrees(math.atan2(abs(v0[0]), -v0[2]))
     sim.gravity[:] = 0.0
     sim.drive_on = False
     sim.compute_forces()
@@ -103,7 +118,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     for step in range(max_steps):
         sim.run(1)
         fz = float(np.sum(sim.spheres.force[:, 2]))
-        v = sim.bodies.v[0] if sim.bodies is not None else sim.spheres.v[0]
+        v = velocity()
         if touched < 0:
             if fz > 0.0:
                 touched = step

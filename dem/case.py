@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from dem import tangential
 from dem.config import GRAVITY
 from dem.errors import InputError
 
@@ -679,21 +680,19 @@ def load_case(path: str | Path) -> Case:
     drive = _read_drive(table("drive"), trough.inclination)
     material = _read_material(table("material"))
     contact = _read_contact(table("contact"))
-    if (
-        contact.tangential == "coulomb"
-        and contact.tangential_stiffness_ratio is None
-        and material.restitution_tangential >= 1.0
-    ):
-        raise table("material").error(
-            "restitution_tangential",
-            material.restitution_tangential,
-            "0 <= value < 1 when contact.tangential = 'coulomb' derives the tangential spring "
-            "from it (eps_t = 1 means no spring, hence no static friction); or give "
-            "contact.tangential_stiffness_ratio",
-        )
     particles = _build_grain(
         _read_particles(table("particles")), material.density, table("particles")
     )
+    if contact.tangential == "coulomb":
+        try:
+            tangential.resolve(contact, material, particles)
+        except ValueError as exc:
+            raise table("material").error(
+                "restitution_tangential",
+                material.restitution_tangential,
+                f"{exc}, when contact.tangential = 'coulomb' derives the tangential spring from "
+                "it; or give contact.tangential_stiffness_ratio",
+            ) from None
     run = _read_run(table("run"))
     output = _read_output(table("output"))
 

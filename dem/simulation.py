@@ -72,20 +72,10 @@ class ContactLaw:
         sphere 2/7, rotation locked 1, a clump its contact mass over its mass) and an omitted
         ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
         """
-        c, m, pt = case.contact, case.material, case.particles
+        c, m = case.contact, case.material
         ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
         if c.tangential == "coulomb":
-            factor = tangential.tangential_mass_factor(pt.shape, pt.rotation, pt.grain)
-            zeta_t = c.tangential_damping_ratio
-            if zeta_t is None:
-                zeta_t = config.DEM_TANGENTIAL_DAMPING_RATIO
-            if ratio is None:
-                ratio = tangential.tangential_stiffness_ratio(
-                    m.restitution_tangential,
-                    -contacts.damping_beta(m.restitution_normal),
-                    zeta_t,
-                    factor,
-                )
+            ratio, zeta_t, factor = tangential.resolve(c, m, case.particles)
         return cls(
             model=c.model,
             params=contacts.make_params(

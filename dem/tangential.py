@@ -13,16 +13,21 @@ does after its instantaneous landing. So eps_t is defined, and measured by
 the tangential effective mass f_t m* (f_t: :func:`tangential_mass_factor`), with
 omega_t^2 = k_t / (f_t m*) and damping ratio zeta_t = gamma_t / (2 sqrt(k_t f_t m*)). An impact
 that sticks (tangential force below mu |F_n| throughout) starts the tangential oscillator with
-unit velocity, and eps_t is its velocity at the end of the impact t_e:
+unit slip velocity, the slip velocity at the end of the impact t_e is V(omega_t t_e; zeta_t),
+V(s; z) = d/ds of the unit-velocity response X(s; z) (V = exp(-z s) (cos(w s) - z / w sin(w s)),
+w = sqrt(1 - z^2), for z < 1), and the centre of mass takes the fraction f_t of that change:
 
-    eps_t = V(omega_t t_e; zeta_t),   V(s; z) = d/ds of the unit-velocity response X(s; z)
+    eps_t = 1 - f_t (1 - V(omega_t t_e; zeta_t)),
 
-(V = exp(-z s) (cos(w s) - z / w sin(w s)), w = sqrt(1 - z^2), for z < 1), and omega_n t_e is
-the first zero of the normal force of the linear law with damping ratio zeta_n = -beta(eps_n)
-(:func:`impact_end_time`; 2 for eps_n = 0). Solving for the first root theta of
-V(theta; zeta_t) = eps_t gives
+where omega_n t_e is the first zero of the normal force of the linear law with damping ratio
+zeta_n = -beta(eps_n) (:func:`impact_end_time`; 2 for eps_n = 0). Solving for the first root
+theta of V(theta; zeta_t) = 1 - (1 - eps_t) / f_t gives
 
     kappa = k_t / k_n = f_t (theta / (omega_n t_e))^2.
+
+With ``limit_force = true`` the grain leaves the floor at t_e and this is exact for an impact
+that sticks (tested); with ``limit_force = false`` the attractive tail of the damped contact keeps
+a weak contact a little longer, and the virtual impacts measure the difference.
 
 This is the construction of Pournin et al. (2001) and Deen et al. (2007) -- coded in MercuryDPM
 (``setCollisionTimeAndNormalAndTangentialRestitutionCoefficient``) and Yade, whose source notes
@@ -30,9 +35,8 @@ a factor-2 error in Pournin's damping -- with two changes: eps_t is the centre-o
 the paper (positive: the grain keeps moving forward) rather than the contact-point ratio of
 Walton's model (negative for the same impact), and the end of the impact is the zero of the
 normal force, which exists for eps_n = 0 where t_c = pi / omega_d does not. For eps_n = 0,
-eps_t = 0.8 and zeta_t = 0 it gives theta = acos(0.8) and kappa = 0.1035 f_t, close to the
-0.05 that the textbook mapping gives for a rolling sphere. For Hertz the tangent stiffness S_n
-takes the place of k_n.
+eps_t = 0.8 and a block (f_t = 1): kappa = 0.1035 with zeta_t = 0 (theta = acos 0.8) and 0.0216
+with the default zeta_t = 0.3. For Hertz the tangent stiffness S_n takes the place of k_n.
 
 **Limits of the construction.** It holds for impacts that stick. An impact whose tangential
 velocity is large against the normal one slides for part of the contact, and Coulomb friction
@@ -103,28 +107,75 @@ def impact_end_time(zeta_n: float) -> float:
     return _first_crossing(force, 4.0, 0.0)
 
 
+def minimum_velocity(zeta_t: float) -> float:
+    """Smallest V(s; zeta_t) over s > 0: how far a sticking impact can reverse the slip."""
+    if zeta_t >= 1.0:
+        return 0.0
+    w = math.sqrt(1.0 - zeta_t * zeta_t)
+    return -math.exp(-zeta_t * math.pi / w)
+
+
+def reachable_restitution(zeta_t: float, mass_factor: float) -> float:
+    """Smallest centre-of-mass eps_t a sticking impact reaches: 1 - f_t (1 - min V)."""
+    return 1.0 - mass_factor * (1.0 - minimum_velocity(zeta_t))
+
+
 def tangential_stiffness_ratio(
     eps_t: float, zeta_n: float, zeta_t: float, mass_factor: float
 ) -> float:
     """Return kappa = k_t / k_n that gives eps_t in a sticking impact (module docstring).
 
+    The slip velocity of the contact point follows V(omega_t t; zeta_t); the centre of mass
+    takes the fraction f_t of its change (a rolling sphere's centre loses 2/7 of what its contact
+    point loses), so eps_t = 1 - f_t (1 - V) and the target of V is 1 - (1 - eps_t) / f_t.
+
     Args:
-        eps_t: Target centre-of-mass tangential restitution, 0 <= eps_t < 1.
+        eps_t: Target centre-of-mass tangential restitution, below 1 and at least
+            :func:`reachable_restitution`.
         zeta_n: Normal damping ratio -beta(eps_n) (1 for eps_n = 0).
         zeta_t: Tangential damping ratio, >= 0.
-        mass_factor: f_t, tangential effective mass over m*.
+        mass_factor: f_t, tangential effective mass over m*, in (0, 1].
+
+    Raises:
+        ValueError: eps_t is out of reach (the message gives the reachable range).
 
     """
-    if not 0.0 <= eps_t < 1.0:
-        raise ValueError(f"eps_t must lie in [0, 1), got {eps_t}")
-    theta = _first_crossing(lambda s: unit_response(s, zeta_t)[1], 4.0, eps_t)
+    lowest = reachable_restitution(zeta_t, mass_factor)
+    if not lowest < eps_t < 1.0:
+        raise ValueError(
+            f"{lowest:.4g} < eps_t < 1 for a grain of tangential mass factor {mass_factor:.4g} "
+            f"with tangential damping ratio {zeta_t:g} (a sticking impact cannot take more)"
+        )
+    level = 1.0 - (1.0 - eps_t) / mass_factor
+    theta = _first_crossing(lambda s: unit_response(s, zeta_t)[1], 4.0, level)
     return mass_factor * (theta / impact_end_time(zeta_n)) ** 2
 
 
 def sticking_restitution(kappa: float, zeta_n: float, zeta_t: float, mass_factor: float) -> float:
-    """eps_t of a sticking impact for kappa = k_t / k_n (the inverse of the mapping above)."""
+    """eps_t = 1 - f_t (1 - V(theta)) of a sticking impact (the inverse of the mapping above)."""
     theta = math.sqrt(kappa / mass_factor) * impact_end_time(zeta_n)
-    return float(unit_response(np.array([theta]), zeta_t)[1][0])
+    return 1.0 - mass_factor * (1.0 - float(unit_response(np.array([theta]), zeta_t)[1][0]))
+
+
+def resolve(contact, material, particles) -> tuple[float, float, float]:
+    """(kappa, zeta_t, f_t) of a case's ``"coulomb"`` contact: given values, else derived.
+
+    Raises:
+        ValueError: eps_t is out of reach of the derivation (see above).
+
+    """
+    from dem.config import DEM_TANGENTIAL_DAMPING_RATIO
+    from dem.kernels.contacts import damping_beta
+
+    f_t = tangential_mass_factor(particles.shape, particles.rotation, particles.grain)
+    zeta_t = contact.tangential_damping_ratio
+    if zeta_t is None:
+        zeta_t = DEM_TANGENTIAL_DAMPING_RATIO
+    kappa = contact.tangential_stiffness_ratio
+    if kappa is None:
+        zeta_n = -damping_beta(material.restitution_normal)
+        kappa = tangential_stiffness_ratio(material.restitution_tangential, zeta_n, zeta_t, f_t)
+    return kappa, zeta_t, f_t
 
 
 def tangential_mass_factor(shape: str, rotation: bool, template=None) -> float:

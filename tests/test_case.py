@@ -349,7 +349,7 @@ BAD = [
         "et-1-derives-no-spring",
         {"material.restitution_tangential": 1.0},
         "material.restitution_tangential",
-        "0 <= value < 1",
+        "< eps_t < 1",
     ),
     ("radius-with-screw", {"particles.shape": "screw"}, "particles.radius", "shape = 'sphere'"),
     ("timestep-word", {"run.timestep": "fast"}, "run.timestep", '"auto"'),

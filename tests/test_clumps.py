@@ -198,10 +198,16 @@ frames_per_cycle = 2
 
 @pytest.mark.parametrize("gamma", [0.4, 0.9])
 def test_sliding_screw_matches_point_mass(tmp_path, gamma):
-    """A single screw, rotation locked, in the sliding regime: within 3 % of the point mass."""
+    """A single screw, rotation locked, in the sliding regime: within 3 % of the point mass.
+
+    With the tangential spring derived from eps_t = 0.8 (k_t / k_n = 0.0216) the error falls as
+    k_n^-1/2: measured -5.8 / -6.3 % at k_n = 1e6 (Gamma 0.4 / 0.9), -2.6 / -2.4 % at 4e6,
+    -1.2 / -0.5 % at 1.6e7 (with k_t = 2/7 k_n: -1.3 / -0.6 % at 1e6). A 2.5 g screw on two
+    contacts needs a stiffer spring than a 0.26 g sphere on one for the same tangential frequency.
+    """
     text = SCREW_CASE.format(
-        length=0.04, width=0.03, gamma=gamma, eps_n=0.5, model="linear",
-        contact="stiffness = 1.0e6", count=1, rotation="false", settle=4, cycles=4,
+        length=0.04, width=0.03, gamma=gamma, eps_n=0.0, model="linear",
+        contact="stiffness = 1.6e7", count=1, rotation="false", settle=4, cycles=4,
     )  # fmt: skip
     case = load_case(write_case(tmp_path / "case", text))
     summary = run_case(case, tmp_path / "out", progress=False, frames=False)

@@ -178,3 +178,30 @@ def test_hertz_head_on_restitution_follows_liggghts_beta(e):
     t_h = contacts.hertz_collision_time(youngs / (2 * (1 - nu**2)), radius / 2, m_eff, speed)
     e_sim, _ = _head_on(law, radius, density, speed, t_h / 2000)
     assert e_sim == pytest.approx(e, abs=5e-3)
+
+
+@pytest.mark.parametrize("model", ["linear", "hertz_mindlin"])
+def test_coulomb_convention_never_exceeds_the_friction_limit(model):
+    """'coulomb' caps spring plus dashpot at mu |F_n|; 'liggghts' caps the spring alone, so a
+    damped sticking contact can transmit more (the reason the default changed)."""
+    rng = np.random.default_rng(3)
+    worst = {}
+    for tangential in ("coulomb", "liggghts"):
+        c = _coefficients(model, 0.0, 0.3, 0.0, False, tangential)
+        p = _law(model, c).params
+        ratio = 0.0
+        for _ in range(2000):
+            n = rng.normal(size=3)
+            n /= np.linalg.norm(n)
+            hist = rng.normal(0, 2e-6, (1, 3))
+            v = rng.normal(0, 0.05, 3)
+            f = contacts.contact_force(
+                contacts.MODELS[model], p, *n, rng.uniform(1e-6, 1e-4), *v, 0.0, 0.0, 0.0,
+                0.0, 0.0, 0.0, 1e-3, 1e-3, 1e-4, 1e-3, hist, 0, 1e-6,
+            )  # fmt: skip
+            force = np.array(f[:3])
+            ft = force - np.dot(force, n) * n
+            ratio = max(ratio, np.linalg.norm(ft) / (0.3 * abs(f[9])))
+        worst[tangential] = ratio
+    assert worst["coulomb"] <= 1.0 + 1e-12
+    assert worst["liggghts"] > 1.05
