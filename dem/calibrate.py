@@ -105,6 +105,7 @@ def measure_impact(sim, *, max_steps: int = 200_000) -> Impact:
     ``sim`` holds one grain (a sphere or a clump) just above the floor, moving towards it; its
     velocity now is "before". Raises RuntimeError if the impact has not ended in ``max_steps``.
     """
+
     def velocity():
         return (sim.bodies.v if sim.bodies is not None else sim.spheres.v)[0].copy()
 
@@ -291,8 +292,11 @@ def calibrate(
     target = case.material.restitution_tangential
     law = ContactLaw.from_case(case)
     zeta_t = float(law.params[contacts.P_ZETA_T])
-    kappa0 = float(law.params[contacts.P_KT_RATIO])
     impacts = landings(case)
+    if impacts.shape[0]:
+        # a periodic orbit lands the same way every cycle: measure each distinct landing once
+        key = np.column_stack([np.round(impacts[:, 0], 1), np.round(np.log(impacts[:, 1]), 3)])
+        impacts = impacts[np.unique(key, axis=0, return_index=True)[1]]
     if impacts.shape[0] == 0:
         speed = case.drive.amplitude * case.drive.omega
         impacts = np.column_stack([np.linspace(10.0, 70.0, 7), np.full(7, speed)])
@@ -334,11 +338,10 @@ def calibrate(
                 lo = mid
             else:
                 hi = mid
-            if hi / lo < 1.0 + 1e-3:
+            if hi / lo < 1.0 + 1e-3 or abs(e_mid - target) < 2e-4:
                 break
         best = math.sqrt(lo * hi)
     eps, e_t, e_n = mean_eps(best)
-    del kappa0
     return Calibration(
         target=target,
         kappa=best,

@@ -723,3 +723,23 @@ def load_case(path: str | Path) -> Case:
         run=run,
         output=output,
     )
+
+
+def set_contact_keys(path: Path, values: dict[str, float], comment: str) -> str:
+    """Return the text of the case file ``path`` with ``values`` set in its [contact] table.
+
+    Existing lines of those keys in the table are replaced; the new lines follow the table's
+    header with ``comment``; the rest of the file (comments, order) is kept. A missing
+    [contact] table is appended.
+    """
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    header = re.compile(r"^\s*\[\s*contact\s*\]\s*(#.*)?$")
+    any_header = re.compile(r"^\s*\[")
+    new = [f"{key} = {value!r}  # {comment}" for key, value in values.items()]
+    start = next((i for i, line in enumerate(lines) if header.match(line)), None)
+    if start is None:
+        return "\n".join([*lines, "", "[contact]", *new]) + "\n"
+    end = next((i for i in range(start + 1, len(lines)) if any_header.match(lines[i])), len(lines))
+    own = re.compile(r"^\s*(" + "|".join(map(re.escape, values)) + r")\s*=")
+    body = [line for line in lines[start + 1 : end] if not own.match(line)]
+    return "\n".join([*lines[: start + 1], *new, *body, *lines[end:]]) + "\n"

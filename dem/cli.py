@@ -333,6 +333,72 @@ def _cmd_export_liggghts(args) -> int:
     return 0
 
 
+def _cmd_calibrate(args) -> int:
+    import datetime
+    import os
+
+    from dem.calibrate import calibrate
+    from dem.case import CASE_FILE, load_case, set_contact_keys
+    from dem.plots import calibration_figure
+
+    case = load_case(args.case_dir)
+    source = case.directory / CASE_FILE
+    print(
+        f"dem calibrate {case.name}: eps_t target {case.material.restitution_tangential:g}, "
+        f"virtual impacts of one grain over the point mass's landings",
+        file=sys.stderr,
+    )
+
+    def progress(kappa, eps):
+        print(f"  k_t / k_n = {kappa:<10.4g} mean eps_t = {eps:.4f}", file=sys.stderr)
+
+    cal = calibrate(case, progress=progress)
+    theta = cal.impacts[:, 0]
+    print(f"impacts          {len(theta)}, incidence {theta.min():.1f}-{theta.max():.1f} deg")
+    print(f"before           mean eps_t = {cal.before.mean():.4f}")
+    print(f"after            k_t / k_n = {cal.kappa:.6g}, zeta_t = {cal.zeta_t:g}")
+    spread = f"{cal.eps_t:.4f} +- {cal.eps_t_spread:.4f}"
+    print(f"                 eps_t = {spread}, eps_n = {cal.eps_n:.4f}")
+    print(f"residual         {cal.residual:+.4f}")
+    if not cal.reachable:
+        print(
+            f"dem calibrate: eps_t = {cal.target:g} is out of reach of this contact over these "
+            f"impacts: the closest reachable is {cal.eps_t:.4f} (Coulomb friction bounds what a "
+            "sliding impact can take; see the plot)",
+            file=sys.stderr,
+        )
+    plot = Path(args.plot) if args.plot else case.directory / "output" / "calibration.png"
+    plot.parent.mkdir(parents=True, exist_ok=True)
+    calibration_figure(cal, case.material.friction, plot)
+    print(f"wrote {plot}")
+    if args.dry_run:
+        print("dry run: case.toml unchanged")
+        return 0 if cal.reachable else 1
+    stamp = datetime.date.today().isoformat()
+    text = set_contact_keys(
+        source,
+        {
+            "tangential_stiffness_ratio": float(f"{cal.kappa:.6g}"),
+            "tangential_damping_ratio": cal.zeta_t,
+        },
+        f"dem calibrate {stamp}: eps_t {cal.eps_t:.3f} for {cal.target:g}",
+    )
+    original = source.with_name(CASE_FILE + ".orig")
+    if not original.exists():
+        original.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+        print(f"kept the previous file as {original}")
+    tmp = source.with_name(CASE_FILE + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    try:
+        load_case(tmp)  # never replace a case with one that does not load
+    except InputError:
+        tmp.unlink()
+        raise
+    os.replace(tmp, source)
+    print(f"wrote {source} ([contact] tangential_stiffness_ratio, tangential_damping_ratio)")
+    return 0 if cal.reachable else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full ``dem`` argument parser."""
     parser = _Parser(
@@ -356,6 +422,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--lab-frame", action="store_true", help="VTK frames in the lab frame (trough shakes)"
     )
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser(
+        "calibrate", help="fit the tangential contact to eps_t by virtual impacts (writes case)"
+    )
+    p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument("--dry-run", action="store_true", help="print and plot, change nothing")
+    p.add_argument("--plot", help="eps_t figure (default CASE_DIR/output/calibration.png)")
+    p.set_defaults(func=_cmd_calibrate)
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")
     p.add_argument("out_dirs", nargs="+", help="run output folders (holding summary.json)")

@@ -208,3 +208,36 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
         capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d2"), "--timestep", "-1"
     )
     assert code == 2 and "timestep" in err
+
+
+def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
+    import shutil
+
+    from dem.case import load_case
+
+    case_dir = tmp_path / "one"
+    shutil.copytree("cases/single-sphere", case_dir)
+    toml = case_dir / "case.toml"
+    toml.write_text(toml.read_text().replace("throw_number = 0.6", "throw_number = 1.8"))
+    before = toml.read_text()
+    plot = tmp_path / "cal.png"
+    assert main(["calibrate", str(case_dir), "--dry-run", "--plot", str(plot)]) == 0
+    assert toml.read_text() == before and plot.stat().st_size > 0
+    assert not (case_dir / "case.toml.orig").exists()
+    assert main(["calibrate", str(case_dir), "--plot", str(plot)]) == 0
+    assert (case_dir / "case.toml.orig").read_text() == before
+    contact = load_case(case_dir).contact
+    assert 0.015 < contact.tangential_stiffness_ratio < 0.025  # eps_t 0.8 at the 34 deg landing
+    assert contact.tangential_damping_ratio == 0.3
+    assert "# N/m" in toml.read_text()  # the rest of the file, comments included, is kept
+
+
+def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):
+    import shutil
+
+    case_dir = tmp_path / "one"
+    shutil.copytree("cases/single-sphere", case_dir)
+    toml = case_dir / "case.toml"
+    toml.write_text(toml.read_text().replace('tangential = "coulomb"', 'tangential = "liggghts"'))
+    assert main(["calibrate", str(case_dir)]) == 2
+    assert "contact.tangential" in capsys.readouterr().err
