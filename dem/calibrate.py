@@ -224,6 +224,8 @@ class Calibration:
         impacts: (incidence deg, speed m/s) of the impacts measured, (L, 2).
         before: eps_t per impact with the case's contact as given, (L,).
         after: eps_t per impact at the fitted kappa, (L,).
+        fan: Incidences 5-85 deg at the mean impact speed, (F,), deg.
+        fan_before, fan_after: eps_t over ``fan`` before and after, (F,).
 
     """
 
@@ -238,6 +240,9 @@ class Calibration:
     impacts: np.ndarray
     before: np.ndarray
     after: np.ndarray
+    fan: np.ndarray
+    fan_before: np.ndarray
+    fan_after: np.ndarray
 
 
 def _with_tangential(case, kappa: float, zeta_t: float):
@@ -332,16 +337,19 @@ def calibrate(
         best = hi
     else:
         for _ in range(30):
-            mid = math.sqrt(lo * hi)
-            e_mid = mean_eps(mid)[0]
-            if e_mid > target:
-                lo = mid
-            else:
-                hi = mid
-            if hi / lo < 1.0 + 1e-3 or abs(e_mid - target) < 2e-4:
+            best = math.sqrt(lo * hi)
+            e_mid = mean_eps(best)[0]
+            if abs(e_mid - target) < 2e-4 or hi / lo < 1.0 + 1e-3:
                 break
-        best = math.sqrt(lo * hi)
+            if e_mid > target:
+                lo = best
+            else:
+                hi = best
     eps, e_t, e_n = mean_eps(best)
+    fan = np.arange(5.0, 86.0, 10.0)
+    fan_impacts = np.column_stack([fan, np.full(fan.size, np.mean(impacts[:, 1]))])
+    fan_before = _measure(case, fan_impacts, quats)[0].mean(axis=1)
+    fan_after = _measure(_with_tangential(case, best, zeta_t), fan_impacts, quats)[0].mean(axis=1)
     return Calibration(
         target=target,
         kappa=best,
@@ -354,4 +362,7 @@ def calibrate(
         impacts=impacts,
         before=before,
         after=e_t.mean(axis=1),
+        fan=fan,
+        fan_before=fan_before,
+        fan_after=fan_after,
     )

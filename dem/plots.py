@@ -205,15 +205,17 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
 
     theta = cal.impacts[:, 0]
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-    ax.plot(theta, cal.before, "o", mfc="none", color="C7", label="before (case as given)")
-    ax.plot(theta, cal.after, "o", color="C0", label=f"after (k_t / k_n = {cal.kappa:.4g})")
+    ax.plot(cal.fan, cal.fan_before, "-", color="C7", lw=1, label="before (case as given)")
+    ax.plot(cal.fan, cal.fan_after, "-", color="C0", label=f"after (k_t / k_n = {cal.kappa:.4g})")
+    ax.plot(theta, cal.before, "o", mfc="none", color="C7", ms=7)
+    ax.plot(theta, cal.after, "o", color="C0", label="landings of the point mass")
     ax.axhline(cal.target, color="C3", lw=1, label=f"target eps_t = {cal.target:g}")
-    grid = np.linspace(max(1.0, theta.min() - 5), min(89.0, theta.max() + 5), 200)
+    grid = np.linspace(5.0, 89.0, 200)
     bound = 1.0 - friction / np.tan(np.radians(grid))
     ax.plot(grid, bound, "--", color="C2", lw=1, label="Coulomb bound 1 - mu cot(theta)")
     ax.set_xlabel("incidence theta (deg from the floor normal)")
     ax.set_ylabel("eps_t (centre of mass, after / before)")
-    ax.set_ylim(min(0.0, cal.before.min(), cal.after.min()) - 0.05, 1.05)
+    ax.set_ylim(min(0.0, cal.fan_before.min(), cal.fan_after.min()) - 0.05, 1.05)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(
