@@ -21,7 +21,6 @@ the chunk boundaries are the same.
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import signal
@@ -282,8 +281,7 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
 
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
     """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums."""
-    total_mass = sim.total_mass
-    velocity = float(sim.stats[0] / (sim.stats[1] * total_mass)) if sim.stats[1] else math.nan
+    velocity = sim.cycle_velocity()
     measured = loop["cycle"] >= case.run.settle_cycles
     if measured:
         loop["per_cycle"].append(velocity)

@@ -452,6 +452,16 @@ class Simulation:
             "material.restitution_normal damping (lower eps_n) or check the contact stiffness"
         )
 
+    def cycle_velocity(self) -> float:
+        """Mass-weighted mean x-velocity over the steps since ``stats`` was last zeroed, m/s.
+
+        The step loop sums the grains' x-momentum after every step into ``stats``; nan if no step
+        was taken.
+        """
+        if not self.stats[1]:
+            return math.nan
+        return float(self.stats[0] / (self.stats[1] * self.total_mass))
+
     def mean_velocity_x(self) -> float:
         """Mass-weighted mean x-velocity now (trough frame), m/s."""
         if self.bodies is not None:
@@ -650,6 +660,29 @@ class Simulation:
         sim.fill_height = float(np.max(positions[:, 2])) if n else 0.0
         sim.timestep_limit = limit
         return sim
+
+
+def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> np.ndarray:
+    """Per-cycle mean conveying velocities of whole drive cycles, (cycles,), m/s.
+
+    Switches the drive on (phase 0) if it is off, runs ``settle_cycles`` unmeasured cycles,
+    then ``cycles`` measured ones, each ending on a whole number of drive periods since the
+    drive started (as ``dem run`` does, without writers). DESIGN.md section 3 defines the
+    velocity: :meth:`Simulation.cycle_velocity` of each cycle.
+    """
+    if not sim.drive_on:
+        sim.start_drive()
+    period = sim.trough.period
+    first = int(round((sim.step_index - sim.drive_start_step) * sim.dt / period))
+    out = np.empty(int(cycles))
+    for c in range(first, first + settle_cycles + cycles):
+        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
+        sim.stats[:] = 0.0
+        sim.run(end - sim.step_index)
+        if c >= first + settle_cycles:
+            out[c - first - settle_cycles] = sim.cycle_velocity()
+    sim.stats[:] = 0.0
+    return out
 
 
 def _check_buildable(case) -> None:
