@@ -256,6 +256,30 @@ class Case:
         )
         return replace(self, drive=drive)
 
+    def with_tangential(self, tangential: str) -> Case:
+        """The case under another tangential convention, with the keys that one refuses cleared.
+
+        ``"liggghts"`` makes a dem run equivalent to the case's exported LIGGGHTS deck: Hertz
+        takes Mindlin's k_t, linear keeps its k_t / k_n (2/7 if it was derived from eps_t).
+        """
+        if tangential not in TANGENTIAL_CONVENTIONS:
+            raise ValueError(f"tangential must be one of {TANGENTIAL_CONVENTIONS}")
+        c = self.contact
+        ratio = c.tangential_stiffness_ratio
+        if tangential == "liggghts":
+            if c.model == "hertz_mindlin":
+                ratio = None
+            elif ratio is None:
+                ratio = DEFAULT_TANGENTIAL_STIFFNESS_RATIO
+        damping = None if tangential == "liggghts" else c.tangential_damping_ratio
+        contact = replace(
+            c,
+            tangential=tangential,
+            tangential_stiffness_ratio=ratio,
+            tangential_damping_ratio=damping,
+        )
+        return replace(self, contact=contact)
+
     def as_dict(self) -> dict[str, Any]:
         """Return the resolved case as plain data (paths as strings; None kept), for output."""
 

@@ -434,3 +434,14 @@ def test_with_drive_keeps_the_given_quantity_and_recomputes_the_other():
         4e-4 * w2 * math.sin(math.radians(40.0)) / GRAVITY, rel=1e-14
     )
     assert case.drive.angle == 25.0  # frozen: the original is untouched
+
+
+def test_with_tangential_gives_the_deck_equivalent_case():
+    hertz = load_case(CASES_DIR / "sphere-bed").with_tangential("liggghts")
+    assert hertz.contact.tangential == "liggghts"
+    assert hertz.contact.tangential_stiffness_ratio is None
+    assert hertz.contact.tangential_damping_ratio is None
+    linear = load_case(CASES_DIR / "single-sphere").with_tangential("liggghts")
+    assert linear.contact.tangential_stiffness_ratio == pytest.approx(2 / 7)
+    with pytest.raises(ValueError):
+        linear.with_tangential("mindlin")

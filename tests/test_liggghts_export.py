@@ -255,3 +255,11 @@ def test_screw_deck_neighbour_skin_and_linear_damping_use_clump_values(tmp_path)
     zeta, m = damping_ratio(0.3), case.particles.grain.mass
     gn = [float(v) for v in fix(c, "m_gn")[6:]]
     assert gn == pytest.approx([2 * zeta * math.sqrt(2.0e4 * mm) for mm in (m / 2, m, m, m)])
+
+
+def test_coulomb_case_deck_says_liggghts_caps_the_spring_alone(tmp_path):
+    case = load_case(CASES_DIR / "single-sphere")
+    text = write_deck(case, tmp_path / "c", timestep=2e-6, steps=10).read_text()
+    assert "NOTE: the case caps the total tangential force" in text
+    text = write_deck(case.with_tangential("liggghts"), tmp_path / "l", timestep=2e-6, steps=10)
+    assert "NOTE: the case caps" not in text.read_text()

@@ -69,7 +69,7 @@ POINTMASS_EPS_T, POINTMASS_EPS_N = 0.8, 0.0
 def make_case(base, angle: float, args):
     """The base case at vibration angle ``angle`` (fixed amplitude) with the comparison settings."""
     return dataclasses.replace(
-        base.with_drive(angle=angle, amplitude=base.drive.amplitude),
+        base.with_drive(angle=angle, amplitude=base.drive.amplitude).with_tangential("liggghts"),
         material=dataclasses.replace(base.material, restitution_normal=RESTITUTION),
         run=dataclasses.replace(
             base.run,

@@ -176,7 +176,7 @@ def bulk_cases() -> dict:
         dt = 1.0 / (base.drive.frequency * per_period)
         for seed, rotation in [(s, True) for s in BULK_SEEDS] + [(BULK_LOCKED_SEED, False)]:
             case = dataclasses.replace(
-                base,
+                base.with_tangential("liggghts"),
                 material=dataclasses.replace(base.material, restitution_normal=BULK_RESTITUTION),
                 particles=dataclasses.replace(base.particles, rotation=rotation),
                 run=dataclasses.replace(
@@ -328,7 +328,7 @@ def impact_case():
     """The screw case with e = 0.5 on a 0.06 m x 0.06 m periodic section (drive never on)."""
     base = load_case(CASE)
     return dataclasses.replace(
-        base,
+        base.with_tangential("liggghts"),
         material=dataclasses.replace(base.material, restitution_normal=IMPACT_RESTITUTION),
         trough=dataclasses.replace(base.trough, length=IMPACT_SECTION, width=IMPACT_SECTION),
     )

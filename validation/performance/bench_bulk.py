@@ -70,7 +70,7 @@ def wait_until_quiet(args) -> float | None:
 
 def bench_case(args):
     """The case with the benchmark's time step and settle length."""
-    case = load_case(args.case)
+    case = load_case(args.case).with_tangential("liggghts")  # the deck's convention
     run = dataclasses.replace(
         case.run, timestep=args.timestep, settle_cycles=args.settle_cycles, cycles=args.cycles
     )
@@ -174,7 +174,7 @@ import dataclasses, json, sys
 sys.path.insert(0, {root!r})
 from dem.case import load_case
 from dem.runner import run_case
-case = load_case({case!r})
+case = load_case({case!r}).with_tangential("liggghts")
 run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r})
 case = dataclasses.replace(case, run=run)
 run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
