@@ -29,7 +29,7 @@ def _sphere_case(
     )
 
 
-KN, MASS = 4.0e6, 7800.0 * 4 / 3 * math.pi * 0.002**3
+KN, MASS = 1.6e7, 7800.0 * 4 / 3 * math.pi * 0.002**3
 T_UNDAMPED = contacts.linear_collision_time(KN, MASS, 0.0)
 
 
