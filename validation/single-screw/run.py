@@ -2,7 +2,8 @@
 
 Regenerates results.csv and velocity.png in this folder:
 
-    .venv/bin/python validation/single-screw/run.py
+    .venv/bin/python validation/single-screw/run.py                          # eps_n = 0
+    .venv/bin/python validation/single-screw/run.py --tangential liggghts    # the recorded study
 
 One screw of cases/screw-trough (L = 22 mm, shank radius 1.8 mm, head radius 3.6 mm, 2.5 g: a
 rigid clump of 8 spheres) is laid along +x, the trough direction, with its head and its tip
@@ -11,7 +12,9 @@ twin of the paper's point mass. Below Gamma = 1 the point mass never leaves the 
 and eps_t do not enter it; a locked block that slides on both contacts feels
 sum_i mu N_i = mu N, so its centre of mass must follow the point mass. Swept over phi in
 {15, 25, 45} deg, mu in {0.25, 0.35, 0.6} and Gamma in [0.2, 0.95], flat trough, 60 Hz, linear
-contact k_n = 4e7 N/m per member, eps_n = 0.5 (README.md says why).
+contact k_n = 4e7 N/m per member. ``--tangential``: "coulomb" (default; eps_n = 0 as the paper,
+k_t / k_n derived from eps_t = 0.8, dem.tangential) or "liggghts" (k_t = 2/7 k_n, eps_n = 0.5:
+the law and contact the recorded results.csv were made with; README.md says why).
 
 Each point is run again with rotation free from the same lying start (column
 dem_velocity_norm_free_rotation; not part of the criterion, which is the locked block's).
@@ -19,14 +22,13 @@ dem_velocity_norm_free_rotation; not part of the criterion, which is the locked 
 Time step: the engine's own rule (dem.simulation.timestep_limits: 1/50 of the linear collision
 time, within the stability limit) applied to the effective mass a floor contact of the lying
 screw actually has: M with rotation locked, 1 / max_n (1/M + (p x n) . I^-1 (p x n)) with it free.
-Simulation.from_case's automatic step (``--timestep auto``) bounds that mass for any pose:
-the results were made when that bound was 1 / (1/M + |d_max|^2 / I_min), 42 times smaller than M
-(the README compares the two); it is now M with rotation locked and
-dem.shapes.Template.contact_mass (0.37 g for this screw) with it free.
+Simulation.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
+locked, dem.shapes.Template.contact_mass (0.37 g) free (README.md: the bound of the recording).
 
-Settling: after ``--min-settle-cycles`` driven cycles the run measures as soon as one cycle's
-mean velocity differs from the previous one by less than ``--periodic-tol`` (normalised), at most
-after ``--max-settle-cycles``; then ``--cycles`` cycles are measured.
+The screw is placed by Simulation.from_grains and measured cycle by cycle by
+dem.simulation.measure_cycles. Settling: after ``--min-settle-cycles`` driven cycles the run
+measures as soon as one cycle's mean velocity differs from the previous one by less than
+``--periodic-tol`` (normalised), at most after ``--max-settle-cycles``; then ``--cycles`` cycles.
 """
 
 import argparse
@@ -42,8 +44,8 @@ import numpy as np
 from dem import measure, pointmass
 from dem.case import load_case
 from dem.kernels.rigid import quat_to_matrix
-from dem.simulation import Simulation, timestep_limits
-from dem.state import Bodies
+from dem.simulation import ContactLaw, Simulation, measure_cycles, timestep_limits
+from dem.trough import Trough
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -51,23 +53,24 @@ ANGLES = (15.0, 25.0, 45.0)
 FRICTIONS = (0.25, 0.35, 0.6)
 THROW_NUMBERS = tuple(np.round(np.linspace(0.2, 0.95, 7), 4))
 STIFFNESS = 4.0e7
-RESTITUTION_NORMAL = 0.5
+RESTITUTION_NORMAL = {"coulomb": 0.0, "liggghts": 0.5}  # the paper's; the recorded study's
 RESTING = 0.02  # |v_pm| below this (normalised): the point mass rests, no relative error
 
 
-def make_case(base, angle, friction, throw_number, stiffness, restitution_normal, rotation):
-    """cases/screw-trough at (phi, mu, Gamma) with one screw and the validation contact."""
-    return dataclasses.replace(
+def make_case(base, angle, friction, throw_number, args, rotation):
+    """cases/screw-trough at (phi, mu, Gamma), one screw, the validation contact and law."""
+    case = dataclasses.replace(
         base.with_drive(angle=angle, throw_number=throw_number),
         material=dataclasses.replace(
-            base.material, friction=friction, restitution_normal=restitution_normal
+            base.material, friction=friction, restitution_normal=args.restitution_normal
         ),
         contact=dataclasses.replace(
-            base.contact, model="linear", stiffness=stiffness, youngs_modulus=None
+            base.contact, model="linear", stiffness=args.stiffness, youngs_modulus=None
         ),
         particles=dataclasses.replace(base.particles, count=1, rotation=rotation),
         run=dataclasses.replace(base.run, timestep=None),
     )
+    return case.with_tangential(args.tangential)  # linear: liggghts k_t = 2/7 k_n
 
 
 def lying_pose(template):
@@ -123,41 +126,37 @@ def floor_contact_mass(template, q, rotation):
 
 
 def lying_simulation(case, timestep="contact"):
-    """One screw laid by lying_pose at mid length, y = 0, at rest.
+    """One screw laid by lying_pose at mid length, y = 0, at rest (Simulation.from_grains).
 
-    Simulation.from_case supplies the trough, the contact law and (``timestep="auto"``) its
-    automatic time step. ``"contact"``: the same rule at the floor contact's actual effective
-    mass (floor_contact_mass), shortened to a whole number of steps per drive period, and
-    checked by from_case against its own stability limit (it refuses a step above it).
+    ``"auto"``: from_grains' automatic step. ``"contact"``: the same rule (timestep_limits) at
+    the floor contact's actual effective mass (floor_contact_mass), shortened to a whole number
+    of steps per drive period (a linear law's step ignores the impact speed); from_grains
+    refuses it above its stability limit.
     """
     template = case.particles.grain
     q, z = lying_pose(template)
-    filled = Simulation.from_case(case)
+    dt = None
     if timestep == "contact":
         mass = floor_contact_mass(template, q, case.particles.rotation)
+        trough = Trough.from_case(case)
         auto, _ = timestep_limits(
-            filled.law, float(template.radii.min()), template.density, filled.reference_speed,
-            rotation=case.particles.rotation, pairs=False, mass=mass,
+            ContactLaw.from_case(case), float(template.radii.min()), template.density,
+            trough.drive_speed, rotation=case.particles.rotation, pairs=False, mass=mass,
         )  # fmt: skip
-        period = filled.trough.period
-        filled = Simulation.from_case(case, timestep=period / math.ceil(period / auto))
-    bodies, spheres = Bodies.create(template, [[0.5 * case.trough.length, 0.0, z]], [q])
-    sim = Simulation(
-        spheres, filled.trough, filled.law, filled.dt, rotation=case.particles.rotation,
-        reference_speed=filled.reference_speed, bodies=bodies,
-    )  # fmt: skip
-    sim.timestep_limit = filled.timestep_limit
-    return sim
+        dt = trough.period / math.ceil(trough.period / auto)
+    return Simulation.from_grains(
+        case, [[0.5 * case.trough.length, 0.0, z]], orientations=[q], timestep=dt
+    )
 
 
 def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
     """Settle with the drive off, switch it on at phase 0, wait for periodicity, measure.
 
-    As dem.runner.run_case: cycle c ends at step drive_start + round((c + 1) T / dt), and its
-    mean x-velocity is the step loop's momentum sum over the cycle, sum_n M V_x / (steps M).
-    Driven cycles are discarded until at least ``min_settle`` have run and the last one changed
-    by less than ``tol`` A omega cos phi (or ``max_settle`` have run); the next ``cycles`` are
-    measured (dem.measure.conveying_velocity: mean and standard error of the per-cycle means).
+    Each cycle is one call of dem.simulation.measure_cycles (whole drive cycles from phase 0,
+    as ``dem run`` measures; the first call switches the drive on). Driven cycles are discarded
+    until at least ``min_settle`` have run and the last one changed by less than ``tol``
+    A omega cos phi (or ``max_settle`` have run); the next ``cycles`` are measured
+    (dem.measure.conveying_velocity: mean and standard error of the per-cycle means).
 
     Returns:
         (VelocityStatistics, settling cycles, largest tilt of the screw axis from its start
@@ -165,17 +164,13 @@ def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
 
     """
     sim.settle()
-    sim.start_drive()
     axis0 = quat_to_matrix(sim.bodies.q[0])[:, 0]
     y0 = float(sim.bodies.x[0, 1])
     scale = measure.drive_velocity_scale(case.drive.amplitude, case.drive.omega, case.drive.angle)
     per_cycle, tilt, drift, settle = [], 0.0, 0.0, None
     c = 0
     while settle is None or c < settle + cycles:
-        sim.stats[:] = 0.0
-        end = sim.drive_start_step + int(round((c + 1) * sim.trough.period / sim.dt))
-        sim.run(end - sim.step_index)
-        per_cycle.append(float(sim.stats[0] / (sim.stats[1] * sim.total_mass)))
+        per_cycle.append(float(measure_cycles(sim, 1)[0]))
         axis = quat_to_matrix(sim.bodies.q[0])[:, 0]
         turned = float(np.linalg.norm(np.cross(axis, axis0)))  # sine of the angle turned
         tilt = max(tilt, math.degrees(math.asin(min(1.0, turned))))
@@ -196,9 +191,7 @@ def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
 def run_point(base, angle, friction, gamma, args, rotation):
     """One DEM run; returns (statistics, settle cycles, tilt deg, drift m, dt s, wall s)."""
     t0 = time.perf_counter()
-    case = make_case(
-        base, angle, friction, gamma, args.stiffness, args.restitution_normal, rotation
-    )
+    case = make_case(base, angle, friction, gamma, args, rotation)
     sim = lying_simulation(case, args.timestep)
     stat, settle, tilt, drift = drive_and_measure(
         sim, case, args.min_settle_cycles, args.max_settle_cycles, args.periodic_tol, args.cycles
@@ -299,7 +292,14 @@ def main():
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--stiffness", type=float, default=STIFFNESS, help="k_n per member, N/m")
-    parser.add_argument("--restitution-normal", type=float, default=RESTITUTION_NORMAL)
+    parser.add_argument(
+        "--tangential", choices=("coulomb", "liggghts"), default="coulomb",
+        help="tangential law; liggghts (with eps_n = 0.5) is the recorded study's",
+    )  # fmt: skip
+    parser.add_argument(
+        "--restitution-normal", type=float, default=None,
+        help="eps_n; default 0 with coulomb (the paper's), 0.5 with liggghts (the recorded)",
+    )  # fmt: skip
     parser.add_argument("--timestep", choices=("contact", "auto"), default="contact")
     parser.add_argument("--min-settle-cycles", type=int, default=10)
     parser.add_argument("--max-settle-cycles", type=int, default=100)
@@ -311,6 +311,8 @@ def main():
     parser.add_argument("--no-free", dest="free", action="store_false", help="locked runs only")
     parser.add_argument("--out", default="results.csv", help="CSV name in this folder")
     args = parser.parse_args()
+    if args.restitution_normal is None:
+        args.restitution_normal = RESTITUTION_NORMAL[args.tangential]
     numba.set_num_threads(1)
     t0 = time.perf_counter()
     rows = sweep(args, HERE / args.out)
