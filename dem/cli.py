@@ -362,9 +362,10 @@ def _cmd_calibrate(args) -> int:
     print(f"residual         {cal.residual:+.4f}")
     if not cal.reachable:
         print(
-            f"dem calibrate: eps_t = {cal.target:g} is out of reach of this contact over these "
-            f"impacts: the closest reachable is {cal.eps_t:.4f} (Coulomb friction bounds what a "
-            "sliding impact can take; see the plot)",
+            f"dem calibrate: no k_t / k_n brings every impact within 0.02 of eps_t = "
+            f"{cal.target:g}: the closest fit gives {cal.after.min():.4f}-{cal.after.max():.4f} "
+            f"(mean {cal.eps_t:.4f}). A Coulomb contact's eps_t varies with incidence, and a "
+            "grazing impact cannot lose more than mu v_n (see the plot)",
             file=sys.stderr,
         )
     plot = Path(args.plot) if args.plot else case.directory / "output" / "calibration.png"

@@ -322,6 +322,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "inclination": case.trough.inclination,
         "friction": case.material.friction,
         "contact_model": case.contact.model,
+        **sim.law.tangential_coefficients(),
         "grains": sim.n_grains,
         "spheres": sim.spheres.n,
         "total_mass": total_mass,
