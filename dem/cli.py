@@ -355,10 +355,14 @@ def _cmd_calibrate(args) -> int:
     cal = calibrate(case, progress=progress)
     theta = cal.impacts[:, 0]
     print(f"impacts          {len(theta)}, incidence {theta.min():.1f}-{theta.max():.1f} deg")
-    print(f"before           mean eps_t = {cal.before.mean():.4f}")
+    print(
+        f"before           mean eps_t = {cal.before.mean():.4f}, weighted rms deviation "
+        f"{cal.deviation_before:.4f}"
+    )
     print(f"after            k_t / k_n = {cal.kappa:.6g}, zeta_t = {cal.zeta_t:g}")
     spread = f"{cal.eps_t:.4f} +- {cal.eps_t_spread:.4f}"
     print(f"                 eps_t = {spread}, eps_n = {cal.eps_n:.4f}")
+    print(f"                 weighted rms deviation {cal.deviation:.4f} (what the fit minimises)")
     print(f"residual         {cal.residual:+.4f}")
     if not cal.reachable:
         print(

@@ -220,7 +220,7 @@ def stiffness():
     return rows
 
 
-def hopping():
+def hopping(parts=("fig6", "fig7")):
     """Fig. 6 (phi 25, mu 0.35, Gamma 0.2-5, eps_t 0.2/0.5/0.8) and Fig. 7 (Gamma 1.8, phi
     10-70, mu 0.25/0.35/0.60) conditions, each point calibrated for its own landings."""
     base = base_case()
@@ -235,12 +235,10 @@ def hopping():
         for f in FRICTIONS[:2] + (0.6,)
         for a in range(10, 71, 5)
     ]
-    rows6 = pool_map(_calibrated_row, fig6)
-    write_csv(rows6, "hopping_fig6.csv")
-    rows7 = pool_map(_calibrated_row, fig7)
-    write_csv(rows7, "hopping_fig7.csv")
-    plot_hopping(rows6, rows7, HERE / "hopping.png")
-    return rows6, rows7
+    for part, cases in (("fig6", fig6), ("fig7", fig7)):
+        if part in parts:
+            write_csv(pool_map(_calibrated_row, cases), f"hopping_{part}.csv")
+    figures()
 
 
 # --- figures -----------------------------------------------------------------------------------
@@ -372,9 +370,13 @@ def figures():
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("study", choices=("sliding", "stiffness", "hopping", "all", "figures"))
+    parser.add_argument("--part", choices=("fig6", "fig7"), help="hopping: one figure only")
     args = parser.parse_args()
     if args.study == "figures":
         figures()
+        return
+    if args.part:
+        hopping((args.part,))
         return
     for study in ("sliding", "stiffness", "hopping"):
         if args.study in (study, "all"):
