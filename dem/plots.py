@@ -215,7 +215,7 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
     ax.plot(grid, bound, "--", color="C2", lw=1, label="Coulomb bound 1 - mu cot(theta)")
     ax.set_xlabel("incidence theta (deg from the floor normal)")
     ax.set_ylabel("eps_t (centre of mass, after / before)")
-    ax.set_ylim(min(0.0, cal.fan_before.min(), cal.fan_after.min()) - 0.05, 1.05)
+    ax.set_ylim(min(0.0, np.nanmin(cal.fan_before), np.nanmin(cal.fan_after)) - 0.05, 1.05)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(
