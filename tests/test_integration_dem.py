@@ -206,9 +206,9 @@ def test_run_case_writes_summary(tmp_path):
         assert key in on_disk
     assert on_disk["spheres"] == 60 and summary["steps"] > 0
     assert math.isfinite(summary["mean_velocity"])
-    # the tangential coefficients the run used, derived from eps_t for a rolling sphere
+    # the tangential coefficients the run used: the case's calibrated k_t / k_n, rolling spheres
     assert on_disk["tangential"] == "coulomb" and on_disk["tangential_mass_factor"] == 2 / 7
-    assert on_disk["tangential_stiffness_ratio"] == pytest.approx(0.0607, abs=1e-3)
+    assert on_disk["tangential_stiffness_ratio"] == case.contact.tangential_stiffness_ratio
 
 
 def test_from_grains_and_measure_cycles_give_what_run_case_gives(tmp_path):
