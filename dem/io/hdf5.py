@@ -42,29 +42,17 @@ from __future__ import annotations
 
 import datetime
 import json
-import platform
 from collections.abc import Mapping
-from importlib import metadata
 from pathlib import Path
 
 import h5py
 import numpy as np
 
+from dem.provenance import package_versions  # noqa: F401  (re-exported)
+
 FORMAT_VERSION = 1
 CYCLE_CHUNK = 256
 _FRAME_VECTORS = ("positions", "velocity")
-
-
-def package_versions() -> dict[str, str]:
-    """Versions of dem, numpy, numba, h5py and python, as strings ("unknown" if not found)."""
-    out = {}
-    for name in ("dem", "numpy", "numba", "h5py"):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "unknown"
-    out["python"] = platform.python_version()
-    return out
 
 
 class ResultsWriter:
