@@ -1,0 +1,56 @@
+"""The linear drive, written once: throw number, amplitude and the velocity scale.
+
+A trough inclined by alpha vibrates along a line at the vibration angle phi to the trough with
+amplitude A and angular frequency omega = 2 pi f. The paper's throw number (its Eq. 3) is the
+normal part of the peak trough acceleration over the normal part of gravity,
+
+    Gamma = A omega^2 sin(phi) / (g cos(alpha)),
+
+and conveying velocities are reported over the drive velocity A omega cos(phi) (DESIGN.md,
+section 3). Every function takes angles in degrees and broadcasts over numpy arrays; with
+scalars it returns a float. :func:`dem.case.resolve_drive`, :class:`dem.trough.Trough`, the
+point-mass model and its sweeps, and the validation scripts all call these.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dem.config import GRAVITY
+
+
+def _float_or_array(value):
+    return float(value) if np.ndim(value) == 0 else value
+
+
+def omega(frequency):
+    """Angular frequency 2 pi f, rad/s."""
+    return 2.0 * np.pi * frequency
+
+
+def throw_scale(frequency, angle, inclination):
+    """Gamma per metre of amplitude: omega^2 sin(phi) / (g cos(alpha)), 1/m."""
+    w = omega(frequency)
+    return _float_or_array(
+        w**2 * np.sin(np.radians(angle)) / (GRAVITY * np.cos(np.radians(inclination)))
+    )
+
+
+def throw_number(amplitude, frequency, angle, inclination=0.0):
+    """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (the paper's Eq. 3)."""
+    return _float_or_array(amplitude * throw_scale(frequency, angle, inclination))
+
+
+def amplitude(throw_number, frequency, angle, inclination=0.0):
+    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m."""
+    return _float_or_array(throw_number / throw_scale(frequency, angle, inclination))
+
+
+def drive_velocity(amplitude, frequency, angle):
+    """The velocity scale A omega cos(phi), m/s (normalised velocities divide by it)."""
+    return _float_or_array(amplitude * omega(frequency) * np.cos(np.radians(angle)))
+
+
+def drive_velocity_from_throw_number(throw_number, frequency, angle, inclination=0.0):
+    """A omega cos(phi), m/s, for a drive given by its throw number."""
+    return drive_velocity(amplitude(throw_number, frequency, angle, inclination), frequency, angle)
