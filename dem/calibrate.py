@@ -353,7 +353,7 @@ def calibrate(
             source=str(case.source),
         )
     from dem.kernels import contacts
-    from dem.simulation import ContactLaw
+    from dem.timestep import ContactLaw
 
     target = case.material.restitution_tangential
     law = ContactLaw.from_case(case)
@@ -373,7 +373,7 @@ def calibrate(
         impacts = impacts[order[np.linspace(0, len(order) - 1, max_impacts).round().astype(int)]]
     quats: list = [None]
     if case.particles.shape != "sphere":
-        from dem.state import random_orientations
+        from dem.fill import random_orientations
 
         rng = np.random.default_rng(case.run.seed)
         quats = list(random_orientations(orientations, rng))

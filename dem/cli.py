@@ -321,12 +321,12 @@ def _cmd_report(args) -> int:
 def _cmd_export_liggghts(args) -> int:
     from dem.case import load_case
     from dem.io.liggghts import write_deck
-    from dem.simulation import Simulation
+    from dem.timestep import timestep_for
 
     case = load_case(args.case_dir)
     # dem's own time step (explicit or automatic, checked against the stability limit), so
     # the deck integrates with the step a dem run of this case would take
-    timestep = args.timestep or Simulation.from_case(case).dt
+    timestep = timestep_for(case, timestep=args.timestep).dt
     steps = int(round(case.run.cycles / case.drive.frequency / timestep))
     path = write_deck(case, Path(args.out_dir), timestep=timestep, steps=steps)
     print(f"wrote {path} (dt = {timestep:.4g} s, {steps} measured steps)")

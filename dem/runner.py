@@ -21,7 +21,6 @@ the chunk boundaries are the same.
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import signal
 import time
@@ -30,8 +29,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import config, measure
+from dem import config, measure, setup
 from dem.errors import InputError
+from dem.io import checkpoint as checkpoint_io
 from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
 from dem.simulation import Simulation
@@ -119,21 +119,6 @@ class _SignalFlag:
             signal.signal(sig, handler)
 
 
-def _write_checkpoint(path: Path, sim: Simulation, loop: dict) -> None:
-    state = sim.state_dict()
-    state["loop.json"] = np.array(json.dumps(loop))
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, **state)
-    os.replace(tmp, path)
-
-
-def _read_checkpoint(path: Path) -> tuple[dict, dict]:
-    with np.load(path) as data:
-        state = {k: data[k] for k in data.files if k != "loop.json"}
-        loop = json.loads(str(data["loop.json"]))
-    return state, loop
-
-
 def run_case(
     case,
     out_dir: Path,
@@ -171,19 +156,19 @@ def run_case(
     out_dir = Path(out_dir)
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     n_threads = _set_threads(threads)
-    sim = Simulation.from_case(case)
+    sim = setup.from_case(case)
     total = case.run.settle_cycles + cycles
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
 
     if resume:
-        state, loop = _read_checkpoint(checkpoint)
+        state, loop = checkpoint_io.read(checkpoint)
         if loop["total_cycles"] != total:
             started = loop["total_cycles"] - case.run.settle_cycles
             raise InputError(
                 "--cycles", cycles, f"the interrupted run has {started}: resume with the same"
             )
-        sim.load_state(state)
+        checkpoint_io.load_state(sim, state)
     else:
         t0 = time.perf_counter()
         settle_time = sim.settle()
@@ -248,9 +233,9 @@ def run_case(
                     if bar is not None:
                         bar.update(1)
                     if loop["cycle"] % config.DEM_CHECKPOINT_EVERY == 0:
-                        _write_checkpoint(checkpoint, sim, loop)
+                        checkpoint_io.write(checkpoint, sim, loop)
                 if flag.signum is not None and loop["cycle"] < total:
-                    _write_checkpoint(checkpoint, sim, loop)
+                    checkpoint_io.write(checkpoint, sim, loop)
                     raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
     finally:
         if bar is not None:

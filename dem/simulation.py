@@ -29,14 +29,12 @@ make them) and raises :class:`dem.errors.SimulationError` naming the cause and t
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from dem import config, tangential
+from dem import config
 from dem.errors import InputError, SimulationError
-from dem.kernels import contacts
 from dem.kernels.integrate import (
     DONE,
     advance,
@@ -47,146 +45,9 @@ from dem.kernels.integrate import (
 )
 from dem.kernels.neighbours import OK
 from dem.kernels.rigid import rotational_energy
-from dem.state import Bodies, PairList, Spheres, random_fill, random_fill_clumps
+from dem.state import Bodies, PairList, Spheres
+from dem.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
 from dem.trough import Trough
-
-
-@dataclass(frozen=True)
-class ContactLaw:
-    """A contact law selector with its kernel parameters.
-
-    Attributes:
-        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
-        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
-
-    """
-
-    model: str
-    params: np.ndarray
-
-    @classmethod
-    def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
-
-        With ``tangential = "coulomb"`` the tangential mass factor follows the grain (a rolling
-        sphere 2/7, rotation locked 1, a clump its contact mass over its mass) and an omitted
-        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
-        """
-        c, m = case.contact, case.material
-        ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
-        if c.tangential == "coulomb":
-            ratio, zeta_t, factor = tangential.resolve(c, m, case.particles)
-        return cls(
-            model=c.model,
-            params=contacts.make_params(
-                stiffness=c.stiffness or 0.0,
-                tangential_stiffness_ratio=ratio or 0.0,
-                youngs_modulus=c.youngs_modulus or 0.0,
-                poisson_ratio=c.poisson_ratio,
-                restitution=m.restitution_normal,
-                friction=m.friction,
-                rolling_friction=m.rolling_friction,
-                limit_force=c.limit_force,
-                tangential=c.tangential,
-                tangential_damping_ratio=zeta_t,
-                tangential_mass_factor=factor,
-            ),
-        )
-
-    @property
-    def tangential(self) -> str:
-        """Tangential convention, ``"coulomb"`` or ``"liggghts"``."""
-        code = self.params[contacts.P_TANGENTIAL]
-        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
-
-    def tangential_coefficients(self) -> dict:
-        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
-        p = self.params
-        out = {"tangential": self.tangential}
-        if self.tangential == "coulomb" or self.model == "linear":
-            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
-        if self.tangential == "coulomb":
-            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
-            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
-        return out
-
-    @property
-    def model_id(self) -> int:
-        """Integer id used by the kernels."""
-        return contacts.MODELS[self.model]
-
-
-def timestep_limits(
-    law: ContactLaw,
-    radius: float,
-    density: float,
-    impact_speed: float,
-    *,
-    rotation: bool = True,
-    pairs: bool = True,
-    youngs_modulus: float = 0.0,
-    poisson_ratio: float = 0.3,
-    mass: float | None = None,
-) -> tuple[float, float]:
-    """Automatic time step and stability limit, s, for equal spheres.
-
-    ``mass`` replaces the sphere's own mass (a clump member: the clump's effective mass at the
-    member, see :meth:`Simulation.from_case`).
-
-    Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
-    the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
-    a rolling sphere's tangential effective mass is 2/7 m*; damping ratio zeta_t with
-    ``tangential = "coulomb"``), sphere-sphere (m* = m/2, R* = r/2;
-    only if ``pairs``) and sphere-wall (m* = m, R* = r). Hertz stiffnesses are the tangent
-    stiffnesses S_n, S_t at the overlap of an impact at ``impact_speed``.
-
-    Automatic: linear: ``DEM_DT_COLLISION_FRACTION`` of the collision time; Hertz: the smaller
-    of ``DEM_DT_RAYLEIGH_FRACTION`` of the Rayleigh time and ``DEM_DT_HERTZ_FRACTION`` of the
-    Hertz collision time at ``impact_speed``; never above the stability limit.
-    """
-    p = law.params
-    if mass is None:
-        mass = density * 4.0 / 3.0 * math.pi * radius**3
-    beta = p[contacts.P_BETA]
-    tangential_factor = 3.5 if rotation else 1.0
-    liggghts = law.tangential == "liggghts"
-    contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
-    limit = math.inf
-    auto = math.inf
-    for m_eff, r_eff in contacts_list:
-        if law.model == "linear":
-            kn = p[contacts.P_KN]
-            kt = p[contacts.P_KT_RATIO] * kn
-            zeta = -beta
-            auto = min(auto, contacts.linear_collision_time(kn, m_eff, beta))
-        else:
-            delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
-            root = math.sqrt(r_eff * delta)
-            kn = 2.0 * p[contacts.P_YSTAR] * root
-            kt = 8.0 * p[contacts.P_GSTAR] * root if liggghts else p[contacts.P_KT_RATIO] * kn
-            zeta = -math.sqrt(5.0 / 6.0) * beta
-            auto = min(
-                auto,
-                contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
-            )
-        kt_eff = tangential_factor * kt
-        if liggghts:
-            zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
-        else:
-            zeta_t = p[contacts.P_ZETA_T]
-        limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
-        if kt > 0:
-            limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
-    limit *= config.DEM_DT_STABILITY_FRACTION
-    if law.model == "linear":
-        auto *= config.DEM_DT_COLLISION_FRACTION
-    else:
-        auto = min(
-            auto * config.DEM_DT_HERTZ_FRACTION,
-            config.DEM_DT_RAYLEIGH_FRACTION
-            * contacts.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
-        )
-    return min(auto, limit), limit
 
 
 class Simulation:
@@ -206,6 +67,7 @@ class Simulation:
         reference_speed: Speed scale for the instability check, m/s (drive and free fall).
         bodies: Rigid clumps owning the spheres (:meth:`dem.state.Bodies.create`), or None for
             plain spheres.
+        timestep_limit: The stability limit dt was chosen under, s (reported; nan if unknown).
 
     """
 
@@ -220,12 +82,14 @@ class Simulation:
         skin: float | None = None,
         reference_speed: float | None = None,
         bodies: Bodies | None = None,
+        timestep_limit: float = math.nan,
     ):
         self.spheres = spheres
         self.bodies = bodies
         self.trough = trough
         self.law = law
         self.dt = float(dt)
+        self.timestep_limit = float(timestep_limit)
         self.rotation = bool(rotation)
         if bodies is not None and not self.rotation:
             bodies.ang_mom[:] = 0.0
@@ -258,7 +122,7 @@ class Simulation:
         self.reference_speed = reference_speed or (
             trough.drive_speed + math.sqrt(2 * config.GRAVITY * 10 * r_max)
         )
-        self._forces_valid = False
+        self.forces_valid = False
 
     # --- stepping ---------------------------------------------------------------------------
 
@@ -304,14 +168,14 @@ class Simulation:
                 self.pairs.as_tuple(), self.pairs.n_pairs, self.geom, self.drive_time,
                 self.gravity, self._drive(), self.bodies.as_tuple(),
             )  # fmt: skip
-            self._forces_valid = True
+            self.forces_valid = True
             return
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
             self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.n_pairs, self.geom,
             self.drive_time, self.gravity, self._drive(), False, False,
         )  # fmt: skip
-        self._forces_valid = True
+        self.forces_valid = True
 
     def _advance(self, n_steps: int) -> None:
         threads = numba.get_num_threads()
@@ -323,7 +187,7 @@ class Simulation:
             numba.set_num_threads(threads)
 
     def _advance_steps(self, n_steps: int) -> None:
-        if not self._forces_valid:
+        if not self.forces_valid:
             self.compute_forces()
         done = 0
         resume = False
@@ -488,178 +352,21 @@ class Simulation:
         count += half - s.x[:, 1] < s.radius
         return count
 
-    # --- checkpoints ---------------------------------------------------------------------------
-
-    def state_dict(self) -> dict[str, np.ndarray]:
-        """Everything the step loop reads, as arrays: restoring it continues bit for bit.
-
-        Sphere arrays (``sph.*``), the pair list with its contact history, scratch and CSR
-        index (``nb.*``, capacities included), the step counters and the stored forces (a
-        fresh force evaluation would update the contact history a second time).
-        """
-        state = {f"sph.{k}": v for k, v in vars(self.spheres).items()}
-        if self.bodies is not None:
-            state |= {f"body.{k}": v for k, v in vars(self.bodies).items()}
-        state |= {f"nb.{k}": v for k, v in vars(self.pairs).items() if isinstance(v, np.ndarray)}
-        state["nb.sizes"] = np.array(
-            [self.pairs.n, self.pairs.capacity, self.pairs.cell_capacity, self.pairs.slots]
-        )
-        state["sim.counters"] = np.array(
-            [self.step_index, self.drive_start_step, int(self.drive_on), int(self._forces_valid)]
-        )
-        state["sim.stats"] = self.stats
-        state["sim.dt"] = np.array(self.dt)
-        return state
-
-    def load_state(self, state: dict[str, np.ndarray]) -> None:
-        """Restore :meth:`state_dict` output (same case; refuses a different sphere count)."""
-        n, capacity, cell_capacity, slots = (int(v) for v in state["nb.sizes"])
-        if n != self.spheres.n or float(state["sim.dt"]) != self.dt:
-            raise SimulationError(
-                f"checkpoint holds {n} spheres at dt = {float(state['sim.dt'])} s, the case "
-                f"{self.spheres.n} at dt = {self.dt} s: it belongs to another case"
-            )
-        for key in vars(self.spheres):
-            setattr(self.spheres, key, np.ascontiguousarray(state[f"sph.{key}"]).copy())
-        if self.bodies is not None:
-            for key in vars(self.bodies):
-                setattr(self.bodies, key, np.ascontiguousarray(state[f"body.{key}"]).copy())
-            self.spheres.body = self.bodies.body_of
-        self.pairs = PairList(n, capacity, cell_capacity, slots)
-        for key, value in vars(self.pairs).items():
-            if isinstance(value, np.ndarray):
-                setattr(self.pairs, key, np.ascontiguousarray(state[f"nb.{key}"]).copy())
-        step, drive_start, drive_on, forces_valid = (int(v) for v in state["sim.counters"])
-        self.step_index, self.drive_start_step = step, drive_start
-        self.drive_on, self._forces_valid = bool(drive_on), bool(forces_valid)
-        self.stats[:] = state["sim.stats"]
-
-    # --- construction from a case --------------------------------------------------------------
+    # --- construction (dem.setup) -------------------------------------------------------------
 
     @classmethod
     def from_case(cls, case, *, timestep: float | None = None) -> Simulation:
-        """Fill the case's trough with grains (seeded) and set up the time step.
+        """Shortcut for :func:`dem.setup.from_case`."""
+        from dem import setup
 
-        Spheres: :func:`dem.state.random_fill`. Screws and clumps: N copies of the case's grain
-        template at random positions and orientations without member overlap
-        (:func:`dem.state.random_fill_clumps`). The rest is :meth:`from_grains`, with the
-        impact speed of the time step taken from the fill height.
-        """
-        pt = case.particles
-        _check_buildable(case)
-        trough = Trough.from_case(case)
-        rng = np.random.default_rng(case.run.seed)
-        if pt.shape == "sphere":
-            positions, height = random_fill(pt.count, pt.radius, trough.length, trough.width, rng)
-            quats = None
-        else:
-            positions, quats, height = random_fill_clumps(
-                pt.count, pt.grain, trough.length, trough.width, rng
-            )
-        impact = trough.drive_speed + math.sqrt(2.0 * config.GRAVITY * height)
-        sim = cls.from_grains(
-            case, positions, orientations=quats, timestep=timestep, impact_speed=impact
-        )
-        sim.fill_height = height
-        return sim
+        return setup.from_case(case, timestep=timestep)
 
     @classmethod
-    def from_grains(
-        cls,
-        case,
-        positions: np.ndarray,
-        *,
-        orientations: np.ndarray | None = None,
-        velocities: np.ndarray | None = None,
-        timestep: float | None = None,
-        impact_speed: float | None = None,
-    ) -> Simulation:
-        """The case's grains at chosen poses and velocities (the case's count is not used).
+    def from_grains(cls, case, positions, **kwargs) -> Simulation:
+        """Shortcut for :func:`dem.setup.from_grains`."""
+        from dem import setup
 
-        Args:
-            case: A :class:`dem.case.Case` (contact, material, grain, trough, drive, run).
-            positions: Centres (spheres) or centres of mass (clumps), trough frame, (G, 3), m.
-            orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
-                default the template's principal axes along the trough axes.
-            velocities: Centre-of-mass velocities relative to the trough, (G, 3), m/s; default 0.
-            timestep: dt, s; default ``case.run.timestep``, else automatic.
-            impact_speed: Speed of the hardest impact expected, m/s, for the automatic step and
-                the instability check; default the drive speed plus the fastest grain plus a
-                fall from the highest grain.
-
-        The time step of a clump takes the smallest effective mass a point of its surface has
-        for a force in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M
-        with rotation locked), for every member radius. A given step above the stability limit
-        raises InputError naming ``run.timestep``; an automatic step is shortened so that a
-        drive period holds a whole number of steps.
-
-        """
-        pt, mat = case.particles, case.material
-        _check_buildable(case)
-        positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
-        n = positions.shape[0]
-        grain = pt.grain
-        trough = Trough.from_case(case)
-        law = ContactLaw.from_case(case)
-        if velocities is None:
-            velocities = np.zeros((n, 3))
-        velocities = np.asarray(velocities, dtype=np.float64).reshape(n, 3)
-        if impact_speed is None:
-            top = float(np.max(positions[:, 2])) if n else 0.0
-            fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
-            impact_speed = (
-                trough.drive_speed + fastest + math.sqrt(2.0 * config.GRAVITY * max(top, 0.0))
-            )
-        if pt.shape == "sphere":
-            sizes = [(pt.radius, None)]
-            density = mat.density
-        else:
-            # the clump's own compliance (rotation included) is in its contact mass, so the
-            # sphere's rolling factor is not applied again below
-            m_eff = grain.contact_mass() if pt.rotation else grain.mass
-            sizes = [(float(r), m_eff) for r in np.unique(grain.radii)]
-            density = grain.density
-        auto, limit = math.inf, math.inf
-        for radius, mass in sizes:
-            a, b = timestep_limits(
-                law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
-                pairs=n > 1,
-                youngs_modulus=case.contact.youngs_modulus or 0.0,
-                poisson_ratio=case.contact.poisson_ratio, mass=mass,
-            )  # fmt: skip
-            auto, limit = min(auto, a), min(limit, b)
-        user = timestep if timestep is not None else case.run.timestep
-        if user is not None:
-            if user > limit:
-                raise InputError(
-                    "run.timestep",
-                    user,
-                    f"<= {limit:.4g} s, the stability limit of this contact "
-                    f"({config.DEM_DT_STABILITY_FRACTION} of the critical step; 'auto' gives "
-                    f"{auto:.4g} s)",
-                    source=str(case.source),
-                )
-            dt = float(user)
-        else:
-            dt = trough.period / math.ceil(trough.period / auto)
-        bodies = None
-        if pt.shape == "sphere":
-            spheres = Spheres.create(positions, pt.radius, mat.density)
-            spheres.v[:] = velocities
-        else:
-            if orientations is None:
-                orientations = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
-            quats = np.ascontiguousarray(orientations, dtype=np.float64).reshape(n, 4)
-            bodies, spheres = Bodies.create(grain, positions, quats)
-            bodies.v[:] = velocities
-            bodies.place(spheres)
-        sim = cls(
-            spheres, trough, law, dt, rotation=pt.rotation, reference_speed=impact_speed,
-            bodies=bodies,
-        )  # fmt: skip
-        sim.fill_height = float(np.max(positions[:, 2])) if n else 0.0
-        sim.timestep_limit = limit
-        return sim
+        return setup.from_grains(case, positions, **kwargs)
 
 
 def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> np.ndarray:
@@ -683,14 +390,3 @@ def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> n
             out[c - first - settle_cycles] = sim.cycle_velocity()
     sim.stats[:] = 0.0
     return out
-
-
-def _check_buildable(case) -> None:
-    """Refuse what the engine cannot build yet (a mesh trough, a grain without its template)."""
-    pt = case.particles
-    if case.trough.mesh is not None:
-        raise InputError(
-            "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
-        )
-    if pt.shape != "sphere" and pt.grain is None:
-        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")

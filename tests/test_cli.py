@@ -198,12 +198,12 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
     (case_dir / "case.toml").write_text(SMALL_CASE)
     code, out, err = run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "deck"))
     assert code == 0, err
+    from dem import setup
     from dem.case import load_case
-    from dem.simulation import Simulation
 
     deck = (tmp_path / "deck" / "in.dem").read_text().splitlines()
     (line,) = [x for x in deck if x.startswith("timestep ")]
-    assert float(line.split()[1]) == Simulation.from_case(load_case(case_dir)).dt
+    assert float(line.split()[1]) == setup.from_case(load_case(case_dir)).dt
     code, _, err = run(
         capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d2"), "--timestep", "-1"
     )

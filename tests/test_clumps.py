@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from small_case import write_case
 
-from dem import shapes
+from dem import setup, shapes
 from dem.case import load_case
+from dem.io import checkpoint
 from dem.kernels import contacts
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
 from dem.runner import run_case
@@ -249,17 +250,17 @@ def _small_screw_case(tmp_path, count, rotation):
 
 def test_clump_checkpoint_continues_bit_for_bit(tmp_path):
     case = _small_screw_case(tmp_path, 10, "true")
-    straight = Simulation.from_case(case)
+    straight = setup.from_case(case)
     straight.settle()
     straight.start_drive()
     straight.run(1500)
-    first = Simulation.from_case(case)
+    first = setup.from_case(case)
     first.settle()
     first.start_drive()
     first.run(700)
-    state = {k: v.copy() for k, v in first.state_dict().items()}
-    second = Simulation.from_case(case)
-    second.load_state(state)
+    state = {k: v.copy() for k, v in checkpoint.state_dict(first).items()}
+    second = setup.from_case(case)
+    checkpoint.load_state(second, state)
     second.run(800)
     for name in ("x", "v", "q", "ang_mom"):
         np.testing.assert_array_equal(getattr(second.bodies, name), getattr(straight.bodies, name))
@@ -269,7 +270,7 @@ def test_clump_checkpoint_continues_bit_for_bit(tmp_path):
 
 def test_rotation_false_locks_the_orientation(tmp_path):
     case = _small_screw_case(tmp_path, 6, "false")
-    sim = Simulation.from_case(case)
+    sim = setup.from_case(case)
     q0 = sim.bodies.q.copy()
     sim.run(3000)
     assert np.all(sim.bodies.ang_mom == 0.0) and np.all(sim.spheres.omega == 0.0)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from dem import setup
 from dem.case import load_case
 from dem.config import GRAVITY
 from dem.errors import InputError, SimulationError
@@ -174,7 +175,7 @@ def test_user_timestep_above_stability_limit_is_refused():
     case = load_case("cases/single-sphere")
     case = dataclasses.replace(case, run=dataclasses.replace(case.run, timestep=1e-3))
     with pytest.raises(InputError, match="run.timestep"):
-        Simulation.from_case(case)
+        setup.from_case(case)
 
 
 def test_instability_is_reported():
@@ -217,13 +218,13 @@ def test_from_grains_and_measure_cycles_give_what_run_case_gives(tmp_path):
 
     case = _single_sphere(0.9)
     summary = run_case(case, tmp_path, progress=False, frames=False)
-    sim = Simulation.from_case(case)
+    sim = setup.from_case(case)
     sim.settle()
     per_cycle = measure_cycles(sim, case.run.cycles, settle_cycles=case.run.settle_cycles)
     assert per_cycle.tolist() == summary["per_cycle_velocity"]
     # a block placed by hand on the floor, at rest: the same steady state (to its transient)
     z = case.particles.radius - 7800.0 * 4 / 3 * math.pi * 0.002**3 * GRAVITY / 1.6e7
-    placed = Simulation.from_grains(case, [[0.01, 0.0, z]], impact_speed=sim.reference_speed)
+    placed = setup.from_grains(case, [[0.01, 0.0, z]], impact_speed=sim.reference_speed)
     assert placed.dt == sim.dt
     v = measure_cycles(placed, 4, settle_cycles=4)
     assert np.mean(v) == pytest.approx(np.mean(per_cycle), rel=0.01)

@@ -67,7 +67,7 @@ from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T
 from dem.shapes import write_clump
-from dem.simulation import ContactLaw
+from dem.timestep import ContactLaw
 
 #: LIGGGHTS version the decks are written for.
 LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"

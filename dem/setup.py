@@ -1,0 +1,106 @@
+"""Building a :class:`dem.simulation.Simulation` from a case: grains, trough, law and time step.
+
+:func:`from_case` fills the case's trough at random (:func:`dem.fill.fill`); :func:`from_grains`
+places the case's grain at chosen poses and velocities (virtual impacts, validation studies).
+Both take the time step from :func:`dem.timestep.timestep_for`, which depends on the case alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dem import fill
+from dem.errors import InputError
+from dem.simulation import Simulation
+from dem.state import Bodies, Spheres
+from dem.timestep import ContactLaw, impact_speed_for, timestep_for
+from dem.trough import Trough
+
+
+def from_case(case, *, timestep: float | None = None) -> Simulation:
+    """The case's trough filled with its grains (seeded), ready to settle and drive.
+
+    Spheres: :func:`dem.fill.random_fill`. Screws and clumps: N copies of the case's grain
+    template at random positions and orientations without member overlap
+    (:func:`dem.fill.random_fill_clumps`). The time step is the case's
+    (:func:`dem.timestep.timestep_for`, impact from the top of the fill box); the instability
+    check's speed scale takes the box as it was finally drawn.
+    """
+    check_buildable(case)
+    step = timestep_for(case, timestep=timestep)
+    positions, quats, height = fill.fill(case)
+    return _build(case, positions, quats, None, step, impact_speed_for(case, height))
+
+
+def from_grains(
+    case,
+    positions: np.ndarray,
+    *,
+    orientations: np.ndarray | None = None,
+    velocities: np.ndarray | None = None,
+    timestep: float | None = None,
+    impact_speed: float | None = None,
+) -> Simulation:
+    """The case's grains at chosen poses and velocities (the case's count is not used).
+
+    Args:
+        case: A :class:`dem.case.Case` (contact, material, grain, trough, drive, run).
+        positions: Centres (spheres) or centres of mass (clumps), trough frame, (G, 3), m.
+        orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
+            default the template's principal axes along the trough axes.
+        velocities: Centre-of-mass velocities relative to the trough, (G, 3), m/s; default 0.
+        timestep: dt, s; default ``case.run.timestep``, else automatic.
+        impact_speed: Speed of the hardest impact expected, m/s, for the automatic step and
+            the instability check; default the drive speed plus the fastest grain plus a
+            fall from the highest grain.
+
+    The time step follows :func:`dem.timestep.timestep_for` with these grains' count and impact
+    speed; a given step above the stability limit raises InputError naming ``run.timestep``.
+
+    """
+    check_buildable(case)
+    positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
+    n = positions.shape[0]
+    if velocities is None:
+        velocities = np.zeros((n, 3))
+    velocities = np.asarray(velocities, dtype=np.float64).reshape(n, 3)
+    if impact_speed is None:
+        top = float(np.max(positions[:, 2])) if n else 0.0
+        fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
+        impact_speed = impact_speed_for(case, top, fastest)
+    step = timestep_for(case, timestep=timestep, impact_speed=impact_speed, grains=n)
+    return _build(case, positions, orientations, velocities, step, impact_speed)
+
+
+def _build(case, positions, orientations, velocities, step, reference_speed) -> Simulation:
+    pt, mat = case.particles, case.material
+    n = positions.shape[0]
+    bodies = None
+    if pt.shape == "sphere":
+        spheres = Spheres.create(positions, pt.radius, mat.density)
+        if velocities is not None:
+            spheres.v[:] = velocities
+    else:
+        if orientations is None:
+            orientations = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+        quats = np.ascontiguousarray(orientations, dtype=np.float64).reshape(n, 4)
+        bodies, spheres = Bodies.create(pt.grain, positions, quats)
+        if velocities is not None:
+            bodies.v[:] = velocities
+        bodies.place(spheres)
+    return Simulation(
+        spheres, Trough.from_case(case), ContactLaw.from_case(case), step.dt,
+        rotation=pt.rotation, reference_speed=reference_speed, bodies=bodies,
+        timestep_limit=step.limit,
+    )  # fmt: skip
+
+
+def check_buildable(case) -> None:
+    """Refuse what the engine cannot build yet (a mesh trough, a grain without its template)."""
+    pt = case.particles
+    if case.trough.mesh is not None:
+        raise InputError(
+            "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
+        )
+    if pt.shape != "sphere" and pt.grain is None:
+        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")

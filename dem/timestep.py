@@ -1,0 +1,253 @@
+"""The time step of a case, from the case alone: contact time scales and stability limits.
+
+:class:`ContactLaw` is a case's contact law in kernel form. :func:`timestep_limits` gives the
+automatic step and the stability limit for one contact, and :func:`timestep_for` applies them to
+a case: every member radius of its grain, sphere-sphere and sphere-wall contacts, and the
+hardest impact the case can produce, taken from the drive and a fall from the top of the fill box
+(:func:`dem.fill.box_height`). Nothing is filled or simulated, so ``dem export liggghts``, the
+validation scripts and ``dem run`` agree on dt before any grain is placed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from dem import config, fill, tangential
+from dem.errors import InputError
+from dem.kernels import contacts
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """A contact law selector with its kernel parameters.
+
+    Attributes:
+        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
+        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
+
+    """
+
+    model: str
+    params: np.ndarray
+
+    @classmethod
+    def from_case(cls, case) -> ContactLaw:
+        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
+
+        With ``tangential = "coulomb"`` the tangential mass factor follows the grain (a rolling
+        sphere 2/7, rotation locked 1, a clump its contact mass over its mass) and an omitted
+        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
+        """
+        c, m = case.contact, case.material
+        ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
+        if c.tangential == "coulomb":
+            ratio, zeta_t, factor = tangential.resolve(c, m, case.particles)
+        return cls(
+            model=c.model,
+            params=contacts.make_params(
+                stiffness=c.stiffness or 0.0,
+                tangential_stiffness_ratio=ratio or 0.0,
+                youngs_modulus=c.youngs_modulus or 0.0,
+                poisson_ratio=c.poisson_ratio,
+                restitution=m.restitution_normal,
+                friction=m.friction,
+                rolling_friction=m.rolling_friction,
+                limit_force=c.limit_force,
+                tangential=c.tangential,
+                tangential_damping_ratio=zeta_t,
+                tangential_mass_factor=factor,
+            ),
+        )
+
+    @property
+    def tangential(self) -> str:
+        """Tangential convention, ``"coulomb"`` or ``"liggghts"``."""
+        code = self.params[contacts.P_TANGENTIAL]
+        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
+
+    def tangential_coefficients(self) -> dict:
+        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
+        p = self.params
+        out = {"tangential": self.tangential}
+        if self.tangential == "coulomb" or self.model == "linear":
+            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
+        if self.tangential == "coulomb":
+            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
+            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+        return out
+
+    @property
+    def model_id(self) -> int:
+        """Integer id used by the kernels."""
+        return contacts.MODELS[self.model]
+
+
+def timestep_limits(
+    law: ContactLaw,
+    radius: float,
+    density: float,
+    impact_speed: float,
+    *,
+    rotation: bool = True,
+    pairs: bool = True,
+    youngs_modulus: float = 0.0,
+    poisson_ratio: float = 0.3,
+    mass: float | None = None,
+) -> tuple[float, float]:
+    """Automatic time step and stability limit, s, for equal spheres.
+
+    ``mass`` replaces the sphere's own mass (a clump member: the clump's effective mass at the
+    member, see :meth:`Simulation.from_case`).
+
+    Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
+    the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
+    a rolling sphere's tangential effective mass is 2/7 m*; damping ratio zeta_t with
+    ``tangential = "coulomb"``), sphere-sphere (m* = m/2, R* = r/2;
+    only if ``pairs``) and sphere-wall (m* = m, R* = r). Hertz stiffnesses are the tangent
+    stiffnesses S_n, S_t at the overlap of an impact at ``impact_speed``.
+
+    Automatic: linear: ``DEM_DT_COLLISION_FRACTION`` of the collision time; Hertz: the smaller
+    of ``DEM_DT_RAYLEIGH_FRACTION`` of the Rayleigh time and ``DEM_DT_HERTZ_FRACTION`` of the
+    Hertz collision time at ``impact_speed``; never above the stability limit.
+    """
+    p = law.params
+    if mass is None:
+        mass = density * 4.0 / 3.0 * math.pi * radius**3
+    beta = p[contacts.P_BETA]
+    tangential_factor = 3.5 if rotation else 1.0
+    liggghts = law.tangential == "liggghts"
+    contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
+    limit = math.inf
+    auto = math.inf
+    for m_eff, r_eff in contacts_list:
+        if law.model == "linear":
+            kn = p[contacts.P_KN]
+            kt = p[contacts.P_KT_RATIO] * kn
+            zeta = -beta
+            auto = min(auto, contacts.linear_collision_time(kn, m_eff, beta))
+        else:
+            delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
+            root = math.sqrt(r_eff * delta)
+            kn = 2.0 * p[contacts.P_YSTAR] * root
+            kt = 8.0 * p[contacts.P_GSTAR] * root if liggghts else p[contacts.P_KT_RATIO] * kn
+            zeta = -math.sqrt(5.0 / 6.0) * beta
+            auto = min(
+                auto,
+                contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
+            )
+        kt_eff = tangential_factor * kt
+        if liggghts:
+            zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
+        else:
+            zeta_t = p[contacts.P_ZETA_T]
+        limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
+        if kt > 0:
+            limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
+    limit *= config.DEM_DT_STABILITY_FRACTION
+    if law.model == "linear":
+        auto *= config.DEM_DT_COLLISION_FRACTION
+    else:
+        auto = min(
+            auto * config.DEM_DT_HERTZ_FRACTION,
+            config.DEM_DT_RAYLEIGH_FRACTION
+            * contacts.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
+        )
+    return min(auto, limit), limit
+
+
+class Timestep(NamedTuple):
+    """A case's time step.
+
+    Attributes:
+        dt: The step the run uses, s (the user's ``run.timestep`` or the automatic one).
+        auto: The automatic step, s (a drive period holds a whole number of them).
+        limit: The stability limit, s; a user step above it is refused.
+        impact_speed: The impact speed the Hertz time scales were taken at, m/s.
+
+    """
+
+    dt: float
+    auto: float
+    limit: float
+    impact_speed: float
+
+
+def impact_speed_for(case, height: float | None = None, fastest: float = 0.0) -> float:
+    """The hardest impact speed a case's grains meet, m/s.
+
+    Peak trough speed A omega, plus the fastest grain's own speed, plus a free fall from
+    ``height`` (default the top of the fill box, :func:`dem.fill.box_height`).
+    """
+    d = case.drive
+    if height is None:
+        height = fill.box_height(case)
+    peak = d.amplitude * d.omega
+    return peak + fastest + math.sqrt(2.0 * config.GRAVITY * max(height, 0.0))
+
+
+def timestep_for(
+    case,
+    *,
+    timestep: float | None = None,
+    impact_speed: float | None = None,
+    grains: int | None = None,
+) -> Timestep:
+    """The time step of a :class:`dem.case.Case`, without placing a grain.
+
+    Args:
+        case: The case (contact, material, grain, drive, run).
+        timestep: dt, s; default ``case.run.timestep``, else automatic.
+        impact_speed: Hardest impact, m/s; default :func:`impact_speed_for` the fill box.
+        grains: Number of grains (sphere-sphere contacts count only if more than one); default
+            ``particles.count``.
+
+    The step of a clump takes the smallest effective mass a point of its surface has for a force
+    in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation
+    locked), for every member radius. A given step above the stability limit raises InputError
+    naming ``run.timestep``; an automatic step is shortened so that a drive period holds a whole
+    number of steps.
+
+    """
+    pt, mat = case.particles, case.material
+    law = ContactLaw.from_case(case)
+    if impact_speed is None:
+        impact_speed = impact_speed_for(case)
+    if grains is None:
+        grains = pt.count
+    if pt.shape == "sphere":
+        sizes = [(pt.radius, None)]
+        density = mat.density
+    else:
+        # the clump's own compliance (rotation included) is in its contact mass, so the
+        # sphere's rolling factor is not applied again below
+        m_eff = pt.grain.contact_mass() if pt.rotation else pt.grain.mass
+        sizes = [(float(r), m_eff) for r in np.unique(pt.grain.radii)]
+        density = pt.grain.density
+    auto, limit = math.inf, math.inf
+    for radius, mass in sizes:
+        a, b = timestep_limits(
+            law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
+            pairs=grains > 1,
+            youngs_modulus=case.contact.youngs_modulus or 0.0,
+            poisson_ratio=case.contact.poisson_ratio, mass=mass,
+        )  # fmt: skip
+        auto, limit = min(auto, a), min(limit, b)
+    period = 2.0 * math.pi / case.drive.omega
+    auto = period / math.ceil(period / auto)
+    user = timestep if timestep is not None else case.run.timestep
+    if user is not None:
+        if user > limit:
+            raise InputError(
+                "run.timestep",
+                user,
+                f"<= {limit:.4g} s, the stability limit of this contact "
+                f"({config.DEM_DT_STABILITY_FRACTION} of the critical step; 'auto' gives "
+                f"{auto:.4g} s)",
+                source=str(case.source),
+            )
+        return Timestep(float(user), auto, limit, impact_speed)
+    return Timestep(auto, auto, limit, impact_speed)
