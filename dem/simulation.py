@@ -43,6 +43,7 @@ from dem.kernels.integrate import (
     evaluate_forces,
     evaluate_forces_clumps,
 )
+from dem.kernels.layout import Geometry
 from dem.kernels.neighbours import OK
 from dem.kernels.rigid import rotational_energy
 from dem.state import Bodies, PairList, Spheres
@@ -113,7 +114,7 @@ class Simulation:
                     "members must lie within half a period of its centre of mass)",
                 )
         self.pairs = PairList.for_spheres(spheres.n)
-        self.geom = np.array([trough.length, trough.width, self.skin, self.dt])
+        self.geom = Geometry(trough.length, trough.width, self.skin, self.dt)
         self.gravity = trough.gravity
         self.drive_on = False
         self.drive_start_step = 0
@@ -148,8 +149,8 @@ class Simulation:
     def _build(self) -> None:
         while True:
             status, need = build(
-                self.spheres.n, self.spheres.as_tuple(), self.spheres.body,
-                self.pairs.as_tuple(), self.pairs.counters, self.geom,
+                self.spheres.n, self.spheres.as_layout(), self.spheres.body,
+                self.pairs.as_layout(), self.pairs.counters, self.geom,
             )  # fmt: skip
             if status == OK:
                 return
@@ -164,15 +165,15 @@ class Simulation:
         self._build()
         if self.bodies is not None:
             evaluate_forces_clumps(
-                self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_tuple(),
-                self.pairs.as_tuple(), self.pairs.n_pairs, self.geom, self.drive_time,
-                self.gravity, self._drive(), self.bodies.as_tuple(),
+                self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_layout(),
+                self.pairs.as_layout(), self.pairs.n_pairs, self.geom, self.drive_time,
+                self.gravity, self._drive(), self.bodies.as_layout(),
             )  # fmt: skip
             self.forces_valid = True
             return
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-            self.spheres.as_tuple(), self.pairs.as_tuple(), self.pairs.n_pairs, self.geom,
+            self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs, self.geom,
             self.drive_time, self.gravity, self._drive(), False, False,
         )  # fmt: skip
         self.forces_valid = True
@@ -196,14 +197,14 @@ class Simulation:
                 status, steps, need = advance(
                     n_steps - done, self.step_index - self.drive_start_step, resume,
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-                    self.spheres.as_tuple(), self.spheres.body, self.pairs.as_tuple(),
+                    self.spheres.as_layout(), self.spheres.body, self.pairs.as_layout(),
                     self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
                 )  # fmt: skip
             else:
                 status, steps, need = advance_clumps(
                     n_steps - done, self.step_index - self.drive_start_step, resume,
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-                    self.spheres.as_tuple(), self.bodies.as_tuple(), self.pairs.as_tuple(),
+                    self.spheres.as_layout(), self.bodies.as_layout(), self.pairs.as_layout(),
                     self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
                 )  # fmt: skip
             done += steps

@@ -19,6 +19,7 @@ import numpy as np
 
 from dem.config import DEM_GROWTH_FACTOR
 from dem.kernels.forces import N_WALLS
+from dem.kernels.layout import BodyArrays, PairArrays, SphereArrays
 from dem.kernels.neighbours import OVERFLOW_CELLS, OVERFLOW_PAIRS, OVERFLOW_SLOTS
 from dem.kernels.rigid import angular_velocity, update_members
 
@@ -83,9 +84,9 @@ class Spheres:
         """Number of spheres."""
         return self.x.shape[0]
 
-    def as_tuple(self) -> tuple:
-        """Kernel tuple ``sph`` (:mod:`dem.kernels.integrate`)."""
-        return (
+    def as_layout(self) -> SphereArrays:
+        """The arrays as the kernels take them (:class:`dem.kernels.layout.SphereArrays`)."""
+        return SphereArrays(
             self.x,
             self.v,
             self.omega,
@@ -205,9 +206,9 @@ class Bodies:
             spheres.omega,
         )  # fmt: skip
 
-    def as_tuple(self) -> tuple:
-        """Kernel tuple ``bod`` (:func:`dem.kernels.integrate.advance_clumps`)."""
-        return (
+    def as_layout(self) -> BodyArrays:
+        """The arrays as the kernels take them (:class:`dem.kernels.layout.BodyArrays`)."""
+        return BodyArrays(
             self.x,
             self.v,
             self.q,
@@ -286,9 +287,9 @@ class PairList:
         """Number of builds so far."""
         return int(self.counters[1])
 
-    def as_tuple(self) -> tuple:
-        """Kernel tuple ``nb`` (:mod:`dem.kernels.integrate`)."""
-        return (
+    def as_layout(self) -> PairArrays:
+        """The arrays as the kernels take them (:class:`dem.kernels.layout.PairArrays`)."""
+        return PairArrays(
             self.x_ref,
             self.pair_i,
             self.pair_j,

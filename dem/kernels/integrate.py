@@ -13,10 +13,9 @@ One step n -> n + 1 (t_n = n dt), as in LAMMPS ``fix nve/sphere``:
    v += dt/2 F/m, omega += dt/2 T/I (parallel over spheres), summing the x-momentum
    sum_i m_i v_x,i for the measurement.
 
-Arrays travel as two tuples: ``sph = (x, v, omega, force, torque, radius, mass, inv_mass,
-inv_inertia, wall_hist)`` and ``nb = (x_ref, pair_i, pair_j, pair_key, hist, scratch_j,
-scratch_key, scratch_hist, counts, offsets, cell_of, cell_start, cell_particles, part_start,
-part_pairs, pf, pt)`` (shapes in :mod:`dem.state`).
+Arrays travel as named layouts (:mod:`dem.kernels.layout`): ``sph`` (SphereArrays), ``nb``
+(PairArrays), ``bod`` (BodyArrays) and ``geom`` (Geometry: length, width, skin, dt); fields are
+read by name, shapes in :mod:`dem.state`.
 """
 
 import math
@@ -68,7 +67,7 @@ def forces_kick(
 
     """
     x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
-    part_start, part_pairs, pf, pt = nb[13], nb[14], nb[15], nb[16]
+    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
     h = 0.5 * dt
     px = 0.0
     for i in numba.prange(n):
@@ -118,10 +117,10 @@ def evaluate_forces(
 ):  # fmt: skip
     """Pair forces then per-sphere gather at time t (see :func:`forces_kick`); sum m v_x."""
     x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
-    length, width, dt = geom[0], geom[1], geom[3]
+    length, width, dt = geom.length, geom.width, geom.dt
     pair_forces(
-        model, p, x, v, omega, radius, mass, nb[1], nb[2], n_pairs, nb[4], length, dt, nb[15],
-        nb[16],
+        model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length, dt,
+        nb.pf, nb.pt,
     )  # fmt: skip
     ax, ay, az = body_acceleration(t, gravity, drive)
     return forces_kick(
@@ -135,10 +134,11 @@ def build(n, sph, body, nb, counters, geom):
 
     ``body`` (n,) int64 is the rigid body of each sphere: spheres of one body are not paired.
     """
-    x, radius = sph[0], sph[5]
+    x, radius = sph.x, sph.radius
     status, n_pairs, need = rebuild(
-        x, radius, body, n, geom[2], geom[0], geom[1], nb[0], nb[1], nb[2], nb[3], nb[4],
-        counters[0], nb[5], nb[6], nb[7], nb[8], nb[9], nb[10], nb[11], nb[12], nb[13], nb[14],
+        x, radius, body, n, geom.skin, geom.length, geom.width, nb.x_ref, nb.pair_i, nb.pair_j,
+        nb.pair_key, nb.hist, counters[0], nb.scratch_j, nb.scratch_key, nb.scratch_hist, nb.counts,
+        nb.offsets, nb.cell_of, nb.cell_start, nb.cell_particles, nb.part_start, nb.part_pairs,
     )  # fmt: skip
     counters[0] = n_pairs
     if status == OK:
@@ -158,10 +158,10 @@ def advance(
         resume: True when the first step's kick and drift were already done (a retry after a
             neighbour-list overflow).
         n, model, p, rotation: Sphere count, contact law id and parameters, rotation on/off.
-        sph, nb: Array tuples (module docstring).
+        sph, nb: Array layouts (module docstring).
         body: Grain of each sphere, int64 (n,) (``0..n-1`` here: every grain is one sphere).
         counters: int64 (2,): number of pairs, number of builds; updated.
-        geom: float64 (4,): length, width, skin, dt.
+        geom: Geometry (length, width, skin, dt).
         gravity: float64 (3,), m/s^2, trough frame.
         drive: float64 (5,): A omega^2 (m/s^2), omega (rad/s), e_x, e_y, e_z.
         out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
@@ -172,14 +172,14 @@ def advance(
         yet (call again with ``resume`` after regrowing).
 
     """
-    x, v, omega, force, torque = sph[0], sph[1], sph[2], sph[3], sph[4]
-    inv_mass, inv_inertia = sph[7], sph[8]
-    length, skin, dt = geom[0], geom[2], geom[3]
+    x, v, omega, force, torque = sph.x, sph.v, sph.omega, sph.force, sph.torque
+    inv_mass, inv_inertia = sph.inv_mass, sph.inv_inertia
+    length, skin, dt = geom.length, geom.skin, geom.dt
     limit = 0.25 * skin * skin
     for s in range(n_steps):
         if s == 0 and not resume:
             kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation)
-        if max_displacement_sq(x, nb[0], n, length) > limit:
+        if max_displacement_sq(x, nb.x_ref, n, length) > limit:
             status, need = build(n, sph, body, nb, counters, geom)
             if status != OK:
                 return status, s, need
@@ -225,30 +225,32 @@ def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, driv
     Leaves ``sph.force``/``torque`` with the members' contact forces and the bodies'
     ``force``/``torque`` (about X) with F_b = sum F_s + M a_body, T_b = sum (T_s + r_s x F_s).
     """
-    x, v, omega, radius, mass = sph[0], sph[1], sph[2], sph[5], sph[6]
-    length, width, dt = geom[0], geom[1], geom[3]
+    x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
+    length, width, dt = geom.length, geom.width, geom.dt
     pair_forces(
-        model, p, x, v, omega, radius, mass, nb[1], nb[2], n_pairs, nb[4], length, dt, nb[15],
-        nb[16],
+        model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length, dt,
+        nb.pf, nb.pt,
     )  # fmt: skip
     forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False)
     reduce_to_bodies(
-        sph[3], sph[4], x, bod[0], bod[10], bod[11], length, bod[7], bod[8],
+        sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
     )  # fmt: skip
     ax, ay, az = body_acceleration(t, gravity, drive)
-    _add_body_force(bod[7], bod[5], ax, ay, az)
+    _add_body_force(bod.force, bod.mass, ax, ay, az)
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def _bodies_half_step(dt, drift, rotation, bod, sph, length):
     """Body kick (+ drift, free rotation, wrap), then place the members (x, v, spin)."""
     kick_drift_bodies(
-        dt, drift, rotation, bod[0], bod[1], bod[2], bod[3], bod[7], bod[8], bod[4], bod[6],
-        bod[9],
+        dt, drift, rotation, bod.x, bod.v, bod.q, bod.ang_mom, bod.force, bod.torque, bod.inv_mass,
+        bod.moments, bod.omega,
     )  # fmt: skip
     if drift:
-        _wrap_bodies(bod[0], length)
-    update_members(bod[0], bod[1], bod[2], bod[9], bod[12], bod[13], sph[0], sph[1], sph[2])
+        _wrap_bodies(bod.x, length)
+    update_members(
+        bod.x, bod.v, bod.q, bod.omega, bod.offsets, bod.body_of, sph.x, sph.v, sph.omega
+    )
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -268,14 +270,14 @@ def bodies_forces_kick(
 
     """
     x, v, omega, force, torque, radius, mass, wall_hist = (
-        sph[0], sph[1], sph[2], sph[3], sph[4], sph[5], sph[6], sph[9]
+        sph.x, sph.v, sph.omega, sph.force, sph.torque, sph.radius, sph.mass, sph.wall_hist
     )  # fmt: skip
-    part_start, part_pairs, pf, pt = nb[13], nb[14], nb[15], nb[16]
+    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
     body_x, body_v, q, ang_mom, inv_mass, body_mass, moments = (
-        bod[0], bod[1], bod[2], bod[3], bod[4], bod[5], bod[6]
+        bod.x, bod.v, bod.q, bod.ang_mom, bod.inv_mass, bod.mass, bod.moments
     )  # fmt: skip
     body_force, body_torque, body_omega, start, members, offsets = (
-        bod[7], bod[8], bod[9], bod[10], bod[11], bod[12]
+        bod.force, bod.torque, bod.omega, bod.start, bod.members, bod.offsets
     )  # fmt: skip
     px = 0.0
     for b in numba.prange(body_x.shape[0]):
@@ -346,21 +348,21 @@ def advance_clumps(
 
     Two parallel regions per step, as the sphere integrator.
     """
-    length, width, skin, dt = geom[0], geom[1], geom[2], geom[3]
+    length, width, skin, dt = geom.length, geom.width, geom.skin, geom.dt
     limit = 0.25 * skin * skin
-    body_of = bod[13]
-    x, v, omega, radius, mass = sph[0], sph[1], sph[2], sph[5], sph[6]
+    body_of = bod.body_of
+    x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
     for s in range(n_steps):
         if s == 0 and not resume:
             _bodies_half_step(dt, True, rotation, bod, sph, length)
-        if max_displacement_sq(x, nb[0], n, length) > limit:
+        if max_displacement_sq(x, nb.x_ref, n, length) > limit:
             status, need = build(n, sph, body_of, nb, counters, geom)
             if status != OK:
                 return status, s, need
         t = (step0 + s + 1) * dt
         pair_forces(
-            model, p, x, v, omega, radius, mass, nb[1], nb[2], counters[0], nb[4], length, dt,
-            nb[15], nb[16],
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist, length,
+            dt, nb.pf, nb.pt,
         )  # fmt: skip
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(

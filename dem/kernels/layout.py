@@ -1,0 +1,76 @@
+"""Named array layouts the kernels take: no index number carries physics.
+
+Each layout is a :class:`typing.NamedTuple`, which numba compiles as a tuple whose fields are read
+by name (``sph.inv_mass``, ``nb.part_pairs``). :mod:`dem.state` builds them from its dataclasses
+(``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap`` pair
+capacity.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class SphereArrays(NamedTuple):
+    """Per-sphere state (:class:`dem.state.Spheres`)."""
+
+    x: np.ndarray  # (n, 3) positions, m
+    v: np.ndarray  # (n, 3) velocities, m/s
+    omega: np.ndarray  # (n, 3) angular velocities, rad/s
+    force: np.ndarray  # (n, 3) forces, N
+    torque: np.ndarray  # (n, 3) torques, N m
+    radius: np.ndarray  # (n,) m
+    mass: np.ndarray  # (n,) kg (a clump member carries its clump's mass)
+    inv_mass: np.ndarray  # (n,) 1/kg
+    inv_inertia: np.ndarray  # (n,) 1/(kg m^2)
+    wall_hist: np.ndarray  # (n, N_WALLS, 3) tangential springs of the wall contacts, m
+
+
+class BodyArrays(NamedTuple):
+    """Rigid clumps and their members (:class:`dem.state.Bodies`)."""
+
+    x: np.ndarray  # (B, 3) centres of mass, m
+    v: np.ndarray  # (B, 3) centre-of-mass velocities, m/s
+    q: np.ndarray  # (B, 4) orientation quaternions (w, x, y, z)
+    ang_mom: np.ndarray  # (B, 3) angular momenta, trough frame, kg m^2/s
+    inv_mass: np.ndarray  # (B,) 1/kg
+    mass: np.ndarray  # (B,) kg
+    moments: np.ndarray  # (B, 3) principal moments, kg m^2
+    force: np.ndarray  # (B, 3) total forces, N
+    torque: np.ndarray  # (B, 3) torques about the centre of mass, N m
+    omega: np.ndarray  # (B, 3) angular velocities, rad/s
+    start: np.ndarray  # (B + 1,) int64 CSR start of each body's members
+    members: np.ndarray  # (n,) int64 member sphere indices, body by body
+    offsets: np.ndarray  # (n, 3) member offsets in the body frame, m
+    body_of: np.ndarray  # (n,) int64 body of each sphere
+
+
+class PairArrays(NamedTuple):
+    """Verlet pair list with contact history, cell work arrays and CSR index (PairList)."""
+
+    x_ref: np.ndarray  # (n, 3) positions at the last build, m
+    pair_i: np.ndarray  # (cap,) int64 first sphere of each pair
+    pair_j: np.ndarray  # (cap,) int64 second sphere
+    pair_key: np.ndarray  # (cap,) int64 i n + j, the history key, sorted
+    hist: np.ndarray  # (cap, 3) tangential elongation per pair, m
+    scratch_j: np.ndarray  # build scratch: partners
+    scratch_key: np.ndarray  # build scratch: keys
+    scratch_hist: np.ndarray  # build scratch: carried history
+    counts: np.ndarray  # per-sphere pair counts
+    offsets: np.ndarray  # per-sphere pair offsets
+    cell_of: np.ndarray  # (n,) cell of each sphere
+    cell_start: np.ndarray  # CSR start per cell
+    cell_particles: np.ndarray  # spheres, cell by cell
+    part_start: np.ndarray  # (n + 1,) CSR start of each sphere's pairs
+    part_pairs: np.ndarray  # (2 cap,) int64 entries 2 k + role, sphere by sphere
+    pf: np.ndarray  # (cap, 3) pair forces on the first sphere, N
+    pt: np.ndarray  # (2 cap, 3) pair torques on i (row 2 k) and j (row 2 k + 1), N m
+
+
+class Geometry(NamedTuple):
+    """The periodic section and the step (:class:`dem.simulation.Simulation`)."""
+
+    length: float  # period along x, m
+    width: float  # distance between the side walls, m
+    skin: float  # Verlet skin, m
+    dt: float  # time step, s
