@@ -25,8 +25,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from dem import tangential
-from dem.config import GRAVITY
+from dem import drive, tangential
 from dem.errors import InputError
 
 #: File name of a case inside its directory.
@@ -85,8 +84,8 @@ class DriveSpec:
 
     @property
     def omega(self) -> float:
-        """Angular frequency omega = 2 pi f, rad/s."""
-        return 2.0 * math.pi * self.frequency
+        """Angular frequency omega = 2 pi f, rad/s (:func:`dem.drive.omega`)."""
+        return drive.omega(self.frequency)
 
 
 @dataclass(frozen=True)
@@ -482,19 +481,17 @@ def resolve_drive(
 ) -> DriveSpec:
     """The drive from exactly one of amplitude (m) and throw_number; the other is computed.
 
-    Gamma = A omega^2 sin(phi) / (g cos(alpha)), phi = ``angle`` and alpha = ``inclination`` in
-    degrees. Values are not range-checked here (``load_case`` checks a file's values first).
+    Gamma = A omega^2 sin(phi) / (g cos(alpha)) (:mod:`dem.drive`), phi = ``angle`` and
+    alpha = ``inclination`` in degrees. Values are not range-checked here (``load_case`` checks
+    a file's values first).
     """
     if (amplitude is None) == (throw_number is None):
         raise ValueError("give exactly one of amplitude and throw_number")
-    omega = 2.0 * math.pi * frequency
-    scale = (
-        omega**2 * math.sin(math.radians(angle)) / (GRAVITY * math.cos(math.radians(inclination)))
-    )
+    given = "amplitude" if amplitude is not None else "throw_number"
     if amplitude is not None:
-        given, throw_number = "amplitude", amplitude * scale
+        throw_number = drive.throw_number(amplitude, frequency, angle, inclination)
     else:
-        given, amplitude = "throw_number", throw_number / scale
+        amplitude = drive.amplitude(throw_number, frequency, angle, inclination)
     return DriveSpec(frequency, angle, amplitude, throw_number, given)
 
 

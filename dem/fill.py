@@ -18,6 +18,7 @@ import numpy as np
 
 from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES
 from dem.kernels.rigid import quat_to_matrix
+from dem.trough import Trough
 
 
 def sphere_box_height(n: int, radius: float, length: float, width: float) -> float:
@@ -95,6 +96,7 @@ def random_fill(
         raise ValueError(f"trough width {width} m leaves no room for spheres of radius {radius} m")
     if height is None:
         height = sphere_box_height(n, radius, length, width)
+    section = Trough(length, width)
     pos = np.empty((n, 3))
     d2_min = (2.0 * radius) ** 2
     placed = 0
@@ -107,8 +109,7 @@ def random_fill(
                     rng.uniform(radius, max(radius, height - radius)),
                 ]
             )
-            d = pos[:placed] - c
-            d[:, 0] -= length * np.round(d[:, 0] / length)
+            d = section.minimum_image(pos[:placed] - c)
             if placed == 0 or np.min(np.einsum("ij,ij->i", d, d)) >= d2_min:
                 pos[placed] = c
                 placed += 1
@@ -162,6 +163,7 @@ def random_fill_clumps(
         raise ValueError(f"trough width {width} m leaves no room for spheres of radius {r_max} m")
     if height is None:
         height = clump_box_height(n, template, length, width)
+    section = Trough(length, width)
     k = len(radii)
     pos = np.empty((n, 3))
     quat = np.empty((n, 4))
@@ -184,13 +186,11 @@ def random_fill_clumps(
                 continue
             m = placed * k
             if placed:
-                near = pos[:placed] - c
-                near[:, 0] -= length * np.round(near[:, 0] / length)
+                near = section.minimum_image(pos[:placed] - c)
                 close = np.einsum("ij,ij->i", near, near) < (2.0 * bound) ** 2
                 if np.any(close):
                     idx = (np.flatnonzero(close)[:, None] * k + np.arange(k)).ravel()
-                    d = members[idx][None, :, :] - xs[:, None, :]
-                    d[..., 0] -= length * np.round(d[..., 0] / length)
+                    d = section.minimum_image(members[idx][None, :, :] - xs[:, None, :])
                     dist2 = np.einsum("abi,abi->ab", d, d)
                     reach = radii[:, None] + member_r[idx][None, :]
                     if np.any(dist2 < reach**2):

@@ -150,8 +150,9 @@ def bed_snapshot_figure(
     import numpy as np
     from matplotlib.collections import EllipseCollection
 
-    x = np.asarray(positions, float).copy()
-    x[:, 0] = np.mod(x[:, 0], length)
+    from dem.trough import Trough
+
+    x = Trough(length, width).wrap(positions)
     r = np.asarray(radius, float)
     vx = np.asarray(vx, float)
     top = float(max(np.max(x[:, 2] + r), 0.25 * width)) if len(r) else 0.25 * width

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import plots
+from dem import measure, plots
 
 COMPARISON_COLUMNS = (
     "run",
@@ -56,6 +56,8 @@ COMPARISON_COLUMNS = (
 def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Running mean and its standard error over the first k values, k = 1..C.
 
+    :func:`dem.measure.running_mean_and_stderr`, so the last point is the run's summary value.
+
     Args:
         values: (C,) samples (per-cycle means, m/s).
 
@@ -63,12 +65,7 @@ def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) / sqrt(k), nan for k = 1.
 
     """
-    v = np.asarray(values, dtype=np.float64)
-    mean = np.cumsum(v) / np.arange(1, v.size + 1)
-    stderr = np.full(v.size, np.nan)
-    for k in range(2, v.size + 1):  # C is a few hundred cycles at most
-        stderr[k - 1] = np.std(v[:k], ddof=1) / math.sqrt(k)
-    return mean, stderr
+    return measure.running_mean_and_stderr(values)
 
 
 def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:

@@ -233,12 +233,10 @@ class Simulation:
         k = p.n_pairs
         if k:
             i, j = p.pair_i[:k], p.pair_j[:k]
-            d = s.x[i] - s.x[j]
-            d[:, 0] -= self.trough.length * np.round(d[:, 0] / self.trough.length)
+            d = self.trough.minimum_image(s.x[i] - s.x[j])
             delta = r[i] + r[j] - np.sqrt(np.einsum("ij,ij->i", d, d))
             worst = max(worst, float(np.max(delta / np.minimum(r[i], r[j]))))
-        half = 0.5 * self.trough.width
-        gaps = np.stack([s.x[:, 2], s.x[:, 1] + half, half - s.x[:, 1]])
+        gaps = self.trough.wall_gaps(s.x)
         worst = max(worst, float(np.max((r - gaps) / r)))
         return worst
 
@@ -342,15 +340,11 @@ class Simulation:
         k = p.n_pairs
         if k:
             i, j = p.pair_i[:k], p.pair_j[:k]
-            d = s.x[i] - s.x[j]
-            d[:, 0] -= self.trough.length * np.round(d[:, 0] / self.trough.length)
+            d = self.trough.minimum_image(s.x[i] - s.x[j])
             touch = np.einsum("ij,ij->i", d, d) < (s.radius[i] + s.radius[j]) ** 2
             np.add.at(count, i[touch], 1)
             np.add.at(count, j[touch], 1)
-        half = 0.5 * self.trough.width
-        count += s.x[:, 2] < s.radius
-        count += s.x[:, 1] + half < s.radius
-        count += half - s.x[:, 1] < s.radius
+        count += np.sum(self.trough.wall_gaps(s.x) < s.radius, axis=0)
         return count
 
     # --- construction (dem.setup) -------------------------------------------------------------

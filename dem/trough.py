@@ -19,6 +19,14 @@ the extra acceleration every grain gets while the walls stay still. Contact forc
 relative positions and velocities only, which are the same in both frames, so nothing is lost.
 Velocities in this frame are the velocities relative to the trough, the ones the conveying
 velocity is measured in (DESIGN.md section 3).
+
+Walls. This module is the Python description of the walls the kernel
+(:mod:`dem.kernels.forces`) computes contacts with, in the kernel's order w = 0, 1, 2
+(:data:`WALLS`): the floor z = 0 (inward normal +z), the side wall y = -width/2 (+y) and the side
+wall y = +width/2 (-y). :meth:`Trough.wall_gaps` gives the distance of points from them (for
+Python-side overlap and contact checks) and :meth:`Trough.wall_corners` their outline (drawn by
+:mod:`dem.io.vtk`). :meth:`Trough.wrap` and :meth:`Trough.minimum_image` are the periodicity in x
+(the fill and the writers use them).
 """
 
 from __future__ import annotations
@@ -28,7 +36,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dem import drive
 from dem.config import GRAVITY
+
+#: The kernel's walls in its order w = 0, 1, 2: (name, inward unit normal). Wall w lies where
+#: the gap of :meth:`Trough.wall_gaps` is zero: z = 0, y = -width/2 and y = +width/2.
+WALLS = (
+    ("floor", (0.0, 0.0, 1.0)),
+    ("side wall y = -width/2", (0.0, 1.0, 0.0)),
+    ("side wall y = +width/2", (0.0, -1.0, 0.0)),
+)
 
 
 @dataclass(frozen=True)
@@ -87,12 +104,12 @@ class Trough:
 
     @property
     def throw_number(self) -> float:
-        """Gamma = A omega^2 sin(phi) / (g cos(alpha))."""
-        return (
-            self.amplitude
-            * self.omega**2
-            * math.sin(self.angle)
-            / (GRAVITY * math.cos(self.inclination))
+        """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (:func:`dem.drive.throw_number`)."""
+        return drive.throw_number(
+            self.amplitude,
+            self.omega / (2.0 * math.pi),
+            math.degrees(self.angle),
+            math.degrees(self.inclination),
         )
 
     def drive_array(self, on: bool = True) -> np.ndarray:
@@ -113,3 +130,43 @@ class Trough:
     def velocity(self, t: float) -> np.ndarray:
         """Laboratory trough velocity s'(t) = A omega cos(omega t) e, shape (3,), m/s."""
         return self.amplitude * self.omega * math.cos(self.omega * t) * self.direction
+
+    def wrap(self, x: np.ndarray) -> np.ndarray:
+        """Positions (n, 3) with x wrapped into the periodic section [0, length), a new array, m."""
+        out = np.array(x, dtype=np.float64)
+        out[:, 0] = np.mod(out[:, 0], self.length)
+        return out
+
+    def minimum_image(self, d: np.ndarray) -> np.ndarray:
+        """Separations (..., 3) with x taken to the nearest periodic image, a new array, m.
+
+        d_x - L round(d_x / L), so |d_x| <= L/2 (the kernels' minimum image).
+        """
+        out = np.array(d, dtype=np.float64)
+        out[..., 0] -= self.length * np.round(out[..., 0] / self.length)
+        return out
+
+    def wall_gaps(self, x: np.ndarray) -> np.ndarray:
+        """Distance of points (n, 3) from each wall along its inward normal, (3, n), m.
+
+        Rows in the kernel's wall order (:data:`WALLS`): z, y + width/2, width/2 - y. A sphere of
+        radius r touches wall w where gap[w] < r; its overlap there is r - gap[w].
+        """
+        x = np.asarray(x, dtype=np.float64)
+        half = 0.5 * self.width
+        return np.stack([x[:, 2], x[:, 1] + half, half - x[:, 1]])
+
+    def wall_corners(self, height: float) -> np.ndarray:
+        """Corners of the walls as drawn, (3, 4, 3), m, in the kernel's order (:data:`WALLS`).
+
+        The floor z = 0 over 0 <= x <= length, |y| <= width/2; each side wall y = -+width/2 over
+        0 <= x <= length, 0 <= z <= ``height``. Corners go round each quad.
+        """
+        lo, hi, length = -0.5 * self.width, 0.5 * self.width, self.length
+        return np.array(
+            [
+                [[0.0, lo, 0.0], [length, lo, 0.0], [length, hi, 0.0], [0.0, hi, 0.0]],
+                [[0.0, lo, 0.0], [length, lo, 0.0], [length, lo, height], [0.0, lo, height]],
+                [[0.0, hi, 0.0], [length, hi, 0.0], [length, hi, height], [0.0, hi, height]],
+            ]
+        )

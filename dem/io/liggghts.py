@@ -112,15 +112,13 @@ def machine_info() -> dict:
 
 
 def damping_ratio(restitution: float) -> float:
-    """Return the damping ratio zeta of a linear spring-dashpot with restitution e.
+    """Return the damping ratio zeta of a linear spring-dashpot with restitution e in [0, 1].
 
-    zeta = -ln(e) / sqrt(ln(e)^2 + pi^2), from e = exp(-zeta pi / sqrt(1 - zeta^2)); e = 0
-    gives critical damping, zeta = 1.
+    zeta = -beta = -ln(e) / sqrt(ln(e)^2 + pi^2) (:func:`dem.kernels.contacts.damping_beta`, the
+    kernels' value), from e = exp(-zeta pi / sqrt(1 - zeta^2)); e = 0 gives critical damping,
+    zeta = 1.
     """
-    if restitution <= 0.0:
-        return 1.0
-    log_e = math.log(restitution)
-    return -log_e / math.sqrt(log_e**2 + math.pi**2)
+    return -damping_beta(restitution)
 
 
 def _prime_at_least(n: int) -> int:

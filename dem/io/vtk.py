@@ -4,10 +4,14 @@ Layout of an output directory::
 
     particles.pvd                  ParaView Data collection (open this one)
     frames/particles_NNNNNN.vtp    spheres of frame NNNNNN (binary, zlib-compressed XML PolyData)
-    frames/trough_NNNNNN.vtp       trough of frame NNNNNN: floor and the two side walls
+    frames/trough.vtp              trough (floor and the two side walls), trough frame: one file
+    frames/trough_NNNNNN.vtp       trough of frame NNNNNN, lab frame (it moves with the drive)
 
 Every frame is one ``<DataSet timestep="t" part="0" .../>`` (the spheres) and one with
-``part="1"`` (the trough) in the collection, t in seconds of simulated time. The collection is
+``part="1"`` (the trough) in the collection, t in seconds of simulated time. The trough's
+geometry is that of :class:`dem.trough.Trough` (:meth:`~dem.trough.Trough.wall_corners`, the
+kernel's walls), built once per writer: in the trough frame it is written once and every frame
+refers to it, in the lab frame each frame writes a shifted copy. The collection is
 rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
 collection that opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a
 last time.
@@ -43,8 +47,12 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import pyvista as pv
 
+from dem.trough import Trough
+
 PVD_NAME = "particles.pvd"
 FRAMES_DIR = "frames"
+#: The trough's file in the trough frame, shared by every frame.
+TROUGH_FILE = "trough.vtp"
 PARTICLE_ARRAYS = ("radius", "velocity", "grain_id", "clump_id", "contact_count")
 
 
@@ -53,28 +61,18 @@ def trough_polydata(
 ) -> pv.PolyData:
     """Floor and side walls of the trough section as three quads, coordinates in m.
 
-    Floor: z = 0, 0 <= x <= length, |y| <= width/2; side walls: y = +-width/2,
-    0 <= z <= wall_height. Cell data ``part``: 0 floor, 1 wall y = -width/2, 2 wall y = +width/2.
+    The kernel's walls as :meth:`dem.trough.Trough.wall_corners` gives them. Floor: z = 0,
+    0 <= x <= length, |y| <= width/2; side walls: y = +-width/2, 0 <= z <= wall_height. Cell data
+    ``part``: the kernel's wall index, 0 floor, 1 wall y = -width/2, 2 wall y = +width/2.
     ``shift`` (3,) is added to every point (the lab-frame drive displacement).
     """
-    h = 0.5 * width
-    pts = np.array(
-        [
-            [0.0, -h, 0.0],
-            [length, -h, 0.0],
-            [length, h, 0.0],
-            [0.0, h, 0.0],
-            [0.0, -h, wall_height],
-            [length, -h, wall_height],
-            [length, h, wall_height],
-            [0.0, h, wall_height],
-        ]
-    )
+    corners = Trough(length, width).wall_corners(wall_height)  # (3 walls, 4 corners, 3)
+    pts = corners.reshape(-1, 3)
     if shift is not None:
         pts = pts + np.asarray(shift, dtype=np.float64).reshape(1, 3)
-    faces = np.array([4, 0, 1, 2, 3, 4, 0, 1, 5, 4, 4, 3, 2, 6, 7])
-    mesh = pv.PolyData(pts, faces=faces)
-    mesh.cell_data["part"] = np.array([0, 1, 2], dtype=np.int32)
+    faces = np.column_stack([np.full(len(corners), 4), np.arange(pts.shape[0]).reshape(-1, 4)])
+    mesh = pv.PolyData(pts, faces=faces.ravel())
+    mesh.cell_data["part"] = np.arange(len(corners), dtype=np.int32)
     return mesh
 
 
@@ -119,7 +117,9 @@ class VTKSeriesWriter:
         self.pvd_path = self.out_dir / PVD_NAME
         # (time, particles file, trough file); a resumed run passes the entries it had
         self._entries: list[tuple[float, str, str]] = [tuple(e) for e in entries or []]
-        self._trough_fixed: pv.PolyData | None = None
+        self._section = Trough(self.length, self.width)
+        self._trough_mesh = trough_polydata(self.length, self.width, self.wall_height)
+        self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
 
     @property
     def entries(self) -> list[tuple[float, str, str]]:
@@ -183,8 +183,7 @@ class VTKSeriesWriter:
         if not np.all(np.isfinite(shift)):
             raise ValueError("drive_displacement must be finite")
 
-        pos = pos.copy()
-        pos[:, 0] = np.mod(pos[:, 0], self.length)
+        pos = self._section.wrap(pos)
         vel = arrays["velocity"].astype(np.float64)
         if self.lab_frame:
             pos += shift
@@ -215,9 +214,8 @@ class VTKSeriesWriter:
 
         index = len(self._entries)
         p_name = f"particles_{index:06d}.vtp"
-        t_name = f"trough_{index:06d}.vtp"
         mesh.save(self.frames_dir / p_name, binary=True, compression="zlib")
-        self._trough(shift).save(self.frames_dir / t_name, binary=True, compression="zlib")
+        t_name = self._write_trough(index, shift)
         self._entries.append((float(time), p_name, t_name))
         self._write_pvd()
         return self.frames_dir / p_name
@@ -233,12 +231,20 @@ class VTKSeriesWriter:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _trough(self, shift: np.ndarray) -> pv.PolyData:
-        if self.lab_frame:
-            return trough_polydata(self.length, self.width, self.wall_height, shift)
-        if self._trough_fixed is None:
-            self._trough_fixed = trough_polydata(self.length, self.width, self.wall_height)
-        return self._trough_fixed
+    def _write_trough(self, index: int, shift: np.ndarray) -> str:
+        """Write the trough of frame ``index`` if it needs a file of its own; returns its name."""
+        if not self.lab_frame:
+            if not self._trough_written:
+                self._trough_mesh.save(
+                    self.frames_dir / TROUGH_FILE, binary=True, compression="zlib"
+                )
+                self._trough_written = True
+            return TROUGH_FILE
+        name = f"trough_{index:06d}.vtp"
+        moved = self._trough_mesh.copy(deep=True)
+        moved.points = self._trough_mesh.points + shift.reshape(1, 3)
+        moved.save(self.frames_dir / name, binary=True, compression="zlib")
+        return name
 
     def _write_pvd(self) -> None:
         lines = [

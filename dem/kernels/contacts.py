@@ -100,7 +100,9 @@ def damping_beta(restitution: float) -> float:
     """Return beta = ln(e) / sqrt(ln(e)^2 + pi^2) for 0 < e <= 1, and -1 for e = 0.
 
     beta = -1 is critical damping of the linear spring-dashpot (the limit e -> 0 of the formula);
-    the logarithm of 0 is never evaluated.
+    the logarithm of 0 is never evaluated. -beta is the damping ratio zeta of the linear
+    spring-dashpot, e = exp(-zeta pi / sqrt(1 - zeta^2)); :mod:`dem.tangential` and the LIGGGHTS
+    export (:func:`dem.io.liggghts.damping_ratio`) take it from here.
     """
     if not 0.0 <= restitution <= 1.0:
         raise ValueError(f"restitution must lie in [0, 1], got {restitution}")

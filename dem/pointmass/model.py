@@ -10,12 +10,11 @@ averaged over ``PM_AVERAGE_CYCLES`` cycles, and ``spread`` is their standard dev
 Velocities are normalised by the drive velocity ``A omega cos(phi)`` (the paper's Fig. 6).
 """
 
-import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from dem import config
+from dem import config, drive
 from dem.pointmass import _kernel
 from dem.pointmass.validate import (
     check_angle,
@@ -87,37 +86,27 @@ class VelocityResult:
         return asdict(self)
 
 
+# The drive relations in the point-mass argument order (Gamma or A, phi, alpha, f); the
+# physics is dem.drive's.
+
+
 def amplitude_from_throw_number(
     throw_number: float, angle: float, inclination: float, frequency: float
 ) -> float:
-    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), in metres (angles in degrees)."""
-    omega = 2.0 * math.pi * frequency
-    return (
-        throw_number
-        * config.GRAVITY
-        * math.cos(math.radians(inclination))
-        / (omega**2 * math.sin(math.radians(angle)))
-    )
+    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m (:func:`dem.drive.amplitude`)."""
+    return drive.amplitude(throw_number, frequency, angle, inclination)
 
 
 def throw_number_from_amplitude(
     amplitude: float, angle: float, inclination: float, frequency: float
 ) -> float:
-    """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (Eq. 3; angles in degrees)."""
-    omega = 2.0 * math.pi * frequency
-    return (
-        amplitude
-        * omega**2
-        * math.sin(math.radians(angle))
-        / (config.GRAVITY * math.cos(math.radians(inclination)))
-    )
+    """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (Eq. 3; :func:`dem.drive.throw_number`)."""
+    return drive.throw_number(amplitude, frequency, angle, inclination)
 
 
 def drive_velocity(throw_number, angle, inclination, frequency):
-    """A omega cos(phi) in m/s for a drive given by its throw number (arrays broadcast)."""
-    omega = 2.0 * np.pi * frequency
-    phi = np.radians(angle)
-    return throw_number * config.GRAVITY * np.cos(np.radians(inclination)) / (omega * np.tan(phi))
+    """A omega cos(phi), m/s, of a drive given by Gamma (:mod:`dem.drive`; arrays broadcast)."""
+    return drive.drive_velocity_from_throw_number(throw_number, frequency, angle, inclination)
 
 
 def _regime_codes(stick, forward, backward, flight, periodic):

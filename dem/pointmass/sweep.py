@@ -31,7 +31,7 @@ from typing import IO
 
 import numpy as np
 
-from dem import config
+from dem import config, drive
 from dem.errors import InputError
 from dem.pointmass.model import REGIMES, velocities
 from dem.pointmass.validate import check_angle, check_positive, check_throw_number
@@ -149,38 +149,34 @@ class Optimum:
 
 
 def _drive(over, hold, x, fixed):
-    """Throw number, angle, amplitude and frequency along the scanned variable x."""
-    g = config.GRAVITY
-    cos_a = math.cos(math.radians(fixed["inclination"]))
+    """Throw number, angle, amplitude and frequency along the scanned variable x (dem.drive)."""
+    alpha = fixed["inclination"]
     if over == "angle":
         phi = x
-        sin_phi = np.sin(np.radians(phi))
         f = np.full_like(x, fixed["frequency"])
-        omega = 2 * np.pi * f
         if hold == "throw_number":
             gamma = np.full_like(x, fixed["throw_number"])
-            amp = gamma * g * cos_a / (omega**2 * sin_phi)
-        elif hold == "amplitude":
-            amp = np.full_like(x, fixed["amplitude"])
-            gamma = amp * omega**2 * sin_phi / (g * cos_a)
-        else:  # acceleration: A omega^2 = K g
-            amp = np.full_like(x, fixed["peak_acceleration"] * g) / omega**2
-            gamma = fixed["peak_acceleration"] * sin_phi / cos_a
+            amp = drive.amplitude(gamma, f, phi, alpha)
+        else:
+            if hold == "amplitude":
+                amp = np.full_like(x, fixed["amplitude"])
+            else:  # acceleration: A omega^2 = K g
+                peak = fixed["peak_acceleration"] * config.GRAVITY
+                amp = np.full_like(x, peak) / drive.omega(f) ** 2
+            gamma = drive.throw_number(amp, f, phi, alpha)
     else:
         gamma = x
         phi = np.full_like(x, fixed["angle"])
-        sin_phi = math.sin(math.radians(fixed["angle"]))
         if hold == "frequency":
             f = np.full_like(x, fixed["frequency"])
-            amp = gamma * g * cos_a / ((2 * np.pi * f) ** 2 * sin_phi)
+            amp = drive.amplitude(gamma, f, fixed["angle"], alpha)
         elif hold == "amplitude":
             amp = np.full_like(x, fixed["amplitude"])
-            f = np.sqrt(gamma * g * cos_a / (amp * sin_phi)) / (2 * np.pi)
-        else:  # drive_velocity: A omega = V
+            f = drive.frequency_for_amplitude(gamma, amp, fixed["angle"], alpha)
+        else:  # drive_velocity: the peak trough speed A omega = V
             v_drive = fixed["drive_velocity"]
-            omega = gamma * g * cos_a / (v_drive * sin_phi)
-            f = omega / (2 * np.pi)
-            amp = v_drive / omega
+            f = drive.frequency_for_peak_speed(gamma, v_drive, fixed["angle"], alpha)
+            amp = v_drive / drive.omega(f)
     return gamma, phi, amp, f
 
 
@@ -195,7 +191,7 @@ def _velocity_along(over, hold, x, fixed):
     r = velocities(
         gamma, phi, fixed["friction"], fixed["inclination"], fixed["eps_t"], fixed["eps_n"]
     )
-    r["velocity"] = r["velocity_norm"] * amp * 2 * np.pi * f * np.cos(np.radians(phi))
+    r["velocity"] = r["velocity_norm"] * drive.drive_velocity(amp, f, phi)
     return r[_objective(over, hold)], r, gamma, phi, amp, f
 
 
