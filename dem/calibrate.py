@@ -83,7 +83,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
         max_steps: Give up (RuntimeError) if the impact has not ended after this many steps.
 
     """
-    from dem.simulation import Simulation
+    from dem import setup
 
     if not 0.0 <= incidence < 90.0:
         raise ValueError(f"incidence must lie in [0, 90) deg, got {incidence}")
@@ -96,7 +96,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     q = None if quat is None else np.asarray(quat, dtype=np.float64)
     height = _lowest_offset(case, q)
     x0 = np.array([[0.5 * case.trough.length, 0.0, height + 1e-9]])
-    sim = Simulation.from_grains(
+    sim = setup.from_grains(
         case, x0, orientations=None if q is None else q[None, :], velocities=v0[None, :],
         impact_speed=speed,
     )  # fmt: skip

@@ -347,22 +347,6 @@ class Simulation:
         count += np.sum(self.trough.wall_gaps(s.x) < s.radius, axis=0)
         return count
 
-    # --- construction (dem.setup) -------------------------------------------------------------
-
-    @classmethod
-    def from_case(cls, case, *, timestep: float | None = None) -> Simulation:
-        """Shortcut for :func:`dem.setup.from_case`."""
-        from dem import setup
-
-        return setup.from_case(case, timestep=timestep)
-
-    @classmethod
-    def from_grains(cls, case, positions, **kwargs) -> Simulation:
-        """Shortcut for :func:`dem.setup.from_grains`."""
-        from dem import setup
-
-        return setup.from_grains(case, positions, **kwargs)
-
 
 def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> np.ndarray:
     """Per-cycle mean conveying velocities of whole drive cycles, (cycles,), m/s.

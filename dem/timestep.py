@@ -101,7 +101,7 @@ def timestep_limits(
     """Automatic time step and stability limit, s, for equal spheres.
 
     ``mass`` replaces the sphere's own mass (a clump member: the clump's effective mass at the
-    member, see :meth:`Simulation.from_case`).
+    member, see :func:`timestep_for`).
 
     Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
     the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:

@@ -33,32 +33,31 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
-import datetime
 import json
 import math
 import re
 import shutil
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-sys.path.insert(0, str(ROOT))
-
-from dem import __version__, pointmass  # noqa: E402
-from dem.case import load_case  # noqa: E402
-from dem.io.liggghts import (  # noqa: E402
+from dem import __version__, pointmass, provenance
+from dem.case import load_case
+from dem.io.liggghts import (
     DECK_NAME,
-    LOOP_RE,
-    VERSION_RE,
+    LIGGGHTS_INSTALL,
     VX_FILE,
+    find_liggghts,
     machine_info,
+    run_liggghts,
     write_deck,
 )
+from dem.measure import conveying_velocity
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
 
 ANGLES = (5.0, 15.0, 25.0, 35.0, 45.0, 55.0)
 RESTITUTION = 0.06
@@ -85,11 +84,6 @@ def cycle_edges(case, n_cycles: int) -> list[int]:
     """Driven-step index ending each cycle, as dem.runner counts them: round(c P / dt)."""
     period = 1.0 / case.drive.frequency
     return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
-
-
-def stats(per_cycle) -> tuple[float, float]:
-    u = np.asarray(per_cycle, dtype=float)
-    return float(u.mean()), float(u.std(ddof=1) / math.sqrt(u.size))
 
 
 def diagnostics(per_cycle) -> dict:
@@ -120,10 +114,10 @@ def tag(angle: float) -> str:
 
 
 # --------------------------------------------------------------------------- LIGGGHTS
-def run_liggghts(case, args) -> dict:
-    exe = shutil.which("liggghts")
-    if exe is None:
-        msg = "liggghts is not on PATH: LIGGGHTS half skipped (apt-get install -y liggghts)"
+def liggghts_point(case, args) -> dict:
+    """LIGGGHTS on the case's deck; per-cycle means binned into dem's drive cycles."""
+    if find_liggghts() is None:
+        msg = f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})"
         print(msg)
         return {"skipped": msg}
     s, c = case.run.settle_cycles, case.run.cycles
@@ -145,21 +139,10 @@ def run_liggghts(case, args) -> dict:
     if work.exists():
         shutil.rmtree(work)
     shutil.copytree(deck_dir, work)
-    command = [exe, "-in", DECK_NAME]
-    t0 = time.perf_counter()
-    done = subprocess.run(command, cwd=work, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    (work / "stdout.txt").write_text(done.stdout + done.stderr)
-    loops = LOOP_RE.findall(done.stdout)
-    if done.returncode != 0 or len(loops) < 2:
-        raise SystemExit(
-            f"LIGGGHTS failed ({' '.join(command)} in {work}):\n{done.stdout[-2000:]}"
-            f"{done.stderr[-2000:]}"
-        )
-    atoms = int(loops[-1][3])
+    run = run_liggghts(work, DECK_NAME, min_loops=2)
+    atoms = run.loop_times[-1].atoms
     if atoms != case.particles.count:
         raise SystemExit(f"LIGGGHTS kept {atoms} atoms, not {case.particles.count} (grains lost)")
-    version = VERSION_RE.search(done.stdout)
     data = np.loadtxt(work / VX_FILE, comments="#")
     steps, vx = data[:, 0].astype(np.int64) - drive_start, data[:, 1]
     per_cycle = []
@@ -173,10 +156,12 @@ def run_liggghts(case, args) -> dict:
     for k in range(s):
         inside = (steps > edges[k]) & (steps <= edges[k + 1])
         settle_cycle.append(float(vx[inside].mean()) if inside.any() else math.nan)
-    mean, se = stats(per_cycle)
-    print(f"  LIGGGHTS phi = {case.drive.angle:g}: v = {mean:.5f} +- {se:.5f} m/s ({wall:.0f} s)")
+    d = case.drive
+    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
+    mean, se = v.mean, v.stderr
+    print(f"  LIGGGHTS phi = {d.angle:g}: v = {mean:.5f} +- {se:.5f} m/s ({run.wall_s:.0f} s)")
     return {
-        "version": version.group(1) if version else None,
+        "version": run.version,
         "deck": str(deck.relative_to(ROOT)),
         "command": f"cd {work.relative_to(ROOT)} && liggghts -in {DECK_NAME}",
         "log": str((work / "log.liggghts").relative_to(ROOT)),
@@ -185,8 +170,8 @@ def run_liggghts(case, args) -> dict:
         "per_cycle_velocity": per_cycle,
         "settle_cycle_velocity": settle_cycle,
         "drive_start_step": drive_start,
-        "loop_times_s": [float(x[0]) for x in loops],
-        "wall_time_s": wall,
+        "loop_times_s": [x.seconds for x in run.loop_times],
+        "wall_time_s": run.wall_s,
     }
 
 
@@ -405,6 +390,7 @@ def main(argv=None) -> None:
             "cycles": args.cycles,
             "seed": args.seed,
             "dem_version": __version__,
+            "git_commit": provenance.git_commit(),
             "machine": machine_info(),
         }
     )
@@ -424,9 +410,9 @@ def main(argv=None) -> None:
                 "pointmass": point_mass(case),
             }
         )
-        stamp = {"date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")}
+        stamp = {"date": provenance.utc_now()}
         if not args.skip_liggghts:
-            done = run_liggghts(case, args)
+            done = liggghts_point(case, args)
             if "skipped" in done and "mean_velocity" in entry.get("liggghts", {}):
                 print("  keeping the earlier LIGGGHTS result of this point")
             else:

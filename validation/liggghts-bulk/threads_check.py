@@ -13,18 +13,17 @@ import sys
 import time
 from pathlib import Path
 
+import numba
+
+from dem import setup
+from dem.case import load_case
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-import numba  # noqa: E402
-
-from dem.case import load_case  # noqa: E402
-from dem.simulation import Simulation  # noqa: E402
 
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 1
 case = load_case(ROOT / "cases" / "sphere-bed")
 case = dataclasses.replace(case, run=dataclasses.replace(case.run, timestep=5e-6))
-sim = Simulation.from_case(case)
+sim = setup.from_case(case)
 numba.set_num_threads(n)
 sim.run(200)  # compile / warm up
 for steps in (500, 2000):

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dem import setup
 from dem.case import load_case
 from dem.io.vtk import VTKSeriesWriter
 from dem.simulation import Simulation
@@ -58,7 +59,7 @@ def main() -> None:
         case, particles=dataclasses.replace(case.particles, count=args.count)
     )
     t0 = time.perf_counter()
-    sim = Simulation.from_case(case)
+    sim = setup.from_case(case)
     settle = sim.settle()
     print(
         f"filled {sim.spheres.n} spheres, settled in {settle:.3f} s simulated "

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import datetime
 import json
 import os
 import shutil
@@ -35,19 +34,24 @@ import sys
 import time
 from pathlib import Path
 
+from dem import __version__, provenance
+from dem.case import load_case
+from dem.io.liggghts import (
+    DECK_NAME,
+    LIGGGHTS_INSTALL,
+    find_liggghts,
+    machine_info,
+    run_liggghts,
+    write_deck,
+)
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(ROOT))
-
-from dem import __version__  # noqa: E402
-from dem.case import load_case  # noqa: E402
-from dem.io.liggghts import DECK_NAME, LOOP_RE, VERSION_RE, machine_info, write_deck  # noqa: E402
 
 
 def machine() -> dict:
     """The machine, plus the load average now: the machine may be shared (fastest kept)."""
-    load = [round(x, 2) for x in os.getloadavg()] if hasattr(os, "getloadavg") else None
-    return machine_info() | {"load_average_at_start": load}
+    return machine_info() | {"load_average_at_start": provenance.load_average()}
 
 
 def wait_until_quiet(args) -> float | None:
@@ -56,16 +60,16 @@ def wait_until_quiet(args) -> float | None:
     On a machine shared with other work a timing is only as good as the cores left to it.
     Returns the load average at the start of the timing.
     """
-    if not hasattr(os, "getloadavg"):
-        return None
+    load = provenance.load_average()
     waited = 0.0
-    while args.max_load is not None and os.getloadavg()[0] > args.max_load:
+    while load is not None and args.max_load is not None and load > args.max_load:
         if waited >= args.max_wait:
-            print(f"load still {os.getloadavg()[0]:.2f} after {waited:.0f} s; timing anyway")
+            print(f"load still {load:.2f} after {waited:.0f} s; timing anyway")
             break
         time.sleep(10.0)
         waited += 10.0
-    return round(os.getloadavg()[0], 2)
+        load = provenance.load_average()
+    return load
 
 
 def bench_case(args):
@@ -98,11 +102,10 @@ def mpirun_prefix(ranks: int) -> list[str] | None:
     return prefix
 
 
-def run_liggghts(args, case) -> dict:
+def bench_liggghts(args, case) -> dict:
     """Time LIGGGHTS on the exported deck; the rate comes from its last 'Loop time' line."""
-    exe = shutil.which("liggghts")
-    if exe is None:
-        msg = "liggghts is not on PATH: LIGGGHTS half skipped (apt-get install -y liggghts)"
+    if find_liggghts() is None:
+        msg = f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})"
         print(msg)
         return {"skipped": msg}
     deck_dir = HERE / f"liggghts_deck_{case.name}"
@@ -117,7 +120,7 @@ def run_liggghts(args, case) -> dict:
         if prefix is None:
             print(f"mpirun not found: {ranks}-rank LIGGGHTS run skipped")
             continue
-        command = [*prefix, exe, "-in", DECK_NAME]
+        command = " ".join(os.path.basename(c) for c in [*prefix, "liggghts", "-in", DECK_NAME])
         best = None
         for repeat in range(args.repeat):
             work = scratch / f"np{ranks}"
@@ -125,18 +128,9 @@ def run_liggghts(args, case) -> dict:
                 shutil.rmtree(work)
             shutil.copytree(deck_dir, work)
             load = wait_until_quiet(args)
-            done = subprocess.run(command, cwd=work, capture_output=True, text=True)
-            (work / "stdout.txt").write_text(done.stdout + done.stderr)
-            loops = LOOP_RE.findall(done.stdout)
-            if done.returncode != 0 or not loops:
-                raise SystemExit(
-                    f"LIGGGHTS failed ({' '.join(command)} in {work}):\n{done.stdout[-2000:]}"
-                    f"{done.stderr[-2000:]}"
-                )
-            found = VERSION_RE.search(done.stdout)
-            version = found.group(1) if found else version
-            loop_time, procs, n_steps, atoms = loops[-1]
-            loop_time, n_steps, atoms = float(loop_time), int(n_steps), int(atoms)
+            run = run_liggghts(work, DECK_NAME, prefix=prefix)
+            version = run.version or version
+            loop_time, procs, n_steps, atoms = run.loop_times[-1]
             if atoms != spheres(case) or n_steps != steps:
                 raise SystemExit(f"LIGGGHTS ran {atoms} atoms x {n_steps} steps, not as asked")
             rate = atoms * n_steps / loop_time
@@ -147,9 +141,8 @@ def run_liggghts(args, case) -> dict:
             )
             if best is None or rate > best["particle_steps_per_s"]:
                 best = {
-                    "ranks": int(procs),
-                    "command": f"cd {deck_dir.relative_to(ROOT)} && "
-                    + " ".join(Path(c).name if os.path.isabs(c) else c for c in command),
+                    "ranks": procs,
+                    "command": f"cd {deck_dir.relative_to(ROOT)} && {command}",
                     "loop_time_s": loop_time,
                     "steps": n_steps,
                     "spheres": atoms,
@@ -170,8 +163,7 @@ def run_liggghts(args, case) -> dict:
 
 
 DEM_CHILD = """
-import dataclasses, json, sys
-sys.path.insert(0, {root!r})
+import dataclasses
 from dem.case import load_case
 from dem.runner import run_case
 case = load_case({case!r}).with_tangential("liggghts")
@@ -196,7 +188,6 @@ def run_dem(args, case) -> dict:
         for repeat in range(args.repeat):
             out = HERE / "scratch" / "dem" / f"threads{threads}"
             code = DEM_CHILD.format(
-                root=str(ROOT),
                 case=str(Path(args.case).resolve()),
                 dt=args.timestep,
                 settle=args.settle_cycles,
@@ -274,11 +265,12 @@ def main(argv=None) -> None:
         }
     )
     stamp = {
-        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "date": provenance.utc_now(),
         "machine": machine(),
         "dem_version": __version__,
+        "git_commit": provenance.git_commit(),
     }
-    halves = [("liggghts", run_liggghts, args.skip_liggghts), ("dem", run_dem, args.skip_dem)]
+    halves = [("liggghts", bench_liggghts, args.skip_liggghts), ("dem", run_dem, args.skip_dem)]
     for name, bench, skip in halves:
         if skip:
             continue

@@ -21,7 +21,7 @@ Prints a table and writes ``validation/performance/pointmass.json``.
 """
 
 import argparse
-import datetime
+import importlib.util
 import json
 import os
 import platform
@@ -34,15 +34,26 @@ from pathlib import Path
 import numba
 import numpy as np
 
-import dem
+from dem import provenance
 from dem.pointmass import velocities
 from dem.pointmass.sweep import sweep
 
 HERE = Path(__file__).resolve().parent
 TESTS = HERE.parent.parent / "tests"
-sys.path.insert(0, str(TESTS))
-from naive_pointmass import brute  # noqa: E402  (the tests' independent twin)
-from test_pointmass import _grid  # noqa: E402  (the grid the brute-force test uses)
+
+
+def from_tests(name: str):
+    """The module tests/NAME.py, loaded by its path (tests/ is not a package)."""
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, TESTS / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return sys.modules[name]
+
+
+brute = from_tests("naive_pointmass").brute  # the tests' independent twin
+_grid = from_tests("test_pointmass")._grid  # the grid the brute-force test uses
 
 FIG7_ANGLES = np.linspace(1.0, 89.0, 161)
 FIG7_FRICTIONS = (0.25, 0.35, 0.60)
@@ -79,15 +90,18 @@ def transient_of(cycles):
 
 
 def machine():
-    """Cores, threads and versions."""
+    """Cores, threads, load, versions and commit."""
+    versions = provenance.package_versions()
     return {
         "cpu_count": os.cpu_count(),
         "numba_threads": numba.get_num_threads(),
         "processor": platform.processor() or platform.machine(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "numba": numba.__version__,
-        "dem_version": dem.__version__,
+        "python": versions["python"],
+        "numpy": versions["numpy"],
+        "numba": versions["numba"],
+        "dem_version": versions["dem"],
+        "git_commit": provenance.git_commit(),
+        "load_average": provenance.load_average(),
     }
 
 
@@ -167,7 +181,7 @@ def main(argv=None):
     worst = int(np.argmax(grid_error))
 
     report = {
-        "date_utc": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "date_utc": provenance.utc_now(),
         "command": shlex.join([sys.executable, *argv]),
         "machine": machine(),
         "fig7_sweep": {

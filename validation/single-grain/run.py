@@ -10,7 +10,7 @@ Regenerates the CSV files and figures of this folder (README.md says what each s
 
 Base case: cases/single-sphere as shipped (r = 2 mm, rho = 7800, linear k_n = 4e6 N/m,
 eps_n = 0, eps_t = 0.8, tangential = "coulomb" with k_t / k_n from eps_t, rotation locked).
-The block is placed at rest on the floor (Simulation.from_grains) and measured over whole drive
+The block is placed at rest on the floor (dem.setup.from_grains) and measured over whole drive
 cycles (measure_cycles): the public library, no private copy of the run loop.
 """
 
@@ -18,8 +18,6 @@ import argparse
 import csv
 import dataclasses
 import math
-import os
-import subprocess
 import time
 from multiprocessing import Pool
 from pathlib import Path
@@ -27,11 +25,11 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import __version__, calibrate, pointmass
+from dem import calibrate, pointmass, provenance, setup
 from dem.case import load_case
 from dem.config import GRAVITY
-from dem.measure import drive_velocity_scale
-from dem.simulation import Simulation, measure_cycles
+from dem.measure import conveying_velocity
+from dem.simulation import measure_cycles
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -78,10 +76,10 @@ def block_velocity(case) -> dict:
     mass = case.material.density * 4 / 3 * math.pi * r**3
     z = r - mass * GRAVITY / k
     t0 = time.perf_counter()
-    sim = Simulation.from_grains(case, [[0.5 * case.trough.length, 0.0, z]])
+    sim = setup.from_grains(case, [[0.5 * case.trough.length, 0.0, z]])
     per_cycle = measure_cycles(sim, case.run.cycles, settle_cycles=case.run.settle_cycles)
-    scale = drive_velocity_scale(case.drive.amplitude, case.drive.omega, case.drive.angle)
     d, m = case.drive, case.material
+    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
     pm = pointmass.velocity(
         d.throw_number, d.angle, m.friction, case.trough.inclination,
         m.restitution_tangential, m.restitution_normal,
@@ -94,8 +92,8 @@ def block_velocity(case) -> dict:
         "stiffness": k,
         "tangential": case.contact.tangential,
         "kappa": case.contact.tangential_stiffness_ratio,
-        "dem_velocity_norm": float(np.mean(per_cycle) / scale),
-        "dem_stderr": float(np.std(per_cycle, ddof=1) / math.sqrt(per_cycle.size) / scale),
+        "dem_velocity_norm": v.norm,
+        "dem_stderr": v.norm_stderr,
         "pointmass_velocity_norm": pm.velocity_norm,
         "regime": pm.regime,
         "timestep": sim.dt,
@@ -158,22 +156,10 @@ def _calibrated_row(case):
     return row
 
 
-def provenance() -> list[str]:
-    try:
-        commit = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
-        ).stdout.strip()
-    except OSError:
-        commit = "unknown"
-    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    return [f"# dem {__version__}, commit {commit}, {stamp}", f"# {os.uname().nodename} load "
-            f"{os.getloadavg()[0]:.2f}"]  # fmt: skip
-
-
 def write_csv(rows, name):
     path = HERE / name
     with open(path, "w", newline="") as fh:
-        fh.write("\n".join(provenance()) + "\n")
+        fh.write("\n".join(provenance.header_lines()) + "\n")
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

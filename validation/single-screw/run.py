@@ -22,10 +22,10 @@ dem_velocity_norm_free_rotation; not part of the criterion, which is the locked 
 Time step: the engine's own rule (dem.simulation.timestep_limits: 1/50 of the linear collision
 time, within the stability limit) applied to the effective mass a floor contact of the lying
 screw actually has: M with rotation locked, 1 / max_n (1/M + (p x n) . I^-1 (p x n)) with it free.
-Simulation.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
+dem.setup.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
 locked, dem.shapes.Template.contact_mass (0.37 g) free (README.md: the bound of the recording).
 
-The screw is placed by Simulation.from_grains and measured cycle by cycle by
+The screw is placed by dem.setup.from_grains and measured cycle by cycle by
 dem.simulation.measure_cycles. Settling: after ``--min-settle-cycles`` driven cycles the run
 measures as soon as one cycle's mean velocity differs from the previous one by less than
 ``--periodic-tol`` (normalised), at most after ``--max-settle-cycles``; then ``--cycles`` cycles.
@@ -41,10 +41,11 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import measure, pointmass
+from dem import measure, pointmass, setup
 from dem.case import load_case
 from dem.kernels.rigid import quat_to_matrix
-from dem.simulation import ContactLaw, Simulation, measure_cycles, timestep_limits
+from dem.simulation import measure_cycles
+from dem.timestep import ContactLaw, timestep_limits
 from dem.trough import Trough
 
 HERE = Path(__file__).resolve().parent
@@ -126,7 +127,7 @@ def floor_contact_mass(template, q, rotation):
 
 
 def lying_simulation(case, timestep="contact"):
-    """One screw laid by lying_pose at mid length, y = 0, at rest (Simulation.from_grains).
+    """One screw laid by lying_pose at mid length, y = 0, at rest (dem.setup.from_grains).
 
     ``"auto"``: from_grains' automatic step. ``"contact"``: the same rule (timestep_limits) at
     the floor contact's actual effective mass (floor_contact_mass), shortened to a whole number
@@ -144,7 +145,7 @@ def lying_simulation(case, timestep="contact"):
             trough.drive_speed, rotation=case.particles.rotation, pairs=False, mass=mass,
         )  # fmt: skip
         dt = trough.period / math.ceil(trough.period / auto)
-    return Simulation.from_grains(
+    return setup.from_grains(
         case, [[0.5 * case.trough.length, 0.0, z]], orientations=[q], timestep=dt
     )
 

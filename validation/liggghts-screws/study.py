@@ -1,0 +1,36 @@
+"""Paths, the results file and small helpers shared by the parts of this study."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+CASE = ROOT / "cases" / "screw-trough"
+SCRATCH = HERE / "scratch"
+DECKS = HERE / "decks"
+RESULTS = HERE / "results.json"
+
+
+def write_results(results: dict) -> None:
+    """results.json, rewritten after every run so that an interrupted study keeps its runs."""
+    RESULTS.write_text(json.dumps(results, indent=2) + "\n")
+
+
+def fresh_copy(deck_dir: Path, work: Path) -> None:
+    """A clean copy of a deck directory to run LIGGGHTS in (scratch/ is git-ignored)."""
+    if work.exists():
+        shutil.rmtree(work)
+    shutil.copytree(deck_dir, work)
+
+
+def fmt(x) -> str:
+    """A float exactly (shortest repr), also for numpy scalars."""
+    return repr(float(x))
+
+
+def rel(path: Path) -> str:
+    """A path relative to the repository root, as results.json records it."""
+    return str(Path(path).resolve().relative_to(ROOT))
