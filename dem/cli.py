@@ -12,23 +12,29 @@ from pathlib import Path
 
 from dem import __version__
 from dem.errors import InputError, SimulationError
+from dem.quantities import QUANTITIES
 
 EXIT_USAGE = 2
 
 #: Allowed values of each numeric option, used in error messages.
+#: Help and "missing option" texts of the options, from the one table of quantities.
 _ALLOWED = {
-    "--throw-number": "throw number Gamma > 0",
-    "--angle": "vibration angle phi in degrees, in (0, 90)",
-    "--friction": "friction coefficient mu >= 0",
-    "--inclination": "inclination alpha in degrees, in (-90, 90)",
-    "--eps-t": "tangential restitution in [0, 1]",
-    "--eps-n": "normal restitution in [0, 1]",
-    "--frequency": "frequency in Hz, > 0",
-    "--amplitude": "amplitude in m, > 0",
-    "--peak-acceleration": "peak trough acceleration in units of g, > 0",
-    "--drive-velocity": "drive velocity amplitude A omega in m/s, > 0",
-    "--cycles": "whole number of cycles >= 1",
-    "--threads": "whole number of threads >= 1",
+    _option: QUANTITIES[_name].help
+    for _option, _name in {
+        "--throw-number": "throw_number",
+        "--angle": "angle",
+        "--friction": "friction",
+        "--inclination": "inclination",
+        "--frequency": "frequency",
+        "--amplitude": "amplitude",
+        "--peak-acceleration": "peak_acceleration",
+        "--drive-velocity": "drive_velocity",
+        "--cycles": "cycles",
+        "--threads": "threads",
+    }.items()
+} | {
+    "--eps-t": "tangential " + QUANTITIES["restitution"].help,
+    "--eps-n": "normal " + QUANTITIES["restitution"].help,
 }
 
 

@@ -184,13 +184,37 @@ def test_tangential_keys(tmp_path):
     assert contact.tangential_damping_ratio == 0.2
 
 
-def test_explicit_timestep_and_mesh(tmp_path):
+def test_explicit_timestep_and_mesh(tmp_path, monkeypatch):
+    monkeypatch.setattr(dem.case, "MESH_TROUGHS", True)  # the reader, once meshes run
     (tmp_path / "geometry").mkdir()
     (tmp_path / "geometry" / "trough.stl").write_text("solid t\nendsolid t\n")
     tables = with_changes({"run.timestep": 1e-6, "trough.mesh": "geometry/trough.stl"})
     case = load_case(write_case(tmp_path, tables))
     assert case.run.timestep == 1e-6
     assert case.trough.mesh == (tmp_path / "geometry" / "trough.stl").resolve()
+
+
+def test_mesh_trough_is_refused_at_load_until_the_engine_runs_it(tmp_path):
+    (tmp_path / "geometry").mkdir()
+    (tmp_path / "geometry" / "trough.stl").write_text("solid t\nendsolid t\n")
+    tables = with_changes({"trough.mesh": "geometry/trough.stl"})
+    with pytest.raises(InputError, match="trough.mesh") as info:
+        load_case(write_case(tmp_path, tables))
+    assert "no mesh troughs yet" in str(info.value)
+
+
+def test_user_timestep_above_the_stability_limit_is_refused_at_load(tmp_path):
+    tables = with_changes({"run.timestep": 1e-3})
+    with pytest.raises(InputError, match="run.timestep") as info:
+        load_case(write_case(tmp_path, tables))
+    assert "stability limit" in str(info.value)
+
+
+def test_periodic_length_must_hold_a_grain_and_its_skin_twice(tmp_path):
+    # 4 radii passed the old two-diameter check and failed only when the run was built
+    tables = with_changes({"trough.length": 4.2 * 0.002})
+    with pytest.raises(InputError, match="trough.length"):
+        load_case(write_case(tmp_path, tables))
 
 
 def test_unsupported_shape_is_easy_to_lift(tmp_path, monkeypatch):
@@ -280,9 +304,9 @@ BAD = [
         "> 0",
     ),
     ("count-zero", {"particles.count": 0}, "particles.count", ">= 1"),
-    ("angle-zero", {"drive.angle": 0.0}, "drive.angle", "0 < angle < 90"),
-    ("angle-90", {"drive.angle": 90.0}, "drive.angle", "0 < angle < 90"),
-    ("angle-negative", {"drive.angle": -10.0}, "drive.angle", "0 < angle < 90"),
+    ("angle-zero", {"drive.angle": 0.0}, "drive.angle", "(0, 90)"),
+    ("angle-90", {"drive.angle": 90.0}, "drive.angle", "(0, 90)"),
+    ("angle-negative", {"drive.angle": -10.0}, "drive.angle", "(0, 90)"),
     ("inclination-90", {"trough.inclination": 90.0}, "trough.inclination", "< 90"),
     ("inclination-minus-95", {"trough.inclination": -95.0}, "trough.inclination", "< 90"),
     ("friction-negative", {"material.friction": -0.1}, "material.friction", ">= 0"),

@@ -229,7 +229,7 @@ def optimum(
         "inclination": inclination,
         "eps_t": eps_t,
         "eps_n": eps_n,
-        "frequency": check_positive(frequency, "frequency", "frequency"),
+        "frequency": check_positive(frequency, "frequency"),
     }
     needs = {
         "throw_number": throw_number,
@@ -241,7 +241,7 @@ def optimum(
         key = "peak_acceleration" if hold == "acceleration" else hold
         if needs[hold] is None:
             raise InputError(key, None, f"required when holding {hold} fixed")
-        fixed[key] = check_positive(needs[hold], key, key.replace("_", " "))
+        fixed[key] = check_positive(needs[hold], key)
     if over == "throw_number":
         if angle is None:
             raise InputError("angle", None, "required for an optimum over throw_number")

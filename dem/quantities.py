@@ -1,0 +1,140 @@
+"""The one table of input quantities: name, unit, allowed range and its text.
+
+Every place that accepts a physical number checks it against this table: the case reader
+(:mod:`dem.case`, keys such as ``drive.angle``), the point-mass functions
+(:mod:`dem.pointmass.validate`) and the command line (its help and its errors, :mod:`dem.cli`).
+A range is stated once, so a value refused in a case file is refused with the same words on the
+command line and in the library.
+
+Each :class:`Quantity` checks a finite float; :meth:`Quantity.check` raises
+:class:`dem.errors.InputError` naming the key (the caller's spelling: ``drive.angle``,
+``--angle`` or ``angle``), the value and the allowed range.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from dem.errors import InputError
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One input quantity.
+
+    Attributes:
+        name: Key name without table or dashes (``angle``).
+        unit: SI unit or "" for a dimensionless number (``deg`` for angles).
+        accepts: True for a value in range (the value is a finite float).
+        allowed: The range in words, as errors and help texts show it.
+        meaning: What it is, with the paper's symbol.
+
+    """
+
+    name: str
+    unit: str
+    accepts: Callable[[float], bool]
+    allowed: str
+    meaning: str
+
+    def check(self, value: object, key: str | None = None, source: str | None = None) -> float:
+        """``value`` as a float if finite and in range; InputError naming ``key`` otherwise."""
+        key = key or self.name
+        if isinstance(value, bool):
+            raise InputError(key, value, f"a number: {self.allowed}", source=source)
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise InputError(key, value, f"a number: {self.allowed}", source=source) from None
+        if not math.isfinite(number):
+            raise InputError(key, value, f"a finite number: {self.allowed}", source=source)
+        if not self.accepts(number):
+            raise InputError(key, value, self.allowed, source=source)
+        return number
+
+    @property
+    def help(self) -> str:
+        """Command-line help: meaning and range."""
+        return f"{self.meaning}; {self.allowed}"
+
+
+def _q(name, unit, accepts, allowed, meaning) -> tuple[str, Quantity]:
+    return name, Quantity(name, unit, accepts, allowed, meaning)
+
+
+def _positive(x: float) -> bool:
+    return x > 0.0
+
+
+def _non_negative(x: float) -> bool:
+    return x >= 0.0
+
+
+def _unit_interval(x: float) -> bool:
+    return 0.0 <= x <= 1.0
+
+
+QUANTITIES: dict[str, Quantity] = dict(
+    [
+        # drive and trough
+        _q("throw_number", "", _positive,
+           "must be > 0 (Gamma = A omega^2 sin(phi) / (g cos(alpha)))",
+           "throw number Gamma"),
+        _q("angle", "deg", lambda x: 0.0 < x < 90.0,
+           "vibration angle must be in (0, 90) degrees", "vibration angle phi, deg"),
+        _q("inclination", "deg", lambda x: -90.0 < x < 90.0,
+           "inclination must be in (-90, 90) degrees: -90 < alpha < 90",
+           "trough inclination alpha, deg"),
+        _q("frequency", "Hz", _positive, "frequency must be > 0 (Hz)", "drive frequency f, Hz"),
+        _q("amplitude", "m", _positive, "amplitude must be > 0 (m)", "drive amplitude A, m"),
+        _q("peak_acceleration", "g", _positive, "peak acceleration must be > 0 (in g)",
+           "peak trough acceleration A omega^2, in units of g"),
+        _q("drive_velocity", "m/s", _positive, "drive velocity must be > 0 (m/s)",
+           "drive velocity amplitude A omega, m/s"),
+        _q("length", "m", _positive, "must be > 0 (m)", "length, m"),
+        _q("width", "m", _positive, "must be > 0 (m)", "width, m"),
+        # material
+        _q("density", "kg/m^3", _positive, "density must be > 0 (kg/m^3)", "grain density"),
+        _q("friction", "", _non_negative, "friction coefficient must be >= 0",
+           "Coulomb friction coefficient mu"),
+        _q("restitution", "", _unit_interval,
+           "coefficient of restitution must be in [0, 1]: 0 <= value <= 1",
+           "coefficient of restitution"),
+        _q("rolling_friction", "", _non_negative, "rolling friction must be >= 0",
+           "rolling friction coefficient"),
+        # contact
+        _q("youngs_modulus", "Pa", _positive, "Young's modulus must be > 0 (Pa)",
+           "Young's modulus E, Pa"),
+        _q("poisson_ratio", "", lambda x: -1.0 < x < 0.5,
+           "Poisson ratio must satisfy -1 < nu < 0.5", "Poisson ratio nu"),
+        _q("stiffness", "N/m", _positive, "stiffness must be > 0 (N/m)",
+           "linear normal stiffness k_n, N/m"),
+        _q("tangential_stiffness_ratio", "", _positive, "k_t / k_n must be > 0",
+           "tangential stiffness ratio kappa = k_t / k_n"),
+        _q("tangential_damping_ratio", "", lambda x: 0.0 <= x <= 10.0,
+           "tangential damping ratio must satisfy 0 <= value <= 10",
+           "tangential damping ratio zeta_t"),
+        # grains and run
+        _q("radius", "m", _positive, "radius must be > 0 (m)", "radius, m"),
+        _q("mass", "kg", _positive, "mass must be > 0 (kg)", "grain mass, kg"),
+        _q("timestep", "s", _positive, '"auto" or a time step > 0 (s)', "time step dt, s"),
+        # whole numbers (read as integers; accepts() sees the int)
+        _q("count", "", lambda n: n >= 1, "a whole number >= 1", "number of grains"),
+        _q("cycles", "", lambda n: n >= 1, "a whole number of cycles >= 1",
+           "measured drive cycles"),
+        _q("settle_cycles", "", lambda n: n >= 0, "a whole number of cycles >= 0",
+           "driven cycles before measuring"),
+        _q("seed", "", lambda n: n >= 0, "a whole number >= 0", "random seed of the fill"),
+        _q("frames_per_cycle", "", lambda n: n >= 1, "a whole number >= 1",
+           "VTK frames per drive cycle"),
+        _q("threads", "", lambda n: n >= 1, "a whole number of threads >= 1",
+           "numba threads"),
+    ]
+)  # fmt: skip
+
+
+def check(name: str, value: object, key: str | None = None, source: str | None = None) -> float:
+    """Check ``value`` against the quantity ``name`` (:data:`QUANTITIES`); see Quantity.check."""
+    return QUANTITIES[name].check(value, key, source)
