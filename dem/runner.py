@@ -34,6 +34,7 @@ from dem.errors import InputError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
+from dem.provenance import record
 from dem.simulation import Simulation
 
 CHECKPOINT = "checkpoint.npz"
@@ -261,7 +262,10 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
         t, s.x, s.radius, s.v, s.body, s.body, counts, orientation,
         drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
     )  # fmt: skip
-    results.append_frame(t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts)
+    results.append_frame(
+        t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts,
+        orientation=orientation,
+    )  # fmt: skip
 
 
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
@@ -292,6 +296,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
     total_mass = sim.total_mass
     flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
     wall = loop["wall_time_s"]
+    provenance = record()  # versions, commit, date, host and load (the load bears on wall_time_s)
     return {
         "case": case.name,
         "mean_velocity": stat.mean,
@@ -325,4 +330,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "threads": n_threads,
         "seed": case.run.seed,
         "pointmass_velocity_norm": _pointmass_norm(case),
+        "dem_version": provenance["versions"]["dem"],
+        "git_commit": provenance["git_commit"],
+        "provenance": provenance,
     }

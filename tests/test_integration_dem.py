@@ -188,6 +188,7 @@ def test_instability_is_reported():
         sim.run(5000)
 
 
+@pytest.mark.integration
 def test_run_case_writes_summary(tmp_path):
     case = load_case("cases/sphere-bed")
     case = dataclasses.replace(

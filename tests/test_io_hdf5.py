@@ -37,7 +37,7 @@ def test_metadata_round_trip(tmp_path):
     _writer(path).close()
     res = read_results(path)
     assert res["case"] == CASE
-    assert res["seed"] == 7 and res["timestep"] == 2.5e-6 and res["format_version"] == 1
+    assert res["seed"] == 7 and res["timestep"] == 2.5e-6 and res["format_version"] == 2
     assert res["complete"] is True
     assert set(res["versions"]) == {"dem", "numpy", "numba", "h5py", "python"}
     assert res["frame_count"] == 0 and res["cycles"] == {}
@@ -185,3 +185,81 @@ def test_resolved_case_from_case_file(tmp_path):
     with h5py.File(path, "r") as f:
         assert f["case/drive"].attrs["amplitude"] == case["drive"]["amplitude"]
         assert f["case/contact"].attrs["limit_force"] == case["contact"]["limit_force"]
+
+
+def _unit_quaternions(rng, b):
+    q = rng.normal(size=(b, 4))
+    return q / np.linalg.norm(q, axis=1)[:, None]
+
+
+def test_clump_orientations_round_trip(tmp_path):
+    path = tmp_path / "results.h5"
+    rng = np.random.default_rng(2)
+    bodies, members = 3, 2
+    n = bodies * members
+    grain_id = np.arange(n) // members
+    w = _writer(path)
+    written = []
+    for k in range(3):
+        pos, vel, cc = _frame(rng, n)
+        q = _unit_quaternions(rng, bodies)
+        w.append_frame(0.01 * k, pos, vel, np.full(n, 0.002), grain_id, cc, orientation=q)
+        written.append(q)
+    with pytest.raises(ValueError, match="orientation"):
+        w.append_frame(0.03, pos, vel)  # a file with orientations needs them in every frame
+    with pytest.raises(ValueError, match="orientation"):
+        w.append_frame(0.03, pos, vel, orientation=_unit_quaternions(rng, bodies + 1))
+    w.close()
+    res = read_results(path)
+    assert res["format_version"] == 2 and res["frame_count"] == 3
+    for k, q in enumerate(written):
+        assert np.array_equal(res["frames"][k]["orientation"], q)
+        assert np.array_equal(res["frames"][k]["grain_id"], grain_id)
+    with h5py.File(path, "r") as f:
+        d = f["frames/orientation"]
+        assert d.shape == (3, bodies, 4) and d.dtype == np.float64 and d.chunks == (1, bodies, 4)
+    # a resumed run trims the orientations with the other frame data and goes on appending
+    w = _writer(path, resume_at=(0, 2))
+    w.append_frame(0.02, pos, vel, orientation=written[0])
+    w.close()
+    res = read_results(path)
+    assert res["frame_count"] == 3
+    assert np.array_equal(res["frames"][1]["orientation"], written[1])
+    assert np.array_equal(res["frames"][2]["orientation"], written[0])
+    # plain spheres: no orientation dataset, None in every frame; a clump index must exist
+    spheres = tmp_path / "spheres.h5"
+    w = _writer(spheres)
+    w.append_frame(0.0, pos, vel, np.full(n, 0.002), None, cc)
+    with pytest.raises(ValueError, match="orientation"):
+        w.append_frame(0.01, pos, vel, orientation=written[0])
+    w.close()
+    assert read_results(spheres)["frames"][0]["orientation"] is None
+    with pytest.raises(ValueError, match="grain_id"):
+        _writer(tmp_path / "bad.h5").append_frame(
+            0.0, pos, vel, np.full(n, 0.002), np.arange(n), cc, orientation=written[0]
+        )
+
+
+def test_format_versions_one_and_two_are_read_and_others_refused(tmp_path):
+    from dem.errors import InputError
+    from dem.provenance import git_commit
+
+    old = tmp_path / "v1.h5"
+    w = _writer(old, format_version=1)
+    w.append_frame(0.0, np.zeros((4, 3)), np.zeros((4, 3)), np.ones(4))
+    w.close()
+    res = read_results(old)
+    assert res["format_version"] == 1 and res["frames"][0]["orientation"] is None
+    commit = git_commit()  # None outside a git checkout; "+" marks edits to dem/ (may change)
+    assert (res["git_commit"] or "").rstrip("+") == (commit or "").rstrip("+")
+    for version in (0, 3):
+        path = tmp_path / f"v{version}.h5"
+        _writer(path, format_version=version).close()
+        with pytest.raises(InputError) as info:
+            read_results(path)
+        message = str(info.value)
+        assert str(path) in message and f"format_version = {version}" in message
+        assert "versions 1, 2" in message
+    # a run is never continued into a file of another version
+    with pytest.raises(InputError, match="format_version = 1"):
+        _writer(old, resume_at=(0, 1))

@@ -175,6 +175,7 @@ def _grid():
     return np.vstack([random, lossless, dip])
 
 
+@pytest.mark.validation
 def test_agrees_with_brute_force_time_stepping():
     grid = _grid()
     model = pm.velocities(*grid.T)

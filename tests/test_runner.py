@@ -131,3 +131,22 @@ def test_pvd_of_a_run_is_a_time_series_with_the_documented_arrays(tmp_path, lab_
         floor_z = trough.points[:, 2].min()
         expected = amplitude * np.sin(omega * times[k]) * np.sin(np.radians(case.drive.angle))
         assert floor_z == pytest.approx(expected if lab_frame else 0.0, abs=1e-9)
+
+
+def test_summary_records_the_dem_version_and_commit(tmp_path):
+    import dem
+    from dem.provenance import git_commit
+
+    case = load_case(_case_dir(tmp_path, cycles=1))
+    run_case(case, tmp_path / "out", progress=False, frames=False)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["dem_version"] == dem.__version__
+    commit = git_commit()  # None outside a git checkout; "+" marks edits to dem/ (may change)
+    if commit is None:
+        assert summary["git_commit"] is None
+    else:
+        assert summary["git_commit"].rstrip("+") == commit.rstrip("+")
+    provenance = summary["provenance"]
+    assert provenance["versions"]["dem"] == dem.__version__
+    assert {"numpy", "numba", "python"} <= set(provenance["versions"])
+    assert {"date", "host", "load_average"} <= set(provenance)

@@ -19,6 +19,7 @@ def quick_run(tmp_path_factory):
     return out, mf.run(out, quick=True, argv=["make_figures.py", "--quick"])
 
 
+@pytest.mark.validation
 def test_writes_every_figure_and_table(quick_run):
     out, _ = quick_run
     for stem in ("fig2_regimes", "fig6_throw_number", "fig7_friction", "fig8_throw_number"):
@@ -34,6 +35,7 @@ def test_writes_every_figure_and_table(quick_run):
     assert "| reading |" in (out / "claims.md").read_text()
 
 
+@pytest.mark.validation
 def test_quick_claims_are_consistent(quick_run):
     _, claims = quick_run
     assert claims["a"]["max_abs_difference_below_1"] == 0.0
@@ -86,6 +88,7 @@ def test_gamma_held_curves_depend_on_mu_tan_phi_only():
         np.testing.assert_allclose(a, b, atol=1e-9)
 
 
+@pytest.mark.validation
 def test_v_over_a_omega_reading_reproduces_claim_c(quick_run):
     # Gamma held, velocity in units of the drive velocity amplitude: v / (A omega) =
     # v_norm cos(phi). Check each optimum against the model directly, then the trends.

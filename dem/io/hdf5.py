@@ -1,14 +1,16 @@
 """``results.h5``: the self-describing record of a run, written incrementally.
 
-Layout (format version 1; SI units)::
+Layout (format version 2; SI units)::
 
     /                       attributes:
-        format_version      int, 1
+        format_version      int, 2
         seed                int, the random seed of the fill
         timestep            float, s
         case_json           str, the resolved case as JSON (complete; the record of truth)
         created_utc         str, ISO 8601
         complete            bool, False until ResultsWriter.close() ran (False: killed run)
+        git_commit          str, the dem checkout's commit (:func:`dem.provenance.git_commit`,
+                            ``+`` when dem/ had uncommitted changes); absent outside a checkout
     /case/                  the resolved case as nested groups of attributes: one group per
                             table ([trough] -> /case/trough), one attribute per key; None values
                             are left out (case_json has them), lists become arrays
@@ -20,8 +22,14 @@ Layout (format version 1; SI units)::
     /frames/positions       (F, N, 3) float64, m, trough frame
     /frames/velocity        (F, N, 3) float64, m/s, relative to the trough
     /frames/contact_count   (F, N) int32
+    /frames/orientation     (F, B, 4) float64, clump runs only: unit quaternions (w, x, y, z),
+                            body -> trough frame, of the B clumps; sphere s belongs to clump
+                            grain_id[s] (the quaternion the VTK frames show per sphere)
     /frames/radius          (N,) float64, m (written once)
     /frames/grain_id        (N,) int64 (written once)
+
+Versions: 1 has no ``orientation`` and no ``git_commit``; 2 adds them. :func:`read_results`
+reads both (``orientation`` is None for version 1 and for plain spheres) and refuses any other.
 
 Frame datasets are chunked one frame per chunk and gzip-compressed (with the shuffle filter);
 cycle datasets are chunked by 256 rows. Both grow along their first axis.
@@ -48,9 +56,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from dem.provenance import package_versions  # noqa: F401  (re-exported)
+from dem.errors import InputError
+from dem.provenance import git_commit, package_versions  # package_versions: re-exported too
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Layout versions :func:`read_results` understands.
+READABLE_VERSIONS = (1, 2)
 CYCLE_CHUNK = 256
 _FRAME_VECTORS = ("positions", "velocity")
 
@@ -58,7 +69,8 @@ _FRAME_VECTORS = ("positions", "velocity")
 class ResultsWriter:
     """Write ``results.h5`` incrementally (layout in the module docstring).
 
-    The file is created (overwritten) with the metadata when the writer is constructed.
+    The file is created (overwritten) with the metadata, the git commit of the dem checkout
+    included, when the writer is constructed.
 
     Args:
         path: File to write.
@@ -90,6 +102,7 @@ class ResultsWriter:
         self._n_cycles = 0
         self._n_frames = 0
         self._n_spheres: int | None = None
+        self._n_bodies: int | None = None  # clumps in /frames/orientation, 0 for none
         self._closed = False
         if resume_at is not None:
             self._resume(*resume_at)
@@ -101,6 +114,9 @@ class ResultsWriter:
             f.attrs["case_json"] = json.dumps(case, default=str, sort_keys=True)
             f.attrs["created_utc"] = datetime.datetime.now(datetime.UTC).isoformat()
             f.attrs["complete"] = False
+            commit = git_commit()
+            if commit is not None:
+                f.attrs["git_commit"] = commit
             _write_attr_tree(f.create_group("case"), case)
             g = f.create_group("versions")
             for key, value in versions.items():
@@ -153,6 +169,7 @@ class ResultsWriter:
         radius: np.ndarray | None = None,
         grain_id: np.ndarray | None = None,
         contact_count: np.ndarray | None = None,
+        orientation: np.ndarray | None = None,
     ) -> None:
         """Append one frame to ``/frames``.
 
@@ -164,6 +181,10 @@ class ResultsWriter:
             grain_id: Grain index of each sphere, (N,); stored with the first frame
                 (default 0..N-1), ignored afterwards.
             contact_count: Contacts per sphere, (N,) int (default zeros).
+            orientation: Unit quaternions (w, x, y, z) of the clumps, body -> trough frame,
+                (B, 4), indexed by ``grain_id``; None for plain spheres. The first frame decides
+                whether a file holds orientations: every later frame must then give them too (or
+                none).
 
         """
         self._check_open()
@@ -179,6 +200,14 @@ class ResultsWriter:
         cc = np.zeros(n, np.int32) if contact_count is None else np.asarray(contact_count)
         if cc.shape != (n,):
             raise ValueError(f"contact_count must have shape ({n},), got {cc.shape}")
+        q = None if orientation is None else np.asarray(orientation, dtype=np.float64)
+        if q is not None and (q.ndim != 2 or q.shape[1] != 4 or q.shape[0] < 1):
+            raise ValueError(f"orientation must have shape (B, 4), got {q.shape}")
+        if self._n_bodies is not None and (0 if q is None else q.shape[0]) != self._n_bodies:
+            raise ValueError(
+                f"orientation must have shape ({self._n_bodies}, 4) as in the first frame, got "
+                f"{None if q is None else q.shape}"
+            )
         k = self._n_frames
         with h5py.File(self.path, "a", locking=False) as f:
             g = f["frames"]
@@ -189,6 +218,11 @@ class ResultsWriter:
                 gid = np.arange(n) if grain_id is None else np.asarray(grain_id)
                 if r.shape != (n,) or gid.shape != (n,):
                     raise ValueError(f"radius and grain_id must have shape ({n},)")
+                if q is not None and n and (gid.min() < 0 or gid.max() >= q.shape[0]):
+                    raise ValueError(
+                        f"orientation has {q.shape[0]} clumps; grain_id must lie in "
+                        f"[0, {q.shape[0]})"
+                    )
                 g.create_dataset("radius", data=r)
                 g.create_dataset("grain_id", data=gid.astype(np.int64))
                 opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
@@ -201,11 +235,21 @@ class ResultsWriter:
                     "contact_count", shape=(0, n), maxshape=(None, n), dtype=np.int32,
                     chunks=(1, max(n, 1)), **opts,
                 )  # fmt: skip
+                if q is not None:
+                    b = q.shape[0]
+                    g.create_dataset(
+                        "orientation", shape=(0, b, 4), maxshape=(None, b, 4), dtype=np.float64,
+                        chunks=(1, b, 4), **opts,
+                    )  # fmt: skip
                 g.create_dataset(
                     "time", shape=(0,), maxshape=(None,), dtype=np.float64, chunks=(CYCLE_CHUNK,)
                 )
                 self._n_spheres = n
-            for name, data in (("positions", pos), ("velocity", vel), ("contact_count", cc)):
+                self._n_bodies = 0 if q is None else q.shape[0]
+            rows = [("positions", pos), ("velocity", vel), ("contact_count", cc)]
+            if q is not None:
+                rows.append(("orientation", q))
+            for name, data in rows:
                 d = g[name]
                 d.resize(k + 1, axis=0)
                 d[k] = data
@@ -216,6 +260,15 @@ class ResultsWriter:
     def _resume(self, n_cycles: int, n_frames: int) -> None:
         """Reopen an interrupted file, trimmed back to its first n_cycles rows and n_frames."""
         with h5py.File(self.path, "a", locking=False) as f:
+            version = int(f.attrs.get("format_version", -1))
+            if version != FORMAT_VERSION:
+                raise InputError(
+                    "format_version",
+                    version,
+                    f"a run continues only in a results.h5 of format version {FORMAT_VERSION} "
+                    "(an older dem began it): run it again with --overwrite",
+                    source=str(self.path),
+                )
             cycles, frames = f["cycles"], f["frames"]
             keys = tuple(cycles.keys())
             for key in keys:
@@ -224,6 +277,10 @@ class ResultsWriter:
                 for name in (*_FRAME_VECTORS, "contact_count", "time"):
                     frames[name].resize(n_frames, axis=0)
                 self._n_spheres = int(frames["radius"].shape[0])
+                self._n_bodies = 0
+                if "orientation" in frames:
+                    frames["orientation"].resize(n_frames, axis=0)
+                    self._n_bodies = int(frames["orientation"].shape[1])
             f.attrs["complete"] = False
         self._cycle_keys = keys or None
         self._n_cycles = n_cycles
@@ -256,7 +313,8 @@ class Frames:
 
     ``len(frames)`` is the number of complete frames; ``frames[i]`` (negative i allowed) returns
     a dict with ``time`` (s), ``positions`` (N, 3) m, ``velocity`` (N, 3) m/s, ``contact_count``
-    (N,), ``radius`` (N,) m and ``grain_id`` (N,).
+    (N,), ``radius`` (N,) m, ``grain_id`` (N,) and ``orientation`` (B, 4) (unit quaternions
+    w, x, y, z of the clumps, indexed by ``grain_id``; None for plain spheres and version 1).
     """
 
     def __init__(self, path: Path, count: int, time: np.ndarray):
@@ -282,22 +340,38 @@ class Frames:
                 "contact_count": g["contact_count"][i],
                 "radius": g["radius"][()],
                 "grain_id": g["grain_id"][()],
+                "orientation": g["orientation"][i] if "orientation" in g else None,
             }
 
 
 def read_results(path: Path) -> dict:
-    """Read a ``results.h5`` (complete or from a killed run).
+    """Read a ``results.h5`` (complete or from a killed run) of a version in READABLE_VERSIONS.
 
     Returns:
         dict with ``case`` (dict, from ``case_json``), ``versions`` (dict of str), ``seed``,
-        ``timestep`` (s), ``format_version``, ``complete`` (bool), ``cycles`` (dict key ->
-        (C,) array, truncated to the shortest column), ``frame_count`` and ``frames``
-        (:class:`Frames`).
+        ``timestep`` (s), ``format_version``, ``git_commit`` (str, None where not recorded),
+        ``complete`` (bool), ``cycles`` (dict key -> (C,) array, truncated to the shortest
+        column), ``frame_count`` and ``frames`` (:class:`Frames`).
+
+    Raises:
+        InputError: The file's ``format_version`` is not one this dem reads (a newer dem wrote
+            it, or it is not a dem results file).
 
     """
     path = Path(path)
     with h5py.File(path, "r", locking=False) as f:
         a = f.attrs
+        version = a.get("format_version")
+        version = int(version) if version is not None else None
+        if version not in READABLE_VERSIONS:
+            readable = ", ".join(str(v) for v in READABLE_VERSIONS)
+            raise InputError(
+                "format_version",
+                version,
+                f"this dem ({package_versions()['dem']}) reads results.h5 format versions "
+                f"{readable} (a newer dem wrote the file, or it is no dem results.h5)",
+                source=str(path),
+            )
         cycles = {k: d[()] for k, d in f["cycles"].items()}
         if cycles:
             rows = min(len(v) for v in cycles.values())
@@ -305,6 +379,7 @@ def read_results(path: Path) -> dict:
         g = f["frames"]
         if "time" in g:
             names = ("time", "contact_count", *_FRAME_VECTORS)
+            names += ("orientation",) if "orientation" in g else ()
             count = min(g[k].shape[0] for k in names)
             time = g["time"][:count]
         else:
@@ -314,7 +389,8 @@ def read_results(path: Path) -> dict:
             "versions": {k: str(v) for k, v in f["versions"].attrs.items()},
             "seed": int(a["seed"]),
             "timestep": float(a["timestep"]),
-            "format_version": int(a["format_version"]),
+            "format_version": version,
+            "git_commit": str(a["git_commit"]) if "git_commit" in a else None,
             "complete": bool(a["complete"]),
             "cycles": cycles,
             "frame_count": count,
