@@ -320,6 +320,7 @@ def calibrate(
     start: float | None = None,
     max_impacts: int = 12,
     orientations: int = 4,
+    poses: np.ndarray | None = None,
     tolerance: float = 0.02,
     progress=None,
 ) -> Calibration:
@@ -332,7 +333,8 @@ def calibrate(
     :data:`MIN_INCIDENCE` of the normal (Gamma about 2.5-3.7 at phi 25 deg; a bed's impacts are
     not the point mass's anyway), a fan of incidences 10-70 deg at the drive or landing speed
     is used instead. Clumps are thrown in ``orientations`` random orientations (seeded by
-    ``run.seed``) and their eps_t averaged per landing. The fit minimises
+    ``run.seed``), or in the given ``poses`` (quaternions (P, 4), e.g. a screw lying on head and
+    tip), and their eps_t averaged per landing. The fit minimises
     sum_i w_i (eps_t,i(kappa) - eps_t)^2 over log kappa in :data:`LOG_KAPPA_RANGE`: a scan of 16
     points over the whole range plus ``start`` (default the case's own kappa), then a
     golden-section search to 1e-3 in log kappa around the best of them. eps_t,i need not be
@@ -372,7 +374,9 @@ def calibrate(
         order = np.argsort(impacts[:, 0])
         impacts = impacts[order[np.linspace(0, len(order) - 1, max_impacts).round().astype(int)]]
     quats: list = [None]
-    if case.particles.shape != "sphere":
+    if case.particles.shape != "sphere" and poses is not None:
+        quats = [np.asarray(q, dtype=np.float64) for q in np.reshape(poses, (-1, 4))]
+    elif case.particles.shape != "sphere":
         from dem.fill import random_orientations
 
         rng = np.random.default_rng(case.run.seed)
