@@ -24,6 +24,7 @@ import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
 from dem.kernels.contacts import contact_force
+from dem.kernels.periodic import minimum_image
 
 N_WALLS = 3
 
@@ -50,11 +51,7 @@ def pair_forces(
     for k in numba.prange(n_pairs):
         i = pair_i[k]
         j = pair_j[k]
-        dx = x[i, 0] - x[j, 0]
-        if dx > half:
-            dx -= length
-        elif dx < -half:
-            dx += length
+        dx = minimum_image(x[i, 0] - x[j, 0], length, half)
         dy = x[i, 1] - x[j, 1]
         dz = x[i, 2] - x[j, 2]
         d2 = dx * dx + dy * dy + dz * dz

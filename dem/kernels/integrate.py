@@ -25,9 +25,11 @@ import numba
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
 from dem.kernels.forces import pair_forces, sphere_force
 from dem.kernels.neighbours import OK, max_displacement_sq, rebuild
+from dem.kernels.periodic import wrap
 from dem.kernels.rigid import (
     kick_drift_bodies,
     kick_drift_one,
+    member_arm,
     place_members_of,
     reduce_to_bodies,
     update_members,
@@ -204,9 +206,7 @@ def advance(
 def _wrap_bodies(body_x, length):
     """Wrap the centres of mass into [0, length) along x (members follow at update_members)."""
     for b in numba.prange(body_x.shape[0]):
-        body_x[b, 0] -= math.floor(body_x[b, 0] / length) * length
-        if body_x[b, 0] >= length:
-            body_x[b, 0] = 0.0
+        body_x[b, 0] = wrap(body_x[b, 0], length)
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -292,10 +292,7 @@ def bodies_forces_kick(
             for c in range(3):
                 force[s, c] = f[c]
                 torque[s, c] = f[3 + c]
-            rx = x[s, 0] - body_x[b, 0]
-            rx -= length * math.floor(rx / length + 0.5)
-            ry = x[s, 1] - body_x[b, 1]
-            rz = x[s, 2] - body_x[b, 2]
+            rx, ry, rz = member_arm(x, s, body_x, b, length)
             fx += f[0]
             fy += f[1]
             fz += f[2]
@@ -319,9 +316,7 @@ def bodies_forces_kick(
                 b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
                 inv_mass, moments, body_omega,
             )  # fmt: skip
-            body_x[b, 0] -= math.floor(body_x[b, 0] / length) * length
-            if body_x[b, 0] >= length:
-                body_x[b, 0] = 0.0
+            body_x[b, 0] = wrap(body_x[b, 0], length)
         place_members_of(
             b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega
         )  # fmt: skip

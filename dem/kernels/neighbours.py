@@ -22,11 +22,10 @@ and reports the size it needs (status :data:`OVERFLOW_PAIRS` / :data:`OVERFLOW_S
 :data:`OVERFLOW_CELLS`), and Python regrows and builds again.
 """
 
-import math
-
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
+from dem.kernels.periodic import minimum_image, wrap
 
 OK = 0
 OVERFLOW_PAIRS = 1
@@ -113,11 +112,7 @@ def _scan_neighbours(
                         j = cell_particles[m]
                         if j <= i or body[j] == bi:
                             continue
-                        dx = xi - x[j, 0]
-                        if dx > half:
-                            dx -= length
-                        elif dx < -half:
-                            dx += length
+                        dx = minimum_image(xi - x[j, 0], length, half)
                         dy = yi - x[j, 1]
                         dz = zi - x[j, 2]
                         cut = ri + radius[j]
@@ -189,9 +184,7 @@ def rebuild(
 
     """
     for i in range(n):
-        x[i, 0] -= math.floor(x[i, 0] / length) * length
-        if x[i, 0] >= length:  # -1e-17 wraps to length in floating point
-            x[i, 0] = 0.0
+        x[i, 0] = wrap(x[i, 0], length)
     r_max = 0.0
     for i in range(n):
         r_max = max(r_max, radius[i])
@@ -270,11 +263,7 @@ def max_displacement_sq(x, x_ref, n, length):
     half = 0.5 * length
     best = 0.0
     for i in range(n):
-        dx = x[i, 0] - x_ref[i, 0]
-        if dx > half:
-            dx -= length
-        elif dx < -half:
-            dx += length
+        dx = minimum_image(x[i, 0] - x_ref[i, 0], length, half)
         dy = x[i, 1] - x_ref[i, 1]
         dz = x[i, 2] - x_ref[i, 2]
         d2 = dx * dx + dy * dy + dz * dz

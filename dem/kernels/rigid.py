@@ -54,6 +54,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
+from dem.kernels.periodic import nearest_image
 
 
 # --- quaternion helpers (scalar, inlined into the kernels) ------------------------------------
@@ -221,6 +222,33 @@ def matrix_to_quat(r):
     return q
 
 
+@numba.njit(**NUMBA_OPTIONS)
+def member_arm(sphere_x, s, body_x, b, length):
+    """r_s = x_s - X_b of member s of body b, x in the nearest periodic image (length > 0)."""
+    rx = sphere_x[s, 0] - body_x[b, 0]
+    if length > 0.0:
+        rx = nearest_image(rx, length)
+    return rx, sphere_x[s, 1] - body_x[b, 1], sphere_x[s, 2] - body_x[b, 2]
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _place_member(s, b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega):
+    """Member s of body b: x_s = X_b + R d_s, v_s = V_b + omega_b x R d_s, omega_s = omega_b."""
+    rx, ry, rz = _rotate(
+        q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
+    )
+    ox, oy, oz = body_omega[b, 0], body_omega[b, 1], body_omega[b, 2]
+    out_x[s, 0] = body_x[b, 0] + rx
+    out_x[s, 1] = body_x[b, 1] + ry
+    out_x[s, 2] = body_x[b, 2] + rz
+    out_v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
+    out_v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
+    out_v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
+    out_omega[s, 0] = ox
+    out_omega[s, 1] = oy
+    out_omega[s, 2] = oz
+
+
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def reduce_to_bodies(
     force, torque, sphere_x, body_x, body_start, body_members, length, out_force, out_torque,
@@ -252,11 +280,7 @@ def reduce_to_bodies(
         tx = ty = tz = 0.0
         for e in range(body_start[b], body_start[b + 1]):
             s = body_members[e]
-            rx = sphere_x[s, 0] - body_x[b, 0]
-            if length > 0.0:
-                rx -= length * math.floor(rx / length + 0.5)
-            ry = sphere_x[s, 1] - body_x[b, 1]
-            rz = sphere_x[s, 2] - body_x[b, 2]
+            rx, ry, rz = member_arm(sphere_x, s, body_x, b, length)
             f0, f1, f2 = force[s, 0], force[s, 1], force[s, 2]
             fx += f0
             fy += f1
@@ -431,20 +455,9 @@ def update_members(
 
     """
     for s in numba.prange(offsets.shape[0]):
-        b = body_of[s]
-        rx, ry, rz = _rotate(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
+        _place_member(
+            s, body_of[s], body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega
         )
-        ox, oy, oz = body_omega[b, 0], body_omega[b, 1], body_omega[b, 2]
-        out_x[s, 0] = body_x[b, 0] + rx
-        out_x[s, 1] = body_x[b, 1] + ry
-        out_x[s, 2] = body_x[b, 2] + rz
-        out_v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
-        out_v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
-        out_v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
-        out_omega[s, 0] = ox
-        out_omega[s, 1] = oy
-        out_omega[s, 2] = oz
 
 
 # --- one body at a time (for fused loops over bodies, e.g. dem.kernels.integrate) -------------
@@ -479,18 +492,7 @@ def place_members_of(
     b, body_x, body_v, q, body_omega, offsets, body_start, body_members, out_x, out_v, out_omega,
 ):  # fmt: skip
     """:func:`update_members` for the members of body b only (CSR ``body_start/members``)."""
-    ox, oy, oz = body_omega[b, 0], body_omega[b, 1], body_omega[b, 2]
     for e in range(body_start[b], body_start[b + 1]):
-        s = body_members[e]
-        rx, ry, rz = _rotate(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
+        _place_member(
+            body_members[e], b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega
         )
-        out_x[s, 0] = body_x[b, 0] + rx
-        out_x[s, 1] = body_x[b, 1] + ry
-        out_x[s, 2] = body_x[b, 2] + rz
-        out_v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
-        out_v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
-        out_v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
-        out_omega[s, 0] = ox
-        out_omega[s, 1] = oy
-        out_omega[s, 2] = oz
