@@ -22,13 +22,13 @@ import time
 from multiprocessing import Pool
 from pathlib import Path
 
-import numba
 import numpy as np
 
 from dem import calibrate, pointmass, provenance, setup
 from dem.case import load_case
 from dem.config import GRAVITY
 from dem.measure import conveying_velocity
+from dem.pointmass.bounded import coulomb_bounded_velocity
 from dem.simulation import measure_cycles
 
 HERE = Path(__file__).resolve().parent
@@ -101,44 +101,6 @@ def block_velocity(case) -> dict:
     }
 
 
-@numba.njit(cache=True)
-def bounded_pointmass(gamma, phi_deg, mu, eps_t, steps=4000, transient=100, measured=40):
-    """v_norm of the point mass whose landings take eps_t but never more than Coulomb allows.
-
-    Moreau-Jean time stepping (alpha = 0, eps_n = 0; u in A omega cos phi, w in A omega sin phi):
-    a landing sets u <- eps_t u unless |du| would exceed mu |dw| tan(phi), the most a Coulomb
-    contact can take in a plastic impact; then u <- u - mu |dw| tan(phi) sign(u). Independent of
-    dem.pointmass; it shows which departures of the DEM are the Coulomb bound.
-    """
-    tphi = math.tan(math.radians(phi_deg))
-    h = 2.0 * math.pi / steps
-    u = w = z = x = 0.0
-    flying = False
-    for n in range((transient + measured) * steps):
-        if n == transient * steps:
-            x = 0.0
-        s = math.sin((n % steps + 0.5) * h)
-        w_free = w + h * (s - 1.0 / gamma)
-        u_free = u + h * s
-        if z + h * w_free > 0.0:
-            u, w = u_free, w_free
-            z += h * w
-            flying = True
-        else:
-            limit = mu * tphi * (-w_free)
-            if flying:
-                u_new = eps_t * u_free
-                if abs(u_free - u_new) > limit:
-                    u_new = u_free - math.copysign(limit, u_free)
-                u = u_new
-            else:
-                u = 0.0 if abs(u_free) <= limit else u_free - math.copysign(limit, u_free)
-            w = z = 0.0
-            flying = False
-        x += h * u
-    return x / (2.0 * math.pi * measured)
-
-
 def calibrated(case) -> tuple:
     """The case with k_t / k_n fitted by dem calibrate's fit; and the fit."""
     cal = calibrate.calibrate(case)
@@ -150,7 +112,7 @@ def _calibrated_row(case):
     row = block_velocity(c)
     row.update(calibrated_eps_t=cal.eps_t, reachable=cal.reachable, landings=len(cal.impacts))
     d, m = case.drive, case.material
-    row["pointmass_coulomb_bounded"] = bounded_pointmass(
+    row["pointmass_coulomb_bounded"] = coulomb_bounded_velocity(
         d.throw_number, d.angle, m.friction, m.restitution_tangential
     )
     return row

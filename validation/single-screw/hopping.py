@@ -19,7 +19,7 @@ do in the run). Then
 Each run: settle with the drive off, switch the drive on at phase 0, discard 40 cycles, measure
 20 (dem.simulation.measure_cycles; mean and standard error by dem.measure.conveying_velocity).
 The dotted curve is the point mass whose landings never take more than Coulomb allows
-(validation/single-grain/run.py:bounded_pointmass).
+(dem.pointmass.bounded).
 """
 
 from __future__ import annotations
@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
-import importlib.util
 import time
 from multiprocessing import Pool
 from pathlib import Path
@@ -38,6 +37,7 @@ import run as screw  # this folder's sliding study: the case, the pose, the time
 from dem import calibrate, measure, pointmass, provenance
 from dem.case import load_case
 from dem.kernels.rigid import quat_to_matrix
+from dem.pointmass.bounded import coulomb_bounded_velocity
 from dem.simulation import measure_cycles
 
 HERE = Path(__file__).resolve().parent
@@ -47,15 +47,6 @@ FRICTIONS = (0.25, 0.35, 0.6)
 ANGLES = tuple(range(10, 71, 5))
 SETTLE, CYCLES = 40, 20
 CONTACT = argparse.Namespace(stiffness=4.0e7, restitution_normal=0.0, tangential="coulomb")
-
-
-def _bounded_pointmass():
-    """bounded_pointmass of validation/single-grain/run.py (loaded by path: another folder)."""
-    spec = importlib.util.spec_from_file_location("single_grain", ROOT / "validation" /
-                                                  "single-grain" / "run.py")  # fmt: skip
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.bounded_pointmass
 
 
 def point_case(base, angle, friction, gamma, rotation):
@@ -112,7 +103,7 @@ def point(spec) -> dict:
         "dem_velocity_norm": stat.norm,
         "dem_stderr": stat.norm_stderr,
         "pointmass_velocity_norm": pm.velocity_norm,
-        "pointmass_coulomb_bounded": BOUNDED(gamma, angle, friction, eps_t),
+        "pointmass_coulomb_bounded": coulomb_bounded_velocity(gamma, angle, friction, eps_t),
         "regime": pm.regime,
         "dem_free_rotation": free_stat.norm,
         "free_rotation_stderr": free_stat.norm_stderr,
@@ -128,9 +119,6 @@ def point(spec) -> dict:
         flush=True,
     )
     return row
-
-
-BOUNDED = _bounded_pointmass()
 
 
 def write_csv(rows, name):
