@@ -303,6 +303,8 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "mean_velocity_stderr": stat.stderr,
         "mean_velocity_norm": stat.norm,
         "mean_velocity_norm_stderr": stat.norm_stderr,
+        "cycle_autocorrelation_time": stat.autocorrelation_time,
+        "mean_velocity_stderr_independent": stat.stderr_independent,
         "mass_flow_rate": flow,
         "mass_flow_rate_per_width": flow / case.trough.width,
         "amplitude": case.drive.amplitude,
