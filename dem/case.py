@@ -183,14 +183,16 @@ class RunSpec:
     """Length of a run.
 
     Attributes:
-        settle_cycles: Drive cycles run before measuring (after the fill has come to rest).
+        settle_cycles: Drive cycles run before measuring (after the fill has come to rest);
+            None ("auto" in the file): until the transient of the per-cycle velocity has ended
+            (:func:`dem.measure.steady`), at most ``DEM_AUTO_SETTLE_MAX_CYCLES``.
         cycles: Drive cycles measured.
         timestep: dt, s, or None for automatic (from the stiffest contact).
         seed: Seed of the random generator (insertion positions).
 
     """
 
-    settle_cycles: int = 10
+    settle_cycles: int | None = 10
     cycles: int = 30
     timestep: float | None = None
     seed: int = 1
@@ -609,8 +611,9 @@ def _read_run(t: _Table) -> RunSpec:
         dt = None
     else:
         dt = t.quantity("timestep")
+    settle = None if t.data.get("settle_cycles") == "auto" else t.whole("settle_cycles", 10)
     return RunSpec(
-        settle_cycles=t.whole("settle_cycles", 10),
+        settle_cycles=settle,
         cycles=t.whole("cycles", 30),
         timestep=dt,
         seed=t.whole("seed", 1),

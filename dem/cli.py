@@ -60,6 +60,16 @@ def _number(text: str) -> float:
     return value
 
 
+def _whole0(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"value {value} must be >= 0")
+    return value
+
+
 def _whole(text: str) -> int:
     try:
         value = int(text)
@@ -334,7 +344,18 @@ def _cmd_export_liggghts(args) -> int:
     # the deck integrates with the step a dem run of this case would take
     timestep = timestep_for(case, timestep=args.timestep).dt
     steps = int(round(case.run.cycles / case.drive.frequency / timestep))
-    path = write_deck(case, Path(args.out_dir), timestep=timestep, steps=steps)
+    settle = args.settle_cycles if args.settle_cycles is not None else case.run.settle_cycles
+    if settle is None:
+        raise InputError(
+            "--settle-cycles",
+            None,
+            'a whole number of driven cycles before measuring: the case says "auto", which a '
+            "deck cannot detect (a dem run of the case reports its number in summary.json)",
+        )
+    settle_steps = round(settle / (case.drive.frequency * timestep))
+    path = write_deck(
+        case, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps
+    )
     print(f"wrote {path} (dt = {timestep:.4g} s, {steps} measured steps)")
     return 0
 
@@ -453,6 +474,10 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("case_dir")
     e.add_argument("out_dir")
     e.add_argument("--timestep", type=_number, help="dt in s (default: dem's for this case)")
+    e.add_argument(
+        "--settle-cycles", type=_whole0,
+        help="driven cycles before measuring (default: the case's; required for \"auto\")",
+    )  # fmt: skip
     e.set_defaults(func=_cmd_export_liggghts)
     return parser
 

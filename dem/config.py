@@ -91,6 +91,10 @@ DEM_PARALLEL_MIN_SPHERES = 256
 DEM_THREADING_LAYER = "omp"
 #: A running case writes checkpoint.npz every this many cycles (and on SIGINT/SIGTERM).
 DEM_CHECKPOINT_EVERY = 10
+#: ``run.settle_cycles = "auto"``: driven cycles before the transient test is first made (the
+#: MSER rule needs a few cycles on either side of a transient's end) and the most it waits.
+DEM_AUTO_SETTLE_MIN_CYCLES = 6
+DEM_AUTO_SETTLE_MAX_CYCLES = 200
 #: OpenMP wait policy for the DEM kernels' threads, applied by dem.kernels unless the environment
 #: sets OMP_WAIT_POLICY; None leaves libgomp's default (spin, then sleep). A trade-off measured on
 #: the 2-core machines (sphere-bed, 2 threads, 2026-11-21): with both cores free the default gave

@@ -111,6 +111,39 @@ def correlated_stderr(samples: np.ndarray) -> tuple[float, float]:
     return float(np.std(u, ddof=1) * math.sqrt(2.0 * tau / u.size)), tau
 
 
+def transient_end(samples: np.ndarray) -> int:
+    """Where the start-up transient of a series ends: the MSER truncation point d*.
+
+    d* minimises the marginal standard error of what is kept,
+    MSER(d) = sum_{i >= d} (x_i - mean(x_d..x_{n-1}))^2 / (n - d)^2, over d <= n/2 (White 1997;
+    White, Cobb and Spratt 2000, "A comparison of five steady-state truncation heuristics").
+    A series still drifting at its end has its minimum at the bound n/2; one whose transient has
+    died out early has it inside. Returns 0 for fewer than 3 samples.
+    """
+    u = np.asarray(samples, dtype=np.float64)
+    n = u.size
+    if n < 3:
+        return 0
+    best, best_d = math.inf, 0
+    for d in range(n // 2 + 1):
+        tail = u[d:]
+        value = float(np.sum((tail - np.mean(tail)) ** 2)) / (n - d) ** 2
+        if value < best:
+            best, best_d = value, d
+    return best_d
+
+
+def steady(samples: np.ndarray, min_samples: int = 6) -> bool:
+    """True when the transient of a growing series has ended: its MSER point lies inside.
+
+    With n >= ``min_samples`` samples, the series is steady when :func:`transient_end` is below
+    n/2 - 1: the kept part is not still drifting, and at least half of the series is past the
+    transient. Cost O(n^2) per call.
+    """
+    n = np.asarray(samples).size
+    return n >= min_samples and transient_end(samples) < n // 2 - 1
+
+
 def running_mean_and_stderr(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Mean and :func:`correlated_stderr` of the first k samples, k = 1..n: (mean, stderr), (n,).
 

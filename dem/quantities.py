@@ -124,7 +124,7 @@ QUANTITIES: dict[str, Quantity] = dict(
         _q("count", "", lambda n: n >= 1, "a whole number >= 1", "number of grains"),
         _q("cycles", "", lambda n: n >= 1, "a whole number of cycles >= 1",
            "measured drive cycles"),
-        _q("settle_cycles", "", lambda n: n >= 0, "a whole number of cycles >= 0",
+        _q("settle_cycles", "", lambda n: n >= 0, "\"auto\" or a whole number of cycles >= 0",
            "driven cycles before measuring"),
         _q("seed", "", lambda n: n >= 0, "a whole number >= 0", "random seed of the fill"),
         _q("frames_per_cycle", "", lambda n: n >= 1, "a whole number >= 1",

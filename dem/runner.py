@@ -4,7 +4,8 @@ What one run does, in order:
 
 1. refuse an output folder that holds an earlier run (unless ``overwrite`` or ``resume``);
 2. fill and settle (:class:`dem.simulation.Simulation`), then switch the drive on at phase 0;
-3. for each cycle (``settle_cycles`` unmeasured, then ``cycles`` measured), in
+3. for each cycle (``settle_cycles`` unmeasured, or with "auto" until the per-cycle velocity's
+   transient has ended, :func:`dem.measure.steady`; then ``cycles`` measured), in
    ``frames_per_cycle`` chunks: advance, write a VTK frame and a results.h5 frame; at the end of
    the cycle append its statistics to results.h5;
 4. every ``DEM_CHECKPOINT_EVERY`` cycles, and when SIGINT or SIGTERM arrives (checked between
@@ -24,6 +25,7 @@ import json
 import shutil
 import signal
 import time
+import warnings
 from pathlib import Path
 
 import numba
@@ -158,16 +160,19 @@ def run_case(
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     n_threads = _set_threads(threads)
     sim = setup.from_case(case)
-    total = case.run.settle_cycles + cycles
+    settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
 
     if resume:
         state, loop = checkpoint_io.read(checkpoint)
-        if loop["total_cycles"] != total:
-            started = loop["total_cycles"] - case.run.settle_cycles
+        loop.setdefault("cycles", loop["total_cycles"] - (settle or 0))  # older checkpoints
+        loop.setdefault("settle_cycles", settle)
+        if loop["cycles"] != cycles:
             raise InputError(
-                "--cycles", cycles, f"the interrupted run has {started}: resume with the same"
+                "--cycles",
+                cycles,
+                f"the interrupted run has {loop['cycles']}: resume with the same",
             )
         checkpoint_io.load_state(sim, state)
     else:
@@ -178,7 +183,10 @@ def run_case(
         loop = {
             "cycle": 0,
             "chunk": 0,
-            "total_cycles": total,
+            "total_cycles": None if settle is None else settle + cycles,
+            "settle_cycles": settle,
+            "cycles": cycles,
+            "settle_series": [],
             "steps": 0,
             "wall_time_s": 0.0,
             "settle_time_s": settle_time,
@@ -212,10 +220,11 @@ def run_case(
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=total, initial=loop["cycle"], unit="cycle", desc=f"dem {case.name}")
+        bar = tqdm(total=_planned(loop), initial=loop["cycle"], unit="cycle",
+                   desc=f"dem {case.name}")  # fmt: skip
     try:
         with _SignalFlag() as flag:
-            while loop["cycle"] < total:
+            while loop["settle_cycles"] is None or loop["cycle"] < loop["total_cycles"]:
                 c = loop["cycle"]
                 k = loop["chunk"]
                 end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
@@ -232,10 +241,12 @@ def run_case(
                 if loop["chunk"] == per_frame:
                     _end_cycle(sim, case, results, loop)
                     if bar is not None:
+                        bar.total = _planned(loop)
                         bar.update(1)
                     if loop["cycle"] % config.DEM_CHECKPOINT_EVERY == 0:
                         checkpoint_io.write(checkpoint, sim, loop)
-                if flag.signum is not None and loop["cycle"] < total:
+                unfinished = loop["settle_cycles"] is None or loop["cycle"] < loop["total_cycles"]
+                if flag.signum is not None and unfinished:
                     checkpoint_io.write(checkpoint, sim, loop)
                     raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
     finally:
@@ -268,12 +279,39 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     )  # fmt: skip
 
 
+def _planned(loop: dict) -> int:
+    """Cycles the run will take: known once the settling cycles are (else the most they can)."""
+    if loop["settle_cycles"] is None:
+        return config.DEM_AUTO_SETTLE_MAX_CYCLES + loop["cycles"]
+    return loop["total_cycles"]
+
+
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
-    """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums."""
+    """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums.
+
+    With ``run.settle_cycles = "auto"`` a settling cycle also tests the settling velocities so
+    far for the end of the transient (:func:`dem.measure.steady`); the first cycle after it is
+    measured. At ``DEM_AUTO_SETTLE_MAX_CYCLES`` the run measures anyway and says so.
+    """
     velocity = sim.cycle_velocity()
-    measured = loop["cycle"] >= case.run.settle_cycles
+    settle = loop["settle_cycles"]
+    measured = settle is not None and loop["cycle"] >= settle
     if measured:
         loop["per_cycle"].append(velocity)
+    elif settle is None:
+        series = loop["settle_series"]
+        series.append(velocity)
+        done = measure.steady(series, config.DEM_AUTO_SETTLE_MIN_CYCLES)
+        if done or len(series) >= config.DEM_AUTO_SETTLE_MAX_CYCLES:
+            loop["settle_cycles"] = loop["cycle"] + 1
+            loop["total_cycles"] = loop["settle_cycles"] + loop["cycles"]
+            loop["settle_detected"] = bool(done)
+            if not done:
+                warnings.warn(
+                    f"{case.name}: the per-cycle velocity still drifts after "
+                    f"{len(series)} settling cycles (DEM_AUTO_SETTLE_MAX_CYCLES); measuring anyway",
+                    stacklevel=2,
+                )
     results.append_cycle(
         cycle=loop["cycle"],
         time=sim.drive_time,
@@ -321,7 +359,9 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "timestep": sim.dt,
         "timestep_limit": sim.timestep_limit,
         "steps": loop["steps"],
-        "settle_cycles": case.run.settle_cycles,
+        "settle_cycles": loop["settle_cycles"],
+        "settle_cycles_auto": case.run.settle_cycles is None,
+        "settle_transient_ended": loop.get("settle_detected"),
         "cycles": cycles,
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "settle_time_s": loop["settle_time_s"],

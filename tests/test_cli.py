@@ -241,3 +241,15 @@ def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):
     toml.write_text(toml.read_text().replace('tangential = "coulomb"', 'tangential = "liggghts"'))
     assert main(["calibrate", str(case_dir)]) == 2
     assert "contact.tangential" in capsys.readouterr().err
+
+
+def test_export_of_an_auto_settle_case_asks_for_the_settle_cycles(capsys, tmp_path):
+    code, _, err = run(capsys, "export", "liggghts", "cases/screw-trough", str(tmp_path / "a"))
+    assert code == 2 and "--settle-cycles" in err and "auto" in err
+    assert not (tmp_path / "a").exists()
+    code, out, err = run(
+        capsys, "export", "liggghts", "cases/screw-trough", str(tmp_path / "b"),
+        "--settle-cycles", "10",
+    )  # fmt: skip
+    assert code == 0, err
+    assert (tmp_path / "b" / "in.dem").is_file()

@@ -123,7 +123,7 @@ def test_sphere_bed_drive_is_the_accelerating_frame(bed_deck):
 def test_inclination_tilts_static_gravity(tmp_path):
     case = load_case(CASES_DIR / "sphere-bed")
     tilted = dataclasses.replace(case, trough=dataclasses.replace(case.trough, inclination=4.0))
-    c = parse(write_deck(tilted, tmp_path, timestep=5e-6, steps=10))
+    c = parse(write_deck(tilted, tmp_path, timestep=5e-6, steps=10, settle_steps=0))
     alpha = math.radians(4.0)
     assert evaluate(variable(c, "gx"), drive=0.0) == pytest.approx(-GRAVITY * math.sin(alpha))
     assert evaluate(variable(c, "gz"), drive=0.0) == pytest.approx(-GRAVITY * math.cos(alpha))
@@ -183,9 +183,9 @@ def test_refuses_what_liggghts_primitives_cannot_do(tmp_path):
     # a screw case not built by load_case has no template to write
     screw = dataclasses.replace(case, particles=dataclasses.replace(case.particles, shape="screw"))
     with pytest.raises(InputError, match="particles.shape"):
-        write_deck(screw, tmp_path, timestep=5e-6, steps=10)
+        write_deck(screw, tmp_path, timestep=5e-6, steps=10, settle_steps=0)
     with pytest.raises(InputError, match="timestep"):
-        write_deck(case, tmp_path, timestep=0.0, steps=10)
+        write_deck(case, tmp_path, timestep=0.0, steps=10, settle_steps=0)
 
 
 def test_header_names_version_and_command(bed_deck):
@@ -247,7 +247,7 @@ def test_screw_deck_neighbour_skin_and_linear_damping_use_clump_values(tmp_path)
         contact=dataclasses.replace(case.contact, model="linear", stiffness=2.0e4),
         material=dataclasses.replace(case.material, restitution_normal=0.3),
     )
-    c = parse(write_deck(locked, tmp_path, timestep=3e-6, steps=10))
+    c = parse(write_deck(locked, tmp_path, timestep=3e-6, steps=10, settle_steps=0))
     template = fix(c, "pts")
     assert template[-4:] == ["tflag", "off", "off", "off"]
     assert float(c["neighbor"][0][0]) == pytest.approx(0.5 * min(case.particles.grain.radii))

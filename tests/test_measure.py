@@ -69,3 +69,22 @@ def test_independent_cycles_keep_the_plain_error_bar():
     assert stat.stderr == pytest.approx(stat.stderr_independent, rel=0.25)
     assert stat.autocorrelation_time < 1.0
     assert measure.integrated_autocorrelation_time(np.full(10, 0.3)) == 0.5
+
+
+def test_transient_end_finds_where_an_exponential_start_up_dies_out():
+    rng = np.random.default_rng(13)
+    t = np.arange(80)
+    noise = 0.01 * _ar1(rng, 0.3, t.size, 1)[0]
+    x = 0.3 + 0.5 * np.exp(-t / 4.0) + noise  # below the noise after about 4 ln(50) = 16 cycles
+    d = measure.transient_end(x)
+    assert 8 <= d <= 30
+    assert measure.steady(x)
+    assert not measure.steady(x[:12])  # still falling: the minimum sits at the bound
+
+
+def test_a_drifting_series_is_never_steady():
+    x = np.linspace(0.2, 0.4, 40) + 1e-4 * np.random.default_rng(14).normal(size=40)
+    assert measure.transient_end(x) == 20
+    assert not measure.steady(x)
+    stationary = 0.3 + 0.01 * np.random.default_rng(15).normal(size=40)
+    assert measure.steady(stationary)

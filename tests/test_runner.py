@@ -150,3 +150,32 @@ def test_summary_records_the_dem_version_and_commit(tmp_path):
     assert provenance["versions"]["dem"] == dem.__version__
     assert {"numpy", "numba", "python"} <= set(provenance["versions"])
     assert {"date", "host", "load_average"} <= set(provenance)
+
+
+def test_auto_settle_measures_after_the_detected_transient(tmp_path, monkeypatch, recwarn):
+    from dem import config
+
+    monkeypatch.setattr(config, "DEM_AUTO_SETTLE_MAX_CYCLES", 14)
+    text = SMALL_CASE.replace("settle_cycles = 2", 'settle_cycles = "auto"')
+    case = load_case(write_case(tmp_path / "case", text))
+    assert case.run.settle_cycles is None
+    summary = run_case(case, tmp_path / "out", cycles=2, frames=False, progress=False)
+    settle = summary["settle_cycles"]
+    assert summary["settle_cycles_auto"] is True
+    assert config.DEM_AUTO_SETTLE_MIN_CYCLES <= settle <= 14
+    measured = read_results(tmp_path / "out" / "results.h5")["cycles"]["measured"]
+    assert list(measured) == [0] * settle + [1, 1]
+    # either the transient test passed or the run said that it measured anyway
+    drifting = [w for w in recwarn if "still drifts" in str(w.message)]
+    assert summary["settle_transient_ended"] != bool(drifting)
+    if settle < 14:
+        assert summary["settle_transient_ended"]
+
+
+def test_auto_settle_cannot_go_into_a_liggghts_deck(tmp_path):
+    from dem.io.liggghts import write_deck
+
+    text = SMALL_CASE.replace("settle_cycles = 2", 'settle_cycles = "auto"')
+    case = load_case(write_case(tmp_path / "case", text))
+    with pytest.raises(InputError, match="run.settle_cycles"):
+        write_deck(case, tmp_path / "deck", timestep=1e-6, steps=10)

@@ -296,6 +296,14 @@ def write_deck(
         ]
     steps_per_cycle = 1.0 / (d.frequency * timestep)
     if settle_steps is None:
+        if case.run.settle_cycles is None:
+            raise InputError(
+                "run.settle_cycles",
+                "auto",
+                "a whole number of cycles for a LIGGGHTS deck (the deck cannot detect the end of "
+                "the transient; use the number a dem run of the case reported in summary.json)",
+                source=str(case.source),
+            )
         settle_steps = round(case.run.settle_cycles * steps_per_cycle)
     if sample_steps is None:
         sample_steps = max(1, round(steps_per_cycle / case.output.frames_per_cycle))
