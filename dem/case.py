@@ -16,7 +16,6 @@ radians by the code that uses them.
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import tomllib
@@ -27,7 +26,7 @@ from typing import Any
 
 from dem import drive, tangential
 from dem.errors import InputError
-from dem.quantities import QUANTITIES
+from dem.tomltable import Table, suggest
 
 #: File name of a case inside its directory.
 CASE_FILE = "case.toml"
@@ -302,120 +301,6 @@ class Case:
 
 # --- reading -------------------------------------------------------------------------------------
 
-_REQUIRED = object()
-
-
-def _suggest(name: str, known: list[str] | tuple[str, ...]) -> str:
-    """Return ' (did you mean 'x'?)' for the closest known name, or ''."""
-    close = difflib.get_close_matches(name, list(known), n=1, cutoff=0.6)
-    close = close or [k for k in known if name and (k.startswith(name) or name.startswith(k))]
-    return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-class _Table:
-    """One TOML table being read: typed getters that raise InputError with the dotted key."""
-
-    def __init__(self, name: str, data: dict[str, Any], source: str, directory: Path):
-        self.name = name
-        self.data = data
-        self.source = source
-        self.directory = directory
-
-    def error(self, key: str, value: object, allowed: str) -> InputError:
-        return InputError(f"{self.name}.{key}", value, allowed, source=self.source)
-
-    def check_known(self, known: tuple[str, ...]) -> None:
-        """Refuse keys that the table does not define (typos would otherwise be ignored)."""
-        for key, value in self.data.items():
-            if key not in known:
-                raise self.error(
-                    key,
-                    value,
-                    f"a key of [{self.name}]: {', '.join(known)}{_suggest(key, known)}",
-                )
-
-    def _get(self, key: str, default: Any) -> tuple[bool, Any]:
-        if key in self.data:
-            return True, self.data[key]
-        if default is _REQUIRED:
-            raise InputError(
-                f"{self.name}.{key}", None, "a value is required (the key is missing)", self.source
-            )
-        return False, default
-
-    def number(
-        self,
-        key: str,
-        default: Any = _REQUIRED,
-        check: Callable[[float], bool] | None = None,
-        allowed: str = "a finite number",
-    ) -> float | None:
-        """Read a float (an int is accepted; a bool is not); ``check`` gives the range."""
-        present, value = self._get(key, default)
-        if not present:
-            return value
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.error(key, value, f"a number: {allowed}")
-        value = float(value)
-        if not math.isfinite(value) or (check is not None and not check(value)):
-            raise self.error(key, value, allowed)
-        return value
-
-    def quantity(self, key: str, default: Any = _REQUIRED, name: str | None = None) -> float | None:
-        """Read a number checked against :data:`dem.quantities.QUANTITIES` [``name`` or key]."""
-        q = QUANTITIES[name or key]
-        return self.number(key, default, q.accepts, q.allowed)
-
-    def whole(self, key: str, default: Any = _REQUIRED) -> int:
-        """Read an integer checked against :data:`dem.quantities.QUANTITIES` [key]."""
-        q = QUANTITIES[key]
-        return self.integer(key, default, q.accepts, q.allowed)
-
-    def integer(
-        self,
-        key: str,
-        default: Any = _REQUIRED,
-        check: Callable[[int], bool] | None = None,
-        allowed: str = "an integer",
-    ) -> int:
-        """Read an int (not a bool, not a float)."""
-        present, value = self._get(key, default)
-        if not present:
-            return value
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(key, value, f"an integer: {allowed}")
-        if check is not None and not check(value):
-            raise self.error(key, value, allowed)
-        return value
-
-    def boolean(self, key: str, default: Any = _REQUIRED) -> bool:
-        """Read a TOML boolean (true/false)."""
-        present, value = self._get(key, default)
-        if present and not isinstance(value, bool):
-            raise self.error(key, value, "true or false")
-        return value
-
-    def choice(self, key: str, choices: tuple[str, ...], default: Any = _REQUIRED) -> str:
-        """Read a string out of ``choices``."""
-        present, value = self._get(key, default)
-        if present and (not isinstance(value, str) or value not in choices):
-            hint = _suggest(value, choices) if isinstance(value, str) else ""
-            raise self.error(key, value, f"one of {', '.join(map(repr, choices))}{hint}")
-        return value
-
-    def path(self, key: str) -> Path | None:
-        """Read an optional file path, relative to the case directory; the file must exist."""
-        present, value = self._get(key, None)
-        if not present:
-            return None
-        if not isinstance(value, str) or not value:
-            raise self.error(key, value, "a file path relative to the case directory")
-        resolved = (self.directory / value).resolve()
-        if not resolved.is_file():
-            raise self.error(key, value, f"an existing file (no file at {resolved})")
-        return resolved
-
-
 # --- one reader per table ------------------------------------------------------------------------
 
 _TROUGH_KEYS = ("length", "width", "inclination", "mesh")
@@ -452,7 +337,7 @@ _RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed")
 _OUTPUT_KEYS = ("frames_per_cycle",)
 
 
-def _read_trough(t: _Table) -> TroughSpec:
+def _read_trough(t: Table) -> TroughSpec:
     t.check_known(_TROUGH_KEYS)
     return TroughSpec(
         length=t.quantity("length"),
@@ -462,7 +347,7 @@ def _read_trough(t: _Table) -> TroughSpec:
     )
 
 
-def _read_mesh(t: _Table) -> Path | None:
+def _read_mesh(t: Table) -> Path | None:
     mesh = t.path("mesh")
     if mesh is not None and not MESH_TROUGHS:
         raise t.error(
@@ -471,7 +356,7 @@ def _read_mesh(t: _Table) -> Path | None:
     return mesh
 
 
-def _read_drive(t: _Table, inclination: float) -> DriveSpec:
+def _read_drive(t: Table, inclination: float) -> DriveSpec:
     t.check_known(_DRIVE_KEYS)
     frequency = t.quantity("frequency")
     angle = t.quantity("angle")
@@ -514,7 +399,7 @@ def resolve_drive(
     return DriveSpec(frequency, angle, amplitude, throw_number, given)
 
 
-def _read_material(t: _Table) -> MaterialSpec:
+def _read_material(t: Table) -> MaterialSpec:
     t.check_known(_MATERIAL_KEYS)
     return MaterialSpec(
         density=t.quantity("density"),
@@ -525,7 +410,7 @@ def _read_material(t: _Table) -> MaterialSpec:
     )
 
 
-def _read_contact(t: _Table) -> ContactSpec:
+def _read_contact(t: Table) -> ContactSpec:
     t.check_known(_CONTACT_KEYS)
     model = t.choice("model", CONTACT_MODELS, "hertz_mindlin")
     tangential = t.choice("tangential", TANGENTIAL_CONVENTIONS, "coulomb")
@@ -567,7 +452,7 @@ def _read_contact(t: _Table) -> ContactSpec:
     )
 
 
-def _read_particles(t: _Table) -> ParticlesSpec:
+def _read_particles(t: Table) -> ParticlesSpec:
     t.check_known(_PARTICLES_KEYS)
     shape = t.choice("shape", SHAPES, "sphere")
     # Keys of the other shapes are refused rather than silently ignored.
@@ -604,7 +489,7 @@ def _read_particles(t: _Table) -> ParticlesSpec:
     return spec
 
 
-def _read_run(t: _Table) -> RunSpec:
+def _read_run(t: Table) -> RunSpec:
     t.check_known(_RUN_KEYS)
     timestep = t.data.get("timestep", "auto")
     if timestep == "auto":
@@ -620,7 +505,7 @@ def _read_run(t: _Table) -> RunSpec:
     )
 
 
-def _read_output(t: _Table) -> OutputSpec:
+def _read_output(t: Table) -> OutputSpec:
     t.check_known(_OUTPUT_KEYS)
     return OutputSpec(frames_per_cycle=t.whole("frames_per_cycle", 4))
 
@@ -639,7 +524,7 @@ def _grain_diameter(particles: ParticlesSpec) -> float | None:
     return None
 
 
-def _build_grain(particles: ParticlesSpec, density: float, t: _Table) -> ParticlesSpec:
+def _build_grain(particles: ParticlesSpec, density: float, t: Table) -> ParticlesSpec:
     """Attach the grain template of a screw or clump (mass if given, else the density)."""
     from dem import shapes
 
@@ -695,15 +580,15 @@ def load_case(path: str | Path) -> Case:
     for name, value in data.items():
         if name not in _TABLES:
             raise InputError(
-                name, value, f"a table: {', '.join(_TABLES)}{_suggest(name, _TABLES)}", where
+                name, value, f"a table: {', '.join(_TABLES)}{suggest(name, _TABLES)}", where
             )
         if not isinstance(value, dict):
             raise InputError(name, value, f"a table [{name}]", where)
 
     directory = source.parent
 
-    def table(name: str) -> _Table:
-        return _Table(name, data.get(name, {}), where, directory)
+    def table(name: str) -> Table:
+        return Table(name, data.get(name, {}), where, directory)
 
     trough = _read_trough(table("trough"))
     drive = _read_drive(table("drive"), trough.inclination)
@@ -746,7 +631,7 @@ def load_case(path: str | Path) -> Case:
     return case
 
 
-def _check_engine(case: Case, table: Callable[[str], _Table]) -> None:
+def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
     """The checks the engine would make when building the case, made at load instead.
 
     The periodic section must hold a grain and its skin twice over (the minimum image must be
