@@ -14,7 +14,7 @@ import numba
 from dem.config import NUMBA_OPTIONS
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def wrap(x, length):
     """X wrapped into [0, length); -1e-17 would round to ``length`` and is set to 0."""
     x -= math.floor(x / length) * length
@@ -23,7 +23,7 @@ def wrap(x, length):
     return x
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def minimum_image(dx, length, half):
     """Dx shifted by one period at most into [-half, half] (half = length / 2)."""
     if dx > half:
@@ -33,7 +33,7 @@ def minimum_image(dx, length, half):
     return dx
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def nearest_image(dx, length):
     """Dx - length round(dx / length): the nearest image at any distance."""
     return dx - length * math.floor(dx / length + 0.5)

@@ -222,7 +222,7 @@ def matrix_to_quat(r):
     return q
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def member_arm(sphere_x, s, body_x, b, length):
     """r_s = x_s - X_b of member s of body b, x in the nearest periodic image (length > 0)."""
     rx = sphere_x[s, 0] - body_x[b, 0]
@@ -231,7 +231,7 @@ def member_arm(sphere_x, s, body_x, b, length):
     return rx, sphere_x[s, 1] - body_x[b, 1], sphere_x[s, 2] - body_x[b, 2]
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def _place_member(s, b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega):
     """Member s of body b: x_s = X_b + R d_s, v_s = V_b + omega_b x R d_s, omega_s = omega_b."""
     rx, ry, rz = _rotate(
