@@ -60,24 +60,23 @@ def _number(text: str) -> float:
     return value
 
 
-def _whole0(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"value {text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"value {value} must be >= 0")
-    return value
+def _whole_from(minimum: int):
+    """An argparse type: a whole number >= ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"value {text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"value {value} must be >= {minimum}")
+        return value
+
+    return parse
 
 
-def _whole(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"value {text!r} is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"value {value} must be >= 1")
-    return value
+_whole = _whole_from(1)
+_whole0 = _whole_from(0)
 
 
 def _option_name(key: str) -> str:
