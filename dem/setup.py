@@ -17,17 +17,17 @@ from dem.timestep import ContactLaw, impact_speed_for, timestep_for
 from dem.trough import Trough
 
 
-def from_case(case, *, timestep: float | None = None) -> Simulation:
+def from_case(case, *, timestep: float | None = None, check_limit: bool = True) -> Simulation:
     """The case's trough filled with its grains (seeded), ready to settle and drive.
 
     Spheres: :func:`dem.fill.random_fill`. Screws and clumps: N copies of the case's grain
     template at random positions and orientations without member overlap
     (:func:`dem.fill.random_fill_clumps`). The time step is the case's
-    (:func:`dem.timestep.timestep_for`, impact from the top of the fill box); the instability
-    check's speed scale takes the box as it was finally drawn.
+    (:func:`dem.timestep.timestep_for`, impact from the top of the fill box; ``check_limit`` as
+    there); the instability check's speed scale takes the box as it was finally drawn.
     """
     check_buildable(case)
-    step = timestep_for(case, timestep=timestep)
+    step = timestep_for(case, timestep=timestep, check_limit=check_limit)
     positions, quats, height = fill.fill(case)
     return _build(case, positions, quats, None, step, impact_speed_for(case, height))
 

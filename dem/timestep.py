@@ -195,6 +195,7 @@ def timestep_for(
     timestep: float | None = None,
     impact_speed: float | None = None,
     grains: int | None = None,
+    check_limit: bool = True,
 ) -> Timestep:
     """The time step of a :class:`dem.case.Case`, without placing a grain.
 
@@ -204,6 +205,8 @@ def timestep_for(
         impact_speed: Hardest impact, m/s; default :func:`impact_speed_for` the fill box.
         grains: Number of grains (sphere-sphere contacts count only if more than one); default
             ``particles.count``.
+        check_limit: False lets a given step exceed the stability limit: for stability studies
+            (validation/stability), whose runs the instability guard must then stop.
 
     The step of a clump takes the smallest effective mass a point of its surface has for a force
     in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation
@@ -240,7 +243,7 @@ def timestep_for(
     auto = period / math.ceil(period / auto)
     user = timestep if timestep is not None else case.run.timestep
     if user is not None:
-        if user > limit:
+        if user > limit and check_limit:
             raise InputError(
                 "run.timestep",
                 user,

@@ -179,3 +179,32 @@ def test_auto_settle_cannot_go_into_a_liggghts_deck(tmp_path):
     case = load_case(write_case(tmp_path / "case", text))
     with pytest.raises(InputError, match="run.settle_cycles"):
         write_deck(case, tmp_path / "deck", timestep=1e-6, steps=10)
+
+
+@pytest.mark.validation
+def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_path, monkeypatch):
+    # a time step 8 x the limit checked at load (2.4 x the critical step of one contact) blows
+    # up within a few hundred steps; the load check is widened so that the run starts at all
+    from dem import config
+    from dem.errors import SimulationError
+    from dem.timestep import timestep_for
+
+    case = load_case(_case_dir(tmp_path, cycles=4))
+    limit = timestep_for(case).limit
+    monkeypatch.setattr(config, "DEM_DT_STABILITY_FRACTION", 100.0)
+    case = case.__class__(**{**case.__dict__, "run": case.run.__class__(
+        settle_cycles=0, cycles=4, timestep=8.0 * limit, seed=case.run.seed)})  # fmt: skip
+    with pytest.raises(SimulationError) as info:
+        run_case(case, tmp_path / "out", progress=False)
+    message = str(info.value)
+    assert "run.timestep" in message and "step" in message  # the cause and the fix
+    assert not (tmp_path / "out" / "summary.json").exists()
+    # stopped while settling (no output yet) or while driven (what was written is finite)
+    if (tmp_path / "out" / "results.h5").exists():
+        res = read_results(tmp_path / "out" / "results.h5")
+        assert not res["complete"]
+        frames = res["frames"]
+        for i in range(len(frames)):
+            for key in ("positions", "velocity"):
+                assert np.isfinite(frames[i][key]).all()
+        assert np.isfinite(res["cycles"]["mean_velocity"]).all()
