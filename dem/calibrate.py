@@ -25,11 +25,10 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
-from dem import config
 from dem.errors import InputError
+from dem.pointmass.stepped import step_point_mass
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
 LANDING_STEPS = 4000
@@ -144,55 +143,6 @@ def measure_impact(sim, *, max_steps: int = 200_000) -> Impact:
 # --- the impacts conveying produces ------------------------------------------------------------
 
 
-@numba.njit(**config.NUMBA_OPTIONS)
-def _landings(gamma, phi, mu, alpha, eps_t, eps_n, steps, transient, measured, out):
-    """Relative landing velocities (u, w) in units of A omega, by Moreau-Jean time stepping.
-
-    Units: phase omega t, velocities in A omega (tangential u along x, normal w along z).
-    Returns the number of rows of ``out`` filled.
-    """
-    s_phi = math.sin(phi)
-    c_phi = math.cos(phi)
-    # accelerations in A omega^2: drive -sin(t) e (trough frame: + sin t e for the grain),
-    # gravity g (-sin a, -cos a) = (Gamma / sin phi) (-sin a / cos a ... ) scaled below
-    g_scale = math.sin(phi) / (gamma * math.cos(alpha))  # g / (A omega^2)
-    gx = -g_scale * math.sin(alpha)
-    gz = -g_scale * math.cos(alpha)
-    h = 2.0 * math.pi / steps
-    u = 0.0
-    w = 0.0
-    z = 0.0
-    flying = False
-    n_out = 0
-    for n in range((transient + measured) * steps):
-        s = math.sin((n % steps + 0.5) * h)
-        u_free = u + h * (s * c_phi + gx)
-        w_free = w + h * (s * s_phi + gz)
-        if z + h * w_free > 0.0:
-            u, w = u_free, w_free
-            z += h * w
-            flying = True
-        elif flying:
-            if n >= transient * steps and n_out < out.shape[0]:
-                out[n_out, 0] = u_free
-                out[n_out, 1] = w_free
-                n_out += 1
-            u = eps_t * u_free
-            w = -eps_n * w_free if w_free < 0.0 else 0.0
-            z = 0.0
-            flying = w > 0.0
-        else:
-            impulse = -w_free
-            limit = mu * impulse
-            if abs(u_free) <= limit:
-                u = 0.0
-            else:
-                u = u_free - math.copysign(limit, u_free)
-            w = 0.0
-            z = 0.0
-    return n_out
-
-
 def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
     """Landings of the point mass on the case's drive: rows (incidence deg, speed m/s), (L, 2).
 
@@ -202,9 +152,10 @@ def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
     """
     d, m = case.drive, case.material
     out = np.zeros((cycles * 8, 2))
-    k = _landings(
+    k, _ = step_point_mass(
         d.throw_number, math.radians(d.angle), m.friction, math.radians(case.trough.inclination),
-        m.restitution_tangential, m.restitution_normal, LANDING_STEPS, transient, cycles, out,
+        m.restitution_tangential, m.restitution_normal, LANDING_STEPS, transient, cycles, False,
+        out,
     )  # fmt: skip
     scale = d.amplitude * d.omega
     u, w = out[:k, 0] * scale, out[:k, 1] * scale

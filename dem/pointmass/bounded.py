@@ -9,20 +9,19 @@ impulse of at most mu times the normal one. This model keeps Eq. 12 and caps the
 
 with u the velocity along the trough in units of A omega cos(phi), w the normal velocity in
 units of A omega sin(phi) and dw its jump at the landing (horizontal trough, eps_n = 0). It is
-integrated by Moreau-Jean time stepping (``steps`` per drive period), independently of the
-event-driven kernel of :mod:`dem.pointmass.model`; below the Coulomb bound the two agree.
-A DEM grain whose contact is Coulomb-exact follows this model at grazing landings
-(validation/single-grain).
+integrated by Moreau-Jean time stepping (:func:`dem.pointmass.stepped.step_point_mass`,
+``steps`` per drive period), independently of the event-driven kernel of
+:mod:`dem.pointmass.model`; below the Coulomb bound the two agree. A DEM grain whose contact
+is Coulomb-exact follows this model at grazing landings (validation/single-grain).
 """
 
 import math
 
-import numba
+import numpy as np
 
-from dem.config import NUMBA_OPTIONS
+from dem.pointmass.stepped import step_point_mass
 
 
-@numba.njit(**NUMBA_OPTIONS)
 def coulomb_bounded_velocity(gamma, phi_deg, mu, eps_t, steps=4000, transient=100, measured=40):
     """Mean conveying velocity over A omega cos(phi) with Coulomb-bounded landings.
 
@@ -36,30 +35,8 @@ def coulomb_bounded_velocity(gamma, phi_deg, mu, eps_t, steps=4000, transient=10
         measured: Periods averaged.
 
     """
-    tphi = math.tan(math.radians(phi_deg))
-    h = 2.0 * math.pi / steps
-    u = w = z = x = 0.0
-    flying = False
-    for n in range((transient + measured) * steps):
-        if n == transient * steps:
-            x = 0.0
-        s = math.sin((n % steps + 0.5) * h)
-        w_free = w + h * (s - 1.0 / gamma)
-        u_free = u + h * s
-        if z + h * w_free > 0.0:
-            u, w = u_free, w_free
-            z += h * w
-            flying = True
-        else:
-            limit = mu * tphi * (-w_free)
-            if flying:
-                u_new = eps_t * u_free
-                if abs(u_free - u_new) > limit:
-                    u_new = u_free - math.copysign(limit, u_free)
-                u = u_new
-            else:
-                u = 0.0 if abs(u_free) <= limit else u_free - math.copysign(limit, u_free)
-            w = z = 0.0
-            flying = False
-        x += h * u
-    return x / (2.0 * math.pi * measured)
+    phi = math.radians(phi_deg)
+    _, mean_u = step_point_mass(
+        gamma, phi, mu, 0.0, eps_t, 0.0, steps, transient, measured, True, np.zeros((0, 2))
+    )
+    return mean_u / math.cos(phi)
