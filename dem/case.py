@@ -640,6 +640,7 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
     """
     from dem import config
     from dem.timestep import timestep_for
+    from dem.trough import check_section_length
 
     pt, length = case.particles, case.trough.length
     r_max = pt.radius if pt.shape == "sphere" else None
@@ -648,21 +649,8 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
         r_max = float(max(pt.grain.radii))
         reach = float(max(math.hypot(*c) for c in pt.grain.centres))
     if r_max is not None:
-        need = 2.0 * (2.0 + config.DEM_SKIN_FRACTION) * r_max
-        if length < need:
-            raise table("trough").error(
-                "length",
-                length,
-                f">= {need:g} m, twice a grain diameter plus the neighbour skin: a grain must not "
-                "reach its own periodic image",
-            )
-        if length <= 2.0 * reach:
-            raise table("trough").error(
-                "length",
-                length,
-                f"> {2.0 * reach:g} m, twice the largest member offset of the grain (a clump's "
-                "members must lie within half a period of its centre of mass)",
-            )
+        skin = config.DEM_SKIN_FRACTION * r_max  # the Simulation's default skin
+        check_section_length(length, r_max, skin, reach, source=str(case.source))
     if case.run.timestep is not None:
         timestep_for(case)
 

@@ -34,7 +34,7 @@ import numba
 import numpy as np
 
 from dem import config
-from dem.errors import InputError, SimulationError
+from dem.errors import SimulationError
 from dem.kernels.integrate import (
     DONE,
     advance,
@@ -48,7 +48,7 @@ from dem.kernels.neighbours import OK
 from dem.kernels.rigid import rotational_energy
 from dem.state import Bodies, PairList, Spheres
 from dem.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
-from dem.trough import Trough
+from dem.trough import Trough, check_section_length
 
 
 class Simulation:
@@ -97,22 +97,8 @@ class Simulation:
             bodies.place(spheres)
         r_max = float(np.max(spheres.radius))
         self.skin = config.DEM_SKIN_FRACTION * r_max if skin is None else float(skin)
-        if trough.length < 2.0 * (2.0 * r_max + self.skin):
-            raise InputError(
-                "trough.length",
-                trough.length,
-                f"at least 2 (2 r + skin) = {2 * (2 * r_max + self.skin):.6g} m "
-                "(the periodic image must be unique)",
-            )
-        if bodies is not None:
-            reach = float(np.max(np.linalg.norm(bodies.offsets, axis=1)))
-            if trough.length <= 2.0 * reach:
-                raise InputError(
-                    "trough.length",
-                    trough.length,
-                    f"more than twice the largest member offset, {2 * reach:.6g} m (a clump's "
-                    "members must lie within half a period of its centre of mass)",
-                )
+        reach = 0.0 if bodies is None else float(np.max(np.linalg.norm(bodies.offsets, axis=1)))
+        check_section_length(trough.length, r_max, self.skin, reach)
         self.pairs = PairList.for_spheres(spheres.n)
         self.geom = Geometry(trough.length, trough.width, self.skin, self.dt)
         self.gravity = trough.gravity

@@ -38,6 +38,7 @@ import numpy as np
 
 from dem import drive
 from dem.config import GRAVITY
+from dem.errors import InputError
 
 #: The kernel's walls in its order w = 0, 1, 2: (name, inward unit normal). Wall w lies where
 #: the gap of :meth:`Trough.wall_gaps` is zero: z = 0, y = -width/2 and y = +width/2.
@@ -169,4 +170,32 @@ class Trough:
                 [[0.0, lo, 0.0], [length, lo, 0.0], [length, lo, height], [0.0, lo, height]],
                 [[0.0, hi, 0.0], [length, hi, 0.0], [length, hi, height], [0.0, hi, height]],
             ]
+        )
+
+
+def check_section_length(
+    length: float, r_max: float, skin: float, reach: float = 0.0, source: str | None = None
+) -> None:
+    """Refuse a periodic section too short for its grains (InputError naming trough.length).
+
+    A sphere of radius ``r_max`` with its neighbour ``skin`` must not reach its own periodic
+    image, length >= 2 (2 r_max + skin); a clump's members must lie within half a period of
+    its centre of mass, length > 2 ``reach`` (the largest member offset).
+    """
+    need = 2.0 * (2.0 * r_max + skin)
+    if length < need:
+        raise InputError(
+            "trough.length",
+            length,
+            f">= 2 (2 r + skin) = {need:.6g} m, twice a grain diameter plus the neighbour skin "
+            "(a grain must not reach its own periodic image)",
+            source=source,
+        )
+    if length <= 2.0 * reach:
+        raise InputError(
+            "trough.length",
+            length,
+            f"> {2.0 * reach:.6g} m, twice the largest member offset (a clump's members must lie "
+            "within half a period of its centre of mass)",
+            source=source,
         )
