@@ -19,7 +19,7 @@ the law and contact the recorded results.csv were made with; README.md says why)
 Each point is run again with rotation free from the same lying start (column
 dem_velocity_norm_free_rotation; not part of the criterion, which is the locked block's).
 
-Time step: the engine's own rule (dem.simulation.timestep_limits: 1/50 of the linear collision
+Time step: the engine's own rule (dem.timestep.timestep_limits: 1/50 of the linear collision
 time, within the stability limit) applied to the effective mass a floor contact of the lying
 screw actually has: M with rotation locked, 1 / max_n (1/M + (p x n) . I^-1 (p x n)) with it free.
 dem.setup.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
