@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import re
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -45,6 +45,8 @@ TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
+#: Screw resolution when ``particles.max_bumpiness`` is omitted (:func:`dem.shapes.screw`).
+DEFAULT_MAX_BUMPINESS = 0.25
 
 
 @dataclass(frozen=True)
@@ -160,6 +162,10 @@ class ParticlesSpec:
         mass: Target grain mass, kg (screw, clump); None: material.density times the union
             volume.
         template: Absolute path of a clump template, lines ``x y z r`` in metres (clump).
+        max_bumpiness: Screw resolution (screw): the deepest valley between neighbouring shank
+            spheres as a fraction of the shank radius, 0 < b <= 1; a smaller b takes more
+            spheres per screw (:func:`dem.shapes.screw`). Default 0.25: 8 spheres for the
+            shipped screw.
         grain: The :class:`dem.shapes.Template` built at load (screw, clump), else None; not
             part of :meth:`Case.as_dict`.
 
@@ -174,6 +180,7 @@ class ParticlesSpec:
     head_radius: float | None = None
     mass: float | None = None
     template: Path | None = None
+    max_bumpiness: float | None = None
     grain: Any = field(default=None, repr=False, compare=False)
 
 
@@ -332,6 +339,7 @@ _PARTICLES_KEYS = (
     "head_radius",
     "mass",
     "template",
+    "max_bumpiness",
 )
 _RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed")
 _OUTPUT_KEYS = ("frames_per_cycle",)
@@ -458,7 +466,7 @@ def _read_particles(t: Table) -> ParticlesSpec:
     # Keys of the other shapes are refused rather than silently ignored.
     own = {
         "sphere": ("radius",),
-        "screw": ("length", "shank_radius", "head_radius", "mass"),
+        "screw": ("length", "shank_radius", "head_radius", "mass", "max_bumpiness"),
         "clump": ("template", "mass"),
     }
     for other, keys in own.items():
@@ -476,6 +484,9 @@ def _read_particles(t: Table) -> ParticlesSpec:
         head_radius=t.quantity("head_radius", name="radius") if shape == "screw" else None,
         mass=t.quantity("mass", None),
         template=t.path("template") if shape == "clump" else None,
+        max_bumpiness=t.quantity("max_bumpiness", DEFAULT_MAX_BUMPINESS)
+        if shape == "screw"
+        else None,
     )
     if shape == "clump" and spec.template is None:
         raise t.error("template", None, "a clump template file is required for shape = 'clump'")
@@ -536,7 +547,7 @@ def _build_grain(particles: ParticlesSpec, density: float, t: Table) -> Particle
         if particles.shape == "screw":
             grain = shapes.screw(
                 particles.length, particles.shank_radius, particles.head_radius,
-                mass=mass, density=rho,
+                mass=mass, density=rho, max_bumpiness=particles.max_bumpiness,
             )  # fmt: skip
         else:
             grain = shapes.clump_from_file(particles.template, mass=mass, density=rho)
@@ -545,11 +556,14 @@ def _build_grain(particles: ParticlesSpec, density: float, t: Table) -> Particle
     return replace(particles, grain=grain)
 
 
-def load_case(path: str | Path) -> Case:
+def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Case:
     """Read and validate a case.
 
     Args:
         path: A case directory (holding ``case.toml``) or the ``case.toml`` itself.
+        overrides: Keys to set before validation, ``{"drive.angle": 30.0}`` (a study or a sweep
+            point); the value None removes the key. Values are checked exactly as if they had
+            been written in the file.
 
     Returns:
         The validated case; relative paths in the file are resolved against its directory.
@@ -576,6 +590,8 @@ def load_case(path: str | Path) -> Case:
         raise InputError(key, str(exc), "valid TOML syntax (https://toml.io)", where) from exc
     except UnicodeDecodeError as exc:
         raise InputError("file", str(exc), "UTF-8 encoded TOML", where) from exc
+    if overrides:
+        _apply_overrides(data, overrides, where)
 
     for name, value in data.items():
         if name not in _TABLES:
@@ -629,6 +645,21 @@ def load_case(path: str | Path) -> Case:
     )
     _check_engine(case, table)
     return case
+
+
+def _apply_overrides(data: dict, overrides: Mapping[str, Any], where: str) -> None:
+    """Set ``table.key`` values in the parsed file ``data`` (None removes the key)."""
+    for dotted, value in overrides.items():
+        name, _, key = str(dotted).partition(".")
+        if name not in _TABLES or not key or "." in key:
+            raise InputError(
+                "override", dotted, f"table.key with a table of {', '.join(_TABLES)}", where
+            )
+        table = data.setdefault(name, {})
+        if value is None:
+            table.pop(key, None)
+        else:
+            table[key] = value
 
 
 def _check_engine(case: Case, table: Callable[[str], Table]) -> None:

@@ -119,6 +119,9 @@ QUANTITIES: dict[str, Quantity] = dict(
         # grains and run
         _q("radius", "m", _positive, "radius must be > 0 (m)", "radius, m"),
         _q("mass", "kg", _positive, "mass must be > 0 (kg)", "grain mass, kg"),
+        _q("max_bumpiness", "", lambda x: 0.0 < x <= 1.0,
+           "must satisfy 0 < b <= 1 (1: touching shank spheres; smaller: more spheres)",
+           "screw resolution: deepest valley between shank spheres over the shank radius"),
         _q("timestep", "s", _positive, '"auto" or a time step > 0 (s)', "time step dt, s"),
         # whole numbers (read as integers; accepts() sees the int)
         _q("count", "", lambda n: n >= 1, "a whole number >= 1", "number of grains"),
