@@ -1,0 +1,56 @@
+"""Contact law: Hertz-Mindlin or linear, each with the Coulomb and the LIGGGHTS tangential law.
+
+    .venv/bin/python validation/speed_accuracy/contact_model.py
+
+The shipped cases use Hertz-Mindlin with the total tangential force capped at Coulomb and k_t,
+gamma_t calibrated to eps_t = 0.8 (``dem calibrate``). The linear law takes the k_n whose
+contact time equals the Hertz contact time of a grain landing on the floor at the drive speed
+A omega (so the two laws resolve the same impact in about the same number of steps); under the
+Coulomb law its k_t and gamma_t are derived from eps_t = 0.8, under the LIGGGHTS law
+k_t / k_n = 2/7. The LIGGGHTS law with Hertz takes Mindlin's k_t, as a LIGGGHTS deck does.
+"""
+
+import math
+
+from study import CASES, ROOT, Point, default_points, main
+
+from dem.case import load_case
+from dem.kernels import contacts
+
+
+def linear_stiffness(case_name: str) -> float:
+    """k_n, N/m, with the contact time of a Hertz grain-floor impact at A omega."""
+    case = load_case(ROOT / "cases" / case_name)
+    pt, c = case.particles, case.contact
+    if pt.shape == "sphere":
+        mass = case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
+        radius = pt.radius
+    else:
+        mass, radius = pt.grain.mass, float(max(pt.grain.radii))
+    y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
+    speed = case.drive.amplitude * case.drive.omega
+    t_c = contacts.hertz_collision_time(y_star, radius, mass, speed)
+    return float(f"{mass * (math.pi / t_c) ** 2:.3g}")
+
+
+def points(case_name: str) -> list[Point]:
+    k = linear_stiffness(case_name)
+    linear = {"contact.model": "linear", "contact.youngs_modulus": None,
+              "contact.stiffness": k, "contact.tangential_stiffness_ratio": None,
+              "contact.tangential_damping_ratio": None}  # fmt: skip
+    liggghts = {"contact.tangential": "liggghts", "contact.tangential_stiffness_ratio": None,
+                "contact.tangential_damping_ratio": None}  # fmt: skip
+    return default_points("contact_model", case_name) + [
+        Point("contact_model", case_name, "Hertz, LIGGGHTS tangential", "hertz liggghts",
+              liggghts),
+        Point("contact_model", case_name, f"linear {k:.3g} N/m, Coulomb", "linear coulomb",
+              linear),
+        Point("contact_model", case_name, f"linear {k:.3g} N/m, LIGGGHTS", "linear liggghts",
+              linear | {"contact.tangential": "liggghts"}),
+    ]  # fmt: skip
+
+
+POINTS = [p for case in CASES for p in points(case)]
+
+if __name__ == "__main__":
+    raise SystemExit(main("contact_model", POINTS, "contact law and tangential law", __file__))

@@ -1,0 +1,363 @@
+"""What every speed-accuracy study shares: a run point, a cache of finished runs, the reference.
+
+A point is one ``dem run`` of a shipped case (``cases/sphere-bed`` or ``cases/screw-trough``)
+with some keys overridden (:func:`dem.case.load_case` ``overrides``), through the same runner a
+user calls (:func:`dem.runner.run_case`: fill, settle, "auto" settle cycles, 20 measured
+cycles), without frames, on one thread. Two points run at a time (one per core), so every wall
+time is a one-thread time beside one other busy process, the same for every point.
+
+Finished points are appended to ``runs.jsonl`` in this folder, keyed by their settings, so a
+study reruns only what is missing (``--fresh`` reruns everything it needs). Each study script
+then reads its points, writes ``<study>.csv`` and ``<study>.png`` and prints its table.
+
+Error of a point: ``v - v_ref`` of the normalised bulk velocity v / (A omega cos phi), where
+``v_ref`` is the mean over the reference fills (:data:`REFERENCE`: stiff contacts, half the
+automatic step, three seeds). Its uncertainty combines the point's own standard error
+(autocorrelation-corrected) with the standard error of the reference mean. A setting is
+*acceptable* when ``|error| <= 2 %`` of v_ref and ``|error| <= 2 s_fill``, s_fill being the
+fill-to-fill standard deviation measured at the default settings.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import math
+import os
+import tempfile
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from multiprocessing import Pool
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+CASES = ("sphere-bed", "screw-trough")
+RUNS = HERE / "runs.jsonl"
+#: Relative tolerance a setting must meet against the reference.
+TOLERANCE = 0.02
+#: Seeds of the reference fills and of the default-setting fills.
+FILL_SEEDS = (1, 2, 3)
+#: The converged reference: contacts 10x stiffer than shipped, half the automatic step there.
+REFERENCE = {"contact.youngs_modulus": 5.0e8}
+REFERENCE_TIMESTEP_FRACTION = 0.15  # of the stability limit (the automatic step is 0.3 of it)
+
+
+@dataclass(frozen=True)
+class Point:
+    """One run: a case, its overrides, a seed, and engine settings that are not case keys.
+
+    Attributes:
+        study: Name of the study the point belongs to (for the tables; not part of the key).
+        case: Shipped case name.
+        label: Short text for plots and tables.
+        x: The value the study varies (for its chart).
+        overrides: ``{"table.key": value}`` for :func:`dem.case.load_case`.
+        timestep_fraction: dt as a fraction of the case's stability limit (None: the case's).
+        skin_fraction: Neighbour skin over the largest radius (None: ``DEM_SKIN_FRACTION``).
+        seed: ``run.seed``.
+
+    """
+
+    study: str
+    case: str
+    label: str
+    x: float | str
+    overrides: dict = field(default_factory=dict)
+    timestep_fraction: float | None = None
+    skin_fraction: float | None = None
+    seed: int = 1
+
+    @property
+    def key(self) -> str:
+        """Identity of the run's settings (two studies share a run with the same key)."""
+        spec = {"case": self.case, "overrides": self.overrides, "seed": self.seed,
+                "timestep_fraction": self.timestep_fraction,
+                "skin": self.skin_fraction}  # fmt: skip
+        return hashlib.sha1(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def default_points(study: str, case: str, seeds: Iterable[int] = (1,)) -> list[Point]:
+    """The shipped settings (seed 1 unless given)."""
+    return [Point(study, case, "shipped", "shipped", seed=s) for s in seeds]
+
+
+def reference_points(study: str, case: str) -> list[Point]:
+    """The converged reference fills."""
+    return [
+        Point(study, case, "reference", "reference", dict(REFERENCE),
+              timestep_fraction=REFERENCE_TIMESTEP_FRACTION, seed=s)
+        for s in FILL_SEEDS
+    ]  # fmt: skip
+
+
+def support_points(cases) -> list[Point]:
+    """The reference and shipped fills every study's errors need."""
+    return [
+        q
+        for c in sorted(cases)
+        for q in reference_points("reference", c) + default_points("reference", c, FILL_SEEDS)
+    ]
+
+
+def load(point: Point):
+    """The case of a point (its overrides and time step applied, checked as a file would be)."""
+    from dem.case import load_case
+    from dem.timestep import timestep_for
+
+    overrides = dict(point.overrides)
+    overrides["run.seed"] = point.seed
+    case = load_case(ROOT / "cases" / point.case, overrides)
+    if point.timestep_fraction is not None:
+        limit = timestep_for(case).limit
+        overrides["run.timestep"] = float(point.timestep_fraction * limit * (1.0 - 1e-12))
+        case = load_case(ROOT / "cases" / point.case, overrides)
+    return case
+
+
+def run_point(point: Point) -> dict:
+    """Run one point on one thread and return its row (also the cache record)."""
+    from dem import config, runner
+    from dem.errors import SimulationError
+
+    default_skin = config.DEM_SKIN_FRACTION
+    if point.skin_fraction is not None:
+        config.DEM_SKIN_FRACTION = point.skin_fraction  # this worker only; reset below
+    skin = config.DEM_SKIN_FRACTION
+    try:
+        case = load(point)
+        t0 = time.perf_counter()
+        with tempfile.TemporaryDirectory() as tmp:
+            summary = runner.run_case(case, Path(tmp) / "out", threads=1, progress=False,
+                                      frames=False)  # fmt: skip
+        total = time.perf_counter() - t0
+    except SimulationError as err:  # the guard stopped it: a result of the study, kept
+        print(f"{point.case} {point.label} seed {point.seed}: stopped: {err}", flush=True)
+        return {"key": point.key, "case": point.case, "seed": point.seed, "failed": str(err),
+                "velocity_norm": math.nan, "stderr": math.nan, "wall_time_s": math.nan,
+                "load_1min": os.getloadavg()[0]}  # fmt: skip
+    finally:
+        config.DEM_SKIN_FRACTION = default_skin
+    dynamics = summary["wall_time_s"] + summary["settle_wall_time_s"]
+    row = {
+        "key": point.key, "case": point.case, "seed": point.seed,
+        "overrides": json.dumps(point.overrides, sort_keys=True),
+        "timestep_fraction": point.timestep_fraction, "skin_fraction": skin,
+        "grains": summary["grains"], "spheres": summary["spheres"],
+        "timestep": summary["timestep"], "timestep_limit": summary["timestep_limit"],
+        "steps": summary["steps"], "settle_cycles": summary["settle_cycles"],
+        "cycles": summary["cycles"],
+        "velocity_norm": summary["mean_velocity_norm"],
+        "stderr": summary["mean_velocity_norm_stderr"],
+        "autocorrelation_time": summary["cycle_autocorrelation_time"],
+        "pointmass_velocity_norm": summary["pointmass_velocity_norm"],
+        "wall_time_s": round(dynamics, 3), "total_time_s": round(total, 3),
+        "particle_steps": summary["spheres"] * summary["steps"],
+        "neighbour_builds": summary["neighbour_builds"],
+        "load_1min": os.getloadavg()[0], "git_commit": summary["git_commit"],
+    }  # fmt: skip
+    print(f"{point.case:13s} {point.study:14s} {point.label:24s} seed {point.seed}: "
+          f"v_norm {row['velocity_norm']:.4f} +- {row['stderr']:.4f}, "
+          f"{row['wall_time_s']:.1f} s, load {row['load_1min']:.2f}", flush=True)  # fmt: skip
+    return row
+
+
+def cached() -> dict[str, dict]:
+    """Finished runs by key (the last record of a key wins)."""
+    rows = {}
+    if RUNS.exists():
+        for line in RUNS.read_text().splitlines():
+            if line.strip():
+                row = json.loads(line)
+                rows[row["key"]] = row
+    return rows
+
+
+def _init_worker() -> None:
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+
+
+def ensure(points: Iterable[Point], *, fresh: bool = False, processes: int = 2) -> dict[str, dict]:
+    """Run the points not yet in the cache (all of them if ``fresh``); return the cache."""
+    have = {} if fresh else cached()
+    todo, seen = [], set()
+    for p in points:
+        if p.key not in have and p.key not in seen:
+            todo.append(p)
+            seen.add(p.key)
+    # Longest first (more spheres, smaller steps), so the two workers finish together.
+    todo.sort(key=lambda p: -_cost_guess(p))
+    if todo:
+        print(f"{len(todo)} runs to do ({len(have)} cached in {RUNS.name})", flush=True)
+        with Pool(processes, initializer=_init_worker) as pool:
+            for row in pool.imap_unordered(run_point, todo):
+                with RUNS.open("a") as fh:
+                    fh.write(json.dumps(row) + "\n")
+    return cached()
+
+
+def _cost_guess(p: Point) -> float:
+    cost = 1.0 / (p.timestep_fraction or 0.3)
+    e = p.overrides.get("contact.youngs_modulus")
+    if e:
+        cost *= (e / 5e7) ** 0.4
+    return cost * p.overrides.get("particles.count", 1000) / 1000
+
+
+# --- the reference and the errors -----------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The converged answer of one case and the fill-to-fill spread."""
+
+    case: str
+    velocity_norm: float  # mean over the reference fills
+    stderr: float  # standard error of that mean (fill-to-fill scatter and each run's own)
+    fill_spread: float  # fill-to-fill standard deviation at the shipped settings (pooled)
+    shipped: float  # mean over the shipped-setting fills
+    wall_time_s: float  # mean wall time of a shipped run
+
+
+def reference(case: str, rows: dict[str, dict]) -> Reference:
+    """The reference of ``case`` from finished runs (run ``reference.py`` first)."""
+    import numpy as np
+
+    ref = [rows[p.key] for p in reference_points("reference", case) if p.key in rows]
+    ship = [rows[p.key] for p in default_points("reference", case, FILL_SEEDS) if p.key in rows]
+    if len(ref) < 2 or len(ship) < 2:
+        raise SystemExit(f"{case}: run validation/speed_accuracy/reference.py first")
+    v_ref = np.array([r["velocity_norm"] for r in ref])
+    v_ship = np.array([r["velocity_norm"] for r in ship])
+    pooled = math.sqrt(
+        (np.sum((v_ref - v_ref.mean()) ** 2) + np.sum((v_ship - v_ship.mean()) ** 2))
+        / (len(v_ref) + len(v_ship) - 2)
+    )
+    own = math.sqrt(sum(r["stderr"] ** 2 for r in ref)) / len(ref)
+    sem = max(float(v_ref.std(ddof=1)) / math.sqrt(len(ref)), own)
+    return Reference(case, float(v_ref.mean()), sem, pooled, float(v_ship.mean()),
+                     float(np.mean([r["wall_time_s"] for r in ship])))  # fmt: skip
+
+
+def table(points: list[Point], rows: dict[str, dict]) -> list[dict]:
+    """Rows of a study: each point's result with its error against the reference."""
+    refs = {c: reference(c, rows) for c in {p.case for p in points}}
+    out = []
+    for p in points:
+        r = rows[p.key]
+        ref = refs[p.case]
+        if r.get("failed"):
+            out.append({"case": p.case, "study": p.study, "label": p.label, "x": p.x,
+                        "seed": p.seed, "velocity_norm": math.nan, "stderr": math.nan,
+                        "reference": ref.velocity_norm, "error": math.nan,
+                        "relative_error": math.nan, "error_uncertainty": math.nan,
+                        "fill_spread": ref.fill_spread, "acceptable": False,
+                        "wall_time_s": math.nan, "speedup": math.nan,
+                        "failed": r["failed"].split(":")[0]})  # fmt: skip
+            continue
+        err = r["velocity_norm"] - ref.velocity_norm
+        out.append({
+            "case": p.case, "study": p.study, "label": p.label, "x": p.x, "seed": p.seed,
+            "velocity_norm": r["velocity_norm"], "stderr": r["stderr"],
+            "reference": ref.velocity_norm, "error": err,
+            "relative_error": err / ref.velocity_norm,
+            "error_uncertainty": math.hypot(r["stderr"], ref.stderr),
+            "fill_spread": ref.fill_spread,
+            "acceptable": abs(err) <= TOLERANCE * ref.velocity_norm
+            and abs(err) <= 2.0 * ref.fill_spread,
+            "wall_time_s": r["wall_time_s"], "speedup": ref.wall_time_s / r["wall_time_s"],
+            "particle_steps": r["particle_steps"], "spheres": r["spheres"],
+            "grains": r["grains"], "timestep": r["timestep"],
+            "timestep_limit": r["timestep_limit"], "settle_cycles": r["settle_cycles"],
+            "load_1min": r["load_1min"], "git_commit": r["git_commit"], "failed": "",
+        })  # fmt: skip
+    return out
+
+
+def write_csv(name: str, rows: list[dict], script: str) -> Path:
+    """``<name>.csv`` with the provenance header."""
+    from dem import provenance
+
+    path = HERE / f"{name}.csv"
+    with open(path, "w", newline="") as fh:
+        fh.write("\n".join(provenance.header_lines(script)) + "\n")
+        fh.write(f"# reference: {json.dumps(REFERENCE)}, dt = {REFERENCE_TIMESTEP_FRACTION} x "
+                 f"limit, seeds {FILL_SEEDS}; acceptable: |error| <= {TOLERANCE:.0%} of it and "
+                 "<= 2 x fill-to-fill spread\n")  # fmt: skip
+        fields = list(max(rows, key=len))
+        writer = csv.DictWriter(fh, fieldnames=fields, restval="")
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def print_table(rows: list[dict]) -> None:
+    print(f"{'case':13s} {'setting':28s} {'v_norm':>8s} {'error %':>8s} {'+-':>6s} "
+          f"{'wall s':>7s} {'speedup':>7s}  ok")  # fmt: skip
+    for r in rows:
+        if r["failed"]:
+            print(f"{r['case']:13s} {r['label']:28s} stopped by the guard: {r['failed']}")
+            continue
+        ok = "yes" if r["acceptable"] else "no"
+        pm = 100 * r["error_uncertainty"] / r["reference"]
+        print(f"{r['case']:13s} {r['label']:28s} {r['velocity_norm']:8.4f} "
+              f"{100 * r['relative_error']:8.2f} {pm:6.2f} "
+              f"{r['wall_time_s']:7.1f} {r['speedup']:7.2f}  {ok}")  # fmt: skip
+
+
+def plot(rows: list[dict], path: Path, title: str) -> None:
+    """Error (% of the reference) against wall time, one panel per case, the 2 % band."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = [c for c in CASES if any(r["case"] == c for r in rows)]
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.5 * len(cases), 4.2), squeeze=False)
+    for ax, case in zip(axes[0], cases, strict=True):
+        sel = [r for r in rows if r["case"] == case]
+        ref = sel[0]
+        ax.axhspan(-100 * TOLERANCE, 100 * TOLERANCE, color="C2", alpha=0.12, label="2 %")
+        spread = 200 * ref["fill_spread"] / ref["reference"]
+        ax.axhline(spread, color="0.5", lw=0.8, ls=":")
+        ax.axhline(-spread, color="0.5", lw=0.8, ls=":", label="2 x fill-to-fill spread")
+        ax.axhline(0.0, color="k", lw=0.8)
+        for r in sel:
+            if r["failed"]:
+                ax.annotate(f"{r['label']}: unstable", (0.02, 0.95), xycoords="axes fraction",
+                            fontsize=7, color="C3")  # fmt: skip
+                continue
+            color = "C0" if r["acceptable"] else "C3"
+            ax.errorbar(r["wall_time_s"], 100 * r["relative_error"],
+                        yerr=100 * r["error_uncertainty"] / r["reference"], fmt="o",
+                        color=color, ms=5, capsize=2)  # fmt: skip
+            ax.annotate(r["label"], (r["wall_time_s"], 100 * r["relative_error"]),
+                        fontsize=7, xytext=(4, 3), textcoords="offset points")  # fmt: skip
+        ax.set_xscale("log")
+        ax.set_xlabel("wall time of the run, s (1 thread beside 1 busy process)")
+        ax.set_ylabel("error of v / (A omega cos phi), % of the reference")
+        ax.set_title(f"{case}: reference {ref['reference']:.3f}", fontsize=10)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(name: str, points: list[Point], title: str, script: str) -> int:
+    """Command line of a study: run what is missing, write the CSV and the chart."""
+    parser = argparse.ArgumentParser(description=title)
+    parser.add_argument("--fresh", action="store_true", help="rerun points already cached")
+    parser.add_argument("--figures", action="store_true", help="only redraw from runs.jsonl")
+    args = parser.parse_args()
+    support = support_points({p.case for p in points})
+    rows = cached() if args.figures else ensure(support + points, fresh=args.fresh)
+    out = table(points, rows)
+    write_csv(name, out, script)
+    plot(out, HERE / f"{name}.png", title)
+    print_table(out)
+    print(f"wrote {name}.csv and {name}.png")
+    return 0
