@@ -95,6 +95,9 @@ DEM_CHECKPOINT_EVERY = 10
 #: MSER rule needs a few cycles on either side of a transient's end) and the most it waits.
 DEM_AUTO_SETTLE_MIN_CYCLES = 6
 DEM_AUTO_SETTLE_MAX_CYCLES = 200
+#: ... and a series whose second half spans at most this fraction of A omega cos(phi) is steady
+#: (a single grain converging geometrically onto its orbit has no noise for MSER to weigh).
+DEM_AUTO_SETTLE_TOLERANCE = 1e-4
 #: OpenMP wait policy for the DEM kernels' threads, applied by dem.kernels unless the environment
 #: sets OMP_WAIT_POLICY; None leaves libgomp's default (spin, then sleep). A trade-off measured on
 #: the 2-core machines (sphere-bed, 2 threads, 2026-11-21): with both cores free the default gave

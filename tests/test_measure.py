@@ -88,3 +88,11 @@ def test_a_drifting_series_is_never_steady():
     assert not measure.steady(x)
     stationary = 0.3 + 0.01 * np.random.default_rng(15).normal(size=40)
     assert measure.steady(stationary)
+
+
+def test_a_noiseless_geometric_approach_is_steady_within_the_tolerance():
+    """One grain settling onto its orbit: MSER alone calls it drifting for ever."""
+    x = 0.99 - 0.3 * 0.8 ** np.arange(80)
+    assert not measure.steady(x)  # no noise: the drift always outweighs it
+    assert not measure.steady(x[:20], tolerance=1e-4)  # second half still spans 3e-3
+    assert measure.steady(x, tolerance=1e-4)  # second half spans < 1e-6
