@@ -8,6 +8,7 @@ import argparse
 import json
 import math
 import sys
+import warnings
 from pathlib import Path
 
 from dem import __version__
@@ -48,6 +49,11 @@ class _Parser(argparse.ArgumentParser):
             parts = [f"{n} ({_ALLOWED[n]})" if n in _ALLOWED else n for n in names]
             message = "missing option " + ", ".join(parts)
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+def _format_warning(message, category, filename, lineno, line=None) -> str:
+    """One line per warning, as the command line's errors are: ``dem: warning: ...``."""
+    return f"dem: warning: {message}\n"
 
 
 def _number(text: str) -> float:
@@ -321,6 +327,19 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _cmd_plan(args) -> int:
+    from dem.case import load_case
+    from dem.plan import plan
+
+    case = load_case(args.case_dir)
+    result = plan(case, threads=args.threads, cycles=args.cycles)
+    if args.json:
+        _print_json(result.as_dict())
+    else:
+        print(result.text())
+    return 0
+
+
 def _cmd_report(args) -> int:
     from dem.report import make_report
 
@@ -455,6 +474,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser(
+        "plan", help="cost, memory, expected error and advice for a case, without running it"
+    )
+    p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
+    p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_plan)
+
+    p = sub.add_parser(
         "calibrate", help="fit the tangential contact to eps_t by virtual impacts (writes case)"
     )
     p.add_argument("case_dir", help="directory holding case.toml")
@@ -485,6 +513,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``dem`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    warnings.formatwarning = _format_warning
     try:
         return args.func(args)
     except InputError as err:

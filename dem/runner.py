@@ -31,7 +31,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import config, measure, setup
+from dem import config, measure, plan, setup
 from dem.errors import InputError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.hdf5 import ResultsWriter, package_versions
@@ -159,6 +159,9 @@ def run_case(
     out_dir = Path(out_dir)
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     n_threads = _set_threads(threads)
+    estimate = plan.plan(case, threads=n_threads, cycles=cycles)
+    if not resume:
+        _warn_plan(estimate)
     sim = setup.from_case(case)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
@@ -254,12 +257,25 @@ def run_case(
             bar.close()
 
     summary = _summary(case, sim, loop, cycles, n_threads)
+    summary["plan"] = estimate.as_dict()
     (out_dir / SUMMARY).write_text(json.dumps(summary, indent=2) + "\n")
     results.close()
     if vtk is not None:
         vtk.close()
     checkpoint.unlink(missing_ok=True)
     return summary
+
+
+def _warn_plan(estimate) -> None:
+    """Warn once, before the fill, when the case asks for far more (or less) than it needs."""
+    items = estimate.warnings()
+    if items:
+        text = "; ".join(f"{a.key}: {a.text}" for a in items)
+        warnings.warn(
+            f"{estimate.case}: {text} (dem plan {estimate.case} says more)",
+            plan.PlanWarning,
+            stacklevel=3,
+        )
 
 
 def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
@@ -301,7 +317,12 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
     elif settle is None:
         series = loop["settle_series"]
         series.append(velocity)
-        done = measure.steady(series, config.DEM_AUTO_SETTLE_MIN_CYCLES)
+        scale = measure.drive_velocity_scale(
+            case.drive.amplitude, case.drive.omega, case.drive.angle
+        )
+        done = measure.steady(
+            series, config.DEM_AUTO_SETTLE_MIN_CYCLES, config.DEM_AUTO_SETTLE_TOLERANCE * scale
+        )
         if done or len(series) >= config.DEM_AUTO_SETTLE_MAX_CYCLES:
             loop["settle_cycles"] = loop["cycle"] + 1
             loop["total_cycles"] = loop["settle_cycles"] + loop["cycles"]

@@ -1,0 +1,487 @@
+"""``dem plan``: what a case will cost and how accurate it will be, before any grain moves.
+
+:func:`plan` reads a case and, without filling or stepping it, works out the grains and spheres,
+the time step and its stability limit, steps per cycle, the memory of the state, an estimate of
+the wall time, the error to expect from these settings, and advice: settings stiffer or finer
+than the answer needs, a section too short for the grain, too few or too many cycles, and which
+rung of the model ladder (point mass, one grain, bed) already answers the question.
+
+Where the numbers come from:
+
+- memory: the state's arrays allocated as a run allocates them (zeros, so nothing is touched),
+  with the pair list at its starting capacity;
+- wall time: particle-steps (spheres x steps: the drive-off settle, the settling cycles and the
+  measured cycles) over a rate: the rate the last run of this case measured on this machine
+  (``CASE_DIR/output/summary.json``), else the rate the speed-accuracy study measured for the
+  grain kind (``dem/data/speed_accuracy.json``: one thread beside one busy process on a 2-core
+  machine; a free core runs about 1.5x faster);
+- expected error: the study (validation/speed_accuracy/) varied one setting at a time around the
+  shipped cases (``cases/sphere-bed`` for spheres, ``cases/screw-trough`` for screws and other
+  clumps) and measured the bulk velocity against a converged reference. The error of a case is
+  the error the study measured at the case's stiffness, plus the change each of its other
+  settings made against the base settings (interpolated in the logarithm of the setting),
+  combined with the statistical error of its cycles and fill, and with how far the reference
+  itself may be from the rigid limit. It is a guide for cases like the shipped ones; outside the
+  studied range the plan says so.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from dem import config
+from dem.timestep import timestep_for
+
+#: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
+TOLERANCE = 0.02
+#: Stiffness or step this many times finer than the cheapest acceptable one is "far more".
+FAR = 2.0
+#: Cost of a step apart from its particles, s (the study's one-grain rung: 1.2 s for 5.7e5
+#: steps of one sphere); it dominates only for a few grains.
+STEP_OVERHEAD_S = 2.0e-6
+#: Particle-steps per second on one thread where the study's figure is missing.
+FALLBACK_RATE = 5.0e6
+
+
+class PlanWarning(UserWarning):
+    """A case asks for far more (or less) than its answer needs (``dem run`` warns at start)."""
+
+
+@dataclass(frozen=True)
+class Advice:
+    """One piece of advice about a case key.
+
+    ``level`` is "warn" (the case asks for far more or less than it needs, or leaves the studied
+    range) or "note"; ``key`` is the case key it concerns.
+    """
+
+    level: str
+    key: str
+    text: str
+
+
+@dataclass
+class Plan:
+    """The plan of a case (all SI; ``as_dict`` is what summary.json's ``plan`` holds)."""
+
+    case: str
+    grains: int
+    spheres_per_grain: int
+    spheres: int
+    timestep: float
+    timestep_auto: float
+    timestep_limit: float
+    steps_per_cycle: float
+    settle_cycles: int
+    settle_cycles_auto: bool
+    cycles: int
+    steps: int
+    particle_steps: float
+    memory_bytes: int
+    threads: int
+    particle_steps_per_s: float
+    rate_source: str
+    wall_time_s: float
+    expected_error: float
+    error_parts: dict[str, float]
+    error_source: str
+    advice: list[Advice] = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON."""
+        return asdict(self)
+
+    def warnings(self) -> list[Advice]:
+        """The advice a run warns about at start."""
+        return [a for a in self.advice if a.level == "warn"]
+
+    def text(self) -> str:
+        """The plan as ``dem plan`` prints it."""
+        lines = [
+            f"case {self.case}",
+            f"  grains            {self.grains} x {self.spheres_per_grain} sphere(s) = "
+            f"{self.spheres} spheres",
+            f"  time step         {self.timestep:.3g} s = {self.timestep / self.timestep_limit:.2f}"
+            f" x stability limit {self.timestep_limit:.3g} s (automatic {self.timestep_auto:.3g})",
+            f"  steps per cycle   {self.steps_per_cycle:.0f}",
+            f"  cycles            {self.settle_cycles} settling"
+            f"{' (auto: estimated)' if self.settle_cycles_auto else ''} + {self.cycles} measured,"
+            f" {self.steps:.3g} steps in all",
+            f"  memory            {_size(self.memory_bytes)} "
+            f"({self.memory_bytes / self.spheres:.0f} B per sphere)",
+            f"  wall time         about {_duration(self.wall_time_s)} on {self.threads} thread(s) "
+            f"at {self.particle_steps_per_s:.2g} particle-steps/s ({self.rate_source})",
+            f"  expected error    {100 * self.expected_error:.1f} % of the bulk velocity ("
+            + ", ".join(f"{k} {100 * v:.1f} %" for k, v in self.error_parts.items())
+            + f"; {self.error_source})"
+            if math.isfinite(self.expected_error)
+            else f"  expected error    not estimated: {self.error_source}",
+        ]
+        if self.advice:
+            lines.append("advice:")
+            lines += [f"  [{a.level}] {a.key}: {a.text}" for a in self.advice]
+        return "\n".join(lines)
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB"):
+        if n < 1000 or unit == "GB":
+            return f"{n:.3g} {unit}"
+        n /= 1000.0
+    return f"{n:.3g} GB"
+
+
+def _duration(s: float) -> str:
+    if s < 120:
+        return f"{s:.0f} s"
+    if s < 7200:
+        return f"{s / 60:.0f} min"
+    return f"{s / 3600:.1f} h"
+
+
+# --- the study's measurements -------------------------------------------------------------------
+
+
+@cache
+def study_data() -> dict | None:
+    """The study's summary, ``dem/data/speed_accuracy.json`` (validation/speed_accuracy/run_all.py).
+
+    None where it is missing: the plan then has no expected error and no study advice.
+    """
+    try:
+        text = resources.files("dem").joinpath("data", "speed_accuracy.json").read_text()
+    except FileNotFoundError:
+        return None
+    return json.loads(text)
+
+
+def study_kind(case) -> str:
+    """The shipped case whose study applies: spheres -> sphere-bed, clumps -> screw-trough."""
+    return "sphere-bed" if case.particles.shape == "sphere" else "screw-trough"
+
+
+def _interpolate(series: list[list[float]], x: float, cheap: str = "low") -> tuple[float, bool]:
+    """Value at ``x`` of ``[[x, y], ...]`` and whether x lies inside the studied range.
+
+    Linear in log x, clamped at the ends; "inside" only asks about the cheap side.
+
+    ``cheap`` "low": smaller x is cheaper (stiffness, section size, resolution); "high": larger
+    x (the time step). Beyond the expensive end the study's finest value stands: the answer
+    only converges further there.
+    """
+    xs = np.log([p[0] for p in series])
+    ys = np.array([p[1] for p in series])
+    order = np.argsort(xs)
+    xs, ys = xs[order], ys[order]
+    lx = math.log(x)
+    inside = lx >= xs[0] - 1e-9 if cheap == "low" else lx <= xs[-1] + 1e-9
+    return float(np.interp(lx, xs, ys)), inside
+
+
+# --- the pieces ---------------------------------------------------------------------------------
+
+
+def memory_bytes(case, spheres: int, grains: int) -> int:
+    """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start)."""
+    from dem.state import Bodies, PairList, Spheres
+
+    total = 0
+    if case.particles.shape == "sphere":
+        s = Spheres.create(np.zeros((spheres, 3)), case.particles.radius, case.material.density)
+        arrays = [s]
+    else:
+        q = np.zeros((grains, 4))
+        q[:, 0] = 1.0
+        b, s = Bodies.create(case.particles.grain, np.zeros((grains, 3)), q)
+        arrays = [s, b]
+    arrays.append(PairList.for_spheres(spheres))
+    seen = set()
+    for obj in arrays:
+        for value in vars(obj).values():
+            if isinstance(value, np.ndarray) and id(value) not in seen:
+                seen.add(id(value))
+                total += value.nbytes
+    return total
+
+
+def settle_steps(case, dt: float) -> int:
+    """Steps of the drive-off settle: twice the fall time from the top of the fill box."""
+    from dem import fill
+
+    fall = math.sqrt(2.0 * fill.box_height(case) / config.GRAVITY)
+    return int(min(2.0 * fall, config.DEM_SETTLE_MAX_TIME) / dt)
+
+
+def rate(case, threads: int, data: dict | None) -> tuple[float, str]:
+    """Particle-steps per second and where the figure comes from."""
+    last = case.directory / "output" / "summary.json"
+    if last.is_file():
+        try:
+            s = json.loads(last.read_text())
+            measured, used = float(s["particle_steps_per_s"]), int(s["threads"])
+            if s.get("spheres") and measured > 0:
+                return _scale(measured, used, threads), f"measured by the last run, {last}"
+        except (ValueError, KeyError, TypeError):
+            pass  # an older or partial summary: fall back to the study
+    if data is None:
+        return _scale(FALLBACK_RATE, 1, threads), "a typical rate (no study data)"
+    one = data["particle_steps_per_s_1thread"]
+    return _scale(one, 1, threads), "the speed-accuracy study's rate for this grain kind"
+
+
+def _scale(rate_used: float, used: int, threads: int) -> float:
+    """Threads scale at about 0.7 of ideal each beyond the first (a shared 2-core machine)."""
+
+    def speed(n: int) -> float:
+        return 1.0 + 0.7 * (max(n, 1) - 1)
+
+    return rate_used * speed(threads) / speed(used)
+
+
+def equivalent_youngs_modulus(case) -> float:
+    """The study's stiffness axis: the case's Young's modulus, Pa.
+
+    For the linear law: the modulus whose Hertz grain-floor impact at A omega lasts as long as
+    the linear contact, pi sqrt(m / k_n).
+    """
+    c, pt = case.contact, case.particles
+    if pt.shape == "sphere":
+        mass = case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
+        radius = pt.radius
+    else:
+        mass, radius = pt.grain.mass, float(max(pt.grain.radii))
+    if c.model == "hertz_mindlin":
+        return float(c.youngs_modulus)
+    t_c = math.pi * math.sqrt(mass / c.stiffness)
+    speed = case.drive.amplitude * case.drive.omega
+    # dem.kernels.contacts.hertz_collision_time inverted:
+    # t_c = 2.87 (m^2 / (R Y*^2 v))^(1/5)  ->  Y* = sqrt(m^2 / (R v (t_c / 2.87)^5))
+    y_star = math.sqrt(mass**2 / (radius * speed * (t_c / 2.87) ** 5))
+    return y_star * 2.0 * (1.0 - c.poisson_ratio**2)
+
+
+def grain_length(case) -> float:
+    """A grain's length, m: a sphere's diameter, a clump's largest extent."""
+    pt = case.particles
+    if pt.shape == "sphere":
+        return 2.0 * pt.radius
+    g = pt.grain
+    centres, radii = np.asarray(g.centres), np.asarray(g.radii)
+    ext = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
+    ext += radii[:, None] + radii[None, :]
+    return float(ext.max())
+
+
+# --- the plan -----------------------------------------------------------------------------------
+
+
+def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan:
+    """The plan of a :class:`dem.case.Case` (no fill, no dynamics)."""
+    data_all = study_data()
+    kind = study_kind(case)
+    data = data_all["cases"][kind] if data_all else None
+    threads = config.default_threads() if threads is None else int(threads)
+    cycles = case.run.cycles if cycles is None else int(cycles)
+    pt = case.particles
+    per_grain = 1 if pt.shape == "sphere" else pt.grain.count
+    grains = pt.count
+    spheres = grains * per_grain
+    step = timestep_for(case)
+    per_cycle = 1.0 / case.drive.frequency / step.dt
+    auto_settle = case.run.settle_cycles is None
+    if not auto_settle:
+        settle = case.run.settle_cycles
+    elif grains > 1 and data:
+        settle = int(round(data["settle_cycles"]))
+    else:
+        settle = config.DEM_AUTO_SETTLE_MIN_CYCLES
+    steps = int(settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
+    particle_steps = float(spheres) * steps
+    speed, source = rate(case, threads, data)
+    advice: list[Advice] = []
+    if data and grains > 1:
+        expected, parts, error_source = _expected_error(case, data, kind, step, cycles, advice)
+    elif data:  # one grain: the bed study says nothing of its error; the ladder does
+        expected, parts = math.nan, {}
+        error_source = ("one grain: compare it with the point mass (validation/single-grain, "
+                        "validation/single-screw)")  # fmt: skip
+        _advise_ladder(case, data, kind, advice)
+    else:
+        expected, parts = math.nan, {}
+        error_source = "no study data: dem/data/speed_accuracy.json is missing"
+    mem = memory_bytes(case, spheres, grains)
+    total = _physical_memory()
+    if total and mem > 0.5 * total:
+        advice.append(Advice("warn", "particles.count", f"the state needs {_size(mem)}, over half "
+                             f"of this machine's {_size(total)}"))  # fmt: skip
+    return Plan(
+        case=case.name, grains=grains, spheres_per_grain=per_grain, spheres=spheres,
+        timestep=step.dt, timestep_auto=step.auto, timestep_limit=step.limit,
+        steps_per_cycle=per_cycle, settle_cycles=settle, settle_cycles_auto=auto_settle,
+        cycles=cycles, steps=steps, particle_steps=particle_steps, memory_bytes=mem,
+        threads=threads, particle_steps_per_s=speed, rate_source=source,
+        wall_time_s=particle_steps / speed + steps * STEP_OVERHEAD_S,
+        expected_error=expected, error_parts=parts,
+        error_source=error_source, advice=advice,
+    )  # fmt: skip
+
+
+def _expected_error(case, data, kind, step, cycles, advice) -> tuple[float, dict, str]:
+    """The error to expect, its parts and source, and the study's advice (appended)."""
+    parts: dict[str, float] = {}
+    outside: list[str] = []
+
+    def change(name: str, series: list[list[float]], x: float, key: str, cheap="low") -> None:
+        value, inside = _interpolate(series, x, cheap)
+        parts[name] = value
+        if not inside:
+            outside.append(key)
+
+    # The stiffness series is the error against the reference; the others are what one setting
+    # changed against the base settings (0 there).
+    e_equiv = equivalent_youngs_modulus(case)
+    key = "contact.youngs_modulus" if case.contact.model == "hertz_mindlin" else "contact.stiffness"
+    change("stiffness", data["stiffness"], e_equiv, key)
+    fraction = step.dt / step.limit
+    change("time step", data["timestep"], fraction, "run.timestep", cheap="high")
+    model = f"{case.contact.model} {case.contact.tangential}"
+    parts["contact law"] = data["contact_model"].get(model, 0.0)
+    g_len = grain_length(case)
+    change("section length", data["section_length"], case.trough.length / g_len, "trough.length")
+    change("section width", data["section_width"], case.trough.width / g_len, "trough.width")
+    if case.particles.shape == "screw":
+        per_grain = case.particles.grain.count
+        change("resolution", data["resolution"], per_grain, "particles.max_bumpiness")
+    # One run's error: its own noise (falls as 1/sqrt(cycles)) and the fill-to-fill scatter
+    # the study found beyond it (a fill's persistent structure: more cycles do not remove it).
+    within = data["base_stderr"] * math.sqrt(data["base_cycles"] / cycles)
+    between = math.sqrt(max(data["fill_spread"] ** 2 - data["base_stderr"] ** 2, 0.0))
+    statistical = math.hypot(between, within)
+    systematic = sum(parts.values())
+    # How far the reference itself may be from the rigid limit: the stiffest runs' deviation.
+    reference = data.get("reference_uncertainty", 0.0)
+    parts = {"statistical": statistical, "systematic": systematic, "reference": reference} | {
+        k: v for k, v in parts.items() if abs(v) > 0
+    }
+    source = f"study of cases/{kind}"
+    if outside:
+        source += f"; {', '.join(outside)} outside the studied range"
+        advice.append(Advice("warn", outside[0], "outside the settings the speed-accuracy study "
+                             "covered: the expected error is an extrapolation"))  # fmt: skip
+    _advise_settings(case, data, step, fraction, e_equiv, advice)
+    _advise_section(case, data, g_len, advice)
+    _advise_cycles(statistical, within, cycles, advice)
+    _advise_ladder(case, data, kind, advice)
+    return math.sqrt(systematic**2 + statistical**2 + reference**2), parts, source
+
+
+def _physical_memory() -> int | None:
+    try:
+        import os
+
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
+    """Stiffer or finer than the answer needs (far more), or past what stayed accurate."""
+    cheap = data["cheapest"]
+    if case.contact.model == "hertz_mindlin":
+        e_ok = cheap["youngs_modulus"]
+        if e_equiv > FAR * e_ok:
+            advice.append(Advice("warn", "contact.youngs_modulus",
+                f"{e_equiv:.3g} Pa is far stiffer than the answer needs: the study stayed within "
+                f"{TOLERANCE:.0%} down to {e_ok:.3g} Pa, about "
+                f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps"))  # fmt: skip
+        elif e_equiv < e_ok / FAR:
+            advice.append(Advice("warn", "contact.youngs_modulus",
+                f"{e_equiv:.3g} Pa is softer than the study found accurate ({e_ok:.3g} Pa "
+                f"stayed within {TOLERANCE:.0%})"))  # fmt: skip
+    f_ok = cheap["timestep_fraction"]
+    if case.run.timestep is not None and fraction < f_ok / FAR:
+        advice.append(Advice("warn", "run.timestep",
+            f"{step.dt:.3g} s ({fraction:.2f} x limit) is far finer than the answer needs: "
+            f"{f_ok:.2f} x limit ({f_ok * step.limit:.3g} s) stayed within "
+            f"{TOLERANCE:.0%}"))  # fmt: skip
+    elif fraction > f_ok * 1.001:
+        advice.append(Advice("warn", "run.timestep",
+            f"{fraction:.2f} x limit is coarser than the study found accurate "
+            f"({f_ok:.2f} x limit)"))  # fmt: skip
+    elif case.run.timestep is None and f_ok > FAR * fraction:
+        advice.append(Advice("note", "run.timestep",
+            f"the automatic step is {fraction:.2f} x limit; {f_ok:.2f} x limit "
+            f"(run.timestep = {f_ok * step.limit:.3g}) stayed within {TOLERANCE:.0%} at "
+            f"{f_ok / fraction:.1f}x less cost"))  # fmt: skip
+
+
+def _advise_section(case, data, g_len, advice) -> None:
+    min_len = data["cheapest"]["section_length_grains"]
+    n_len = case.trough.length / g_len
+    if n_len < min_len * 0.999:
+        advice.append(Advice("warn", "trough.length",
+            f"{case.trough.length:g} m is {n_len:.1f} grain lengths, shorter than the "
+            f"{min_len:.1f} the study needed to stay within {TOLERANCE:.0%}: the periodic "
+            "section holds too few grains along the flow"))  # fmt: skip
+    min_w = data["cheapest"]["section_width_grains"]
+    n_w = case.trough.width / g_len
+    if n_w < min_w * 0.999:
+        advice.append(Advice("warn", "trough.width",
+            f"{case.trough.width:g} m is {n_w:.1f} grain lengths, narrower than the "
+            f"{min_w:.1f} the study needed: the side walls set the answer"))  # fmt: skip
+
+
+def _advise_cycles(statistical, within, cycles, advice) -> None:
+    if statistical > TOLERANCE and within > TOLERANCE:
+        need = int(math.ceil(cycles * (within / TOLERANCE) ** 2))
+        advice.append(Advice("warn", "run.cycles",
+            f"{cycles} cycles leave a statistical error of {100 * within:.1f} %: "
+            f"about {need} reach {TOLERANCE:.0%}"))  # fmt: skip
+    elif statistical > TOLERANCE:
+        advice.append(Advice("note", "run.seed",
+            f"one fill scatters by {100 * statistical:.1f} % from the next (the study's "
+            "fill-to-fill spread): average runs with several seeds for a tighter "
+            "answer"))  # fmt: skip
+    elif within < TOLERANCE / 8 and cycles > 40:
+        need = max(20, int(math.ceil(cycles * (8 * within / TOLERANCE) ** 2)))
+        advice.append(Advice("note", "run.cycles",
+            f"{cycles} cycles give {100 * within:.2f} %, far below {TOLERANCE:.0%}: "
+            f"{need} would do"))  # fmt: skip
+
+
+def _advise_ladder(case, data, kind, advice) -> None:
+    """Which rung of the ladder (point mass, one grain, bed) already answers the question."""
+    d, m = case.drive, case.material
+    command = (f"dem pointmass velocity --throw-number {d.throw_number:.4g} "
+               f"--angle {d.angle:g} --friction {m.friction:g} "
+               f"--inclination {case.trough.inclination:g} "
+               f"--eps-t {m.restitution_tangential:g} "
+               f"--eps-n {m.restitution_normal:g}")  # fmt: skip
+    pm = data["ladder"]["point mass"]
+    one_vs_pm = data["ladder"]["one grain vs point mass"]
+    if case.particles.count == 1:
+        advice.append(Advice("note", "particles.count",
+            f"one grain: the point-mass model answers in milliseconds ({command}); the study's "
+            f"single grain differed from it by {100 * one_vs_pm:.1f} %"))  # fmt: skip
+    elif abs(pm) <= TOLERANCE:
+        advice.append(Advice("note", "particles.count",
+            f"for the study's {kind} the point mass was within {100 * abs(pm):.1f} % of the "
+            f"bed: {command} may already answer"))  # fmt: skip
+    else:
+        advice.append(Advice("note", "particles.count",
+            f"the bed is needed: for the study's {kind} the point mass ({command}) differed "
+            f"from the bed by {100 * pm:+.1f} %"))  # fmt: skip
+
+
+def write_study_data(path: Path, data: dict) -> None:
+    """Write the study's summary where :func:`study_data` reads it (run_all.py calls this)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+    study_data.cache_clear()

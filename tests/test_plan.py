@@ -1,0 +1,164 @@
+"""``dem plan``: cost, memory, expected error and advice of a case, without running it."""
+
+import dataclasses
+import json
+import math
+import tracemalloc
+from pathlib import Path
+
+import pytest
+from small_case import SMALL_CASE, write_case
+
+from dem import plan, setup
+from dem.case import load_case
+from dem.cli import main
+from dem.runner import run_case
+from dem.timestep import timestep_for
+
+CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
+TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output")
+
+
+def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
+    """A study summary with known numbers (the shape run_all.py writes)."""
+    kind = {
+        "reference": 0.7, "fill_spread": 0.01, "base_error": base_error,
+        "base_stderr": stderr, "base_cycles": 20, "settle_cycles": 10.0,
+        "particle_steps_per_s_1thread": 5.0e6, "reference_uncertainty": 0.0,
+        # against the reference:
+        "stiffness": [[1e6, 0.2], [1e7, base_error], [5e7, base_error], [1e9, 0.0]],
+        # against the base settings:
+        "timestep": [[0.1, 0.0], [0.3046, 0.0], [1.0, 0.04]],
+        "contact_model": {"hertz_mindlin coulomb": 0.0, "linear coulomb": 0.05},
+        "section_length": [[10.0, 0.1], [25.0, 0.0], [50.0, 0.0]],
+        "section_width": [[1.0, 0.1], [10.0, 0.0], [20.0, 0.0]],
+        "resolution": [[6, 0.0], [8, 0.0], [15, 0.0]],
+        "ladder": {"point mass": 0.03, "one grain": 0.04, "one grain vs point mass": 0.01,
+                   "point mass wall_time_s": 1e-3, "one grain wall_time_s": 1.0},
+        "cheapest": {"youngs_modulus": 3e7, "timestep_fraction": 0.6,
+                     "section_length_grains": 12.0, "section_width_grains": 5.0},
+    }  # fmt: skip
+    return {"cases": {"sphere-bed": kind, "screw-trough": kind}}
+
+
+@pytest.fixture
+def study(monkeypatch):
+    data = synthetic_study()
+    monkeypatch.setattr(plan, "study_data", lambda: data)
+    return data
+
+
+def small(tmp_path, keys=None):
+    """SMALL_CASE in the 100 x 40 mm section of cases/sphere-bed, with ``keys`` overridden."""
+    directory = write_case(tmp_path / "case", SMALL_CASE)
+    return load_case(directory, {"trough.length": 0.10, "trough.width": 0.04} | (keys or {}))
+
+
+@pytest.mark.parametrize("directory", SHIPPED, ids=lambda p: p.name)
+def test_plan_on_every_shipped_case(directory, capsys):
+    """The study's own data: every field present and consistent with the case."""
+    assert main(["plan", str(directory)]) == 0
+    text = capsys.readouterr().out
+    for word in ("grains", "time step", "steps per cycle", "memory", "wall time", "expected error"):
+        assert word in text
+    assert main(["plan", str(directory), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    case = load_case(directory)
+    step = timestep_for(case)
+    per = 1 if case.particles.shape == "sphere" else case.particles.grain.count
+    assert out["spheres"] == case.particles.count * per
+    assert out["timestep"] == step.dt and out["timestep_limit"] == step.limit
+    assert out["steps_per_cycle"] == pytest.approx(1.0 / case.drive.frequency / step.dt)
+    assert 0 < out["memory_bytes"] < 2000 * out["spheres"] + 8000  # 2 kB a sphere, 8 kB fixed
+    assert out["wall_time_s"] > 0
+    if case.particles.count > 1:  # a bed: the study's error; one grain: the point mass's
+        assert 0 <= out["expected_error"] < 1
+    else:
+        assert math.isnan(out["expected_error"]) and "point mass" in out["error_source"]
+    for advice in out["advice"]:
+        assert advice["level"] in ("warn", "note")
+        assert advice["key"].split(".")[0] in TABLES
+
+
+def test_memory_estimate_matches_what_a_run_allocates(tmp_path, study):
+    """Independent check: tracemalloc's count of the bytes the built simulation holds."""
+    case = small(tmp_path, {"particles.count": 3000})
+    case = dataclasses.replace(case, particles=dataclasses.replace(case.particles, count=3000))
+    expected = plan.plan(case).memory_bytes
+    tracemalloc.start()
+    sim = setup.from_case(case)
+    held, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert sim.spheres.n == 3000
+    assert 0.8 * held < expected < 1.25 * held, (expected, held)
+
+
+def test_expected_error_is_the_base_error_at_shipped_settings(tmp_path, study):
+    """At the shipped settings only the stiffness error counts; more cycles cut a run's noise."""
+    case = small(tmp_path, {"particles.count": 1500})
+    p = plan.plan(case, cycles=20)
+    assert p.error_parts["systematic"] == pytest.approx(0.01, abs=1e-4)
+    # at the study's cycles a run scatters by the fill-to-fill spread ...
+    assert p.error_parts["statistical"] == pytest.approx(0.01)
+    assert p.expected_error == pytest.approx(math.hypot(0.01, 0.01), abs=1e-4)
+    # ... of which only the within-run part (stderr 0.005) falls with more cycles
+    p4 = plan.plan(case, cycles=80)
+    between = math.sqrt(0.01**2 - 0.005**2)
+    assert p4.error_parts["statistical"] == pytest.approx(math.hypot(between, 0.0025))
+    assert p.warnings() == []
+
+
+def test_advice_names_what_a_case_overdoes_or_underdoes(tmp_path, study):
+    stiff = plan.plan(small(tmp_path / "a", {"contact.youngs_modulus": 1e9}))
+    assert [a.key for a in stiff.warnings()] == ["contact.youngs_modulus"]
+    assert "far stiffer" in stiff.warnings()[0].text
+    short = plan.plan(small(tmp_path / "b", {"trough.length": 0.03}))
+    keys = [a.key for a in short.warnings()]
+    assert "trough.length" in keys
+    assert short.error_parts["section length"] == pytest.approx(0.1, rel=0.2)
+    few = plan.plan(small(tmp_path / "c"), cycles=1)
+    assert "run.cycles" in [a.key for a in few.warnings()]
+    fine = small(tmp_path / "d", {"run.timestep": 1e-6})
+    assert "far finer" in plan.plan(fine).warnings()[0].text
+    one = plan.plan(small(tmp_path / "e", {"particles.count": 1}))
+    note = next(a for a in one.advice if a.key == "particles.count")
+    assert note.level == "note" and "dem pointmass velocity --throw-number" in note.text
+
+
+def test_soft_contacts_outside_the_study_are_flagged(tmp_path, study):
+    soft = plan.plan(small(tmp_path, {"contact.youngs_modulus": 1e5}))
+    texts = " ".join(a.text for a in soft.warnings())
+    assert "softer than the study found accurate" in texts
+    assert "outside the settings" in texts and "outside the studied range" in soft.error_source
+
+
+def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
+    case = small(tmp_path)
+    directory = case.directory
+    before = plan.plan(case, threads=1)
+    assert "study" in before.rate_source
+    (directory / "output").mkdir()
+    (directory / "output" / "summary.json").write_text(
+        json.dumps({"particle_steps_per_s": 1.0e6, "threads": 1, "spheres": 120})
+    )
+    after = plan.plan(case, threads=1)
+    assert after.particle_steps_per_s == 1.0e6 and "last run" in after.rate_source
+    overhead = after.steps * plan.STEP_OVERHEAD_S
+    assert after.wall_time_s == pytest.approx(after.particle_steps / 1.0e6 + overhead)
+
+
+def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
+    """The driven steps the plan counts are the steps the run takes."""
+    case = small(tmp_path, {"contact.youngs_modulus": 1e9})
+    case = dataclasses.replace(case, particles=dataclasses.replace(case.particles, count=40))
+    with pytest.warns(plan.PlanWarning, match="contact.youngs_modulus") as record:
+        summary = run_case(case, tmp_path / "out", progress=False, frames=False)
+    assert len([w for w in record if w.category is plan.PlanWarning]) == 1
+    p = summary["plan"]
+    driven = p["steps"] - plan.settle_steps(case, p["timestep"])
+    assert abs(summary["steps"] - driven) <= p["settle_cycles"] + p["cycles"]
+    assert p["timestep"] == summary["timestep"]
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["plan"] == json.loads(
+        json.dumps(p)
+    )
