@@ -12,15 +12,14 @@ k_t / k_n = 2/7. The LIGGGHTS law with Hertz takes Mindlin's k_t, as a LIGGGHTS 
 
 import math
 
-from study import CASES, ROOT, Point, default_points, main
+from study import CASES, FILL_SEEDS, Point, default_points, load, main
 
-from dem.case import load_case
 from dem.kernels import contacts
 
 
 def linear_stiffness(case_name: str) -> float:
     """k_n, N/m, with the contact time of a Hertz grain-floor impact at A omega."""
-    case = load_case(ROOT / "cases" / case_name)
+    case = load(Point("contact_model", case_name, "base", "base"))
     pt, c = case.particles, case.contact
     if pt.shape == "sphere":
         mass = case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
@@ -40,7 +39,7 @@ def points(case_name: str) -> list[Point]:
               "contact.tangential_damping_ratio": None}  # fmt: skip
     liggghts = {"contact.tangential": "liggghts", "contact.tangential_stiffness_ratio": None,
                 "contact.tangential_damping_ratio": None}  # fmt: skip
-    return default_points("contact_model", case_name) + [
+    return default_points("contact_model", case_name, FILL_SEEDS[case_name]) + [
         Point("contact_model", case_name, "Hertz, LIGGGHTS tangential", "hertz liggghts",
               liggghts),
         Point("contact_model", case_name, f"linear {k:.3g} N/m, Coulomb", "linear coulomb",

@@ -12,6 +12,7 @@ import time
 
 from study import (
     CASES,
+    FILL_SEEDS,
     HERE,
     ROOT,
     TOLERANCE,
@@ -21,6 +22,7 @@ from study import (
     ensure,
     print_table,
     reference,
+    reference_points,
     support_points,
     table,
     write_csv,
@@ -33,7 +35,8 @@ POINTS = [
     p
     for case in CASES
     for p in [Point("ladder", case, "one grain", "one grain", {"particles.count": 1})]
-    + default_points("ladder", case)
+    + default_points("ladder", case, FILL_SEEDS[case])
+    + reference_points("ladder", case)
 ]
 
 
@@ -52,7 +55,7 @@ def pointmass_rows(rows: dict) -> list[dict]:
         ref = reference(name, rows)
         err = v - ref.velocity_norm
         out.append({"case": name, "study": "ladder", "label": "point mass", "x": "point mass",
-                    "seed": "", "velocity_norm": v, "stderr": 0.0,
+                    "seed": "", "fills": 0, "velocity_norm": v, "stderr": 0.0,
                     "reference": ref.velocity_norm, "error": err,
                     "relative_error": err / ref.velocity_norm, "error_uncertainty": ref.stderr,
                     "fill_spread": ref.fill_spread,

@@ -1,5 +1,6 @@
 """Every speed-accuracy study in one go: all runs in one pool (about 30 min on 2 cores), then
-each study's CSV and chart, and summary.md (the cheapest acceptable settings).
+each study's CSV and chart, the ladder, and ``dem/data/speed_accuracy.json``: the summary that
+``dem plan`` reads (errors of each setting, the cheapest acceptable settings, rates).
 
     .venv/bin/python validation/speed_accuracy/run_all.py [--figures]
 """
@@ -8,13 +9,36 @@ import sys
 
 import contact_model
 import ladder
+import numpy as np
 import reference
 import resolution
 import section
 import skin
 import stiffness
 import timestep
-from study import HERE, cached, ensure, plot, print_table, table, write_csv
+from study import (
+    BASE,
+    CASES,
+    FILL_SEEDS,
+    HERE,
+    REFERENCE,
+    REFERENCE_TIMESTEP_FRACTION,
+    ROOT,
+    TOLERANCE,
+    cached,
+    default_points,
+    ensure,
+    load,
+    plot,
+    print_table,
+    table,
+    write_csv,
+)
+from study import (
+    reference as reference_of,
+)
+
+from dem import plan, provenance
 
 STUDIES = (reference, timestep, stiffness, contact_model, skin, section, resolution)
 
@@ -31,7 +55,140 @@ def main() -> int:
         print(f"\n== {name}")
         print_table(out)
     sys.argv = [sys.argv[0], "--figures"]
-    return ladder.main()
+    ladder.main()
+    data = plan_data(rows)
+    path = ROOT / "dem" / "data" / "speed_accuracy.json"
+    plan.write_study_data(path, data)
+    for case, d in data["cases"].items():
+        print(f"{case}: cheapest acceptable {d['cheapest']}")
+    print(f"wrote {path.relative_to(ROOT)}")
+    return 0
+
+
+def _effects(rows: list[dict], x_of, shipped_x) -> tuple[list[list[float]], dict]:
+    """``[[x, relative effect], ...]`` with the base setting at 0, and each x's verdict:
+    "ok" (acceptable), "bad" (off by more than the tolerance and by more than twice its
+    uncertainty) or "open" (neither: a single noisy fill that settles nothing)."""
+    sel = [r for r in rows if r["label"] != "base" and not r["failed"]]
+    series = [[float(x_of(r)), r["relative_effect"]] for r in sel] + [[float(shipped_x), 0.0]]
+    verdict = {float(x_of(r)): _verdict(r, "effect") for r in sel} | {float(shipped_x): "ok"}
+    return series, verdict
+
+
+def _verdict(r: dict, kind: str) -> str:
+    if r["failed"]:
+        return "bad"
+    if r["acceptable" if kind == "error" else "effect_acceptable"]:
+        return "ok"
+    e, u = abs(r[kind]), r[f"{kind}_uncertainty"]
+    base = r["reference"] if kind == "error" else r["velocity_norm"] - r["effect"]
+    return "bad" if e > TOLERANCE * base and e > 2.0 * u else "open"
+
+
+def _walk(verdict: dict, start: float, *, upward: bool) -> float:
+    """From ``start`` towards the cheap side: the farthest "ok" setting before a "bad" one."""
+    xs = sorted(x for x in verdict if (x >= start if upward else x <= start))
+    if not upward:
+        xs = xs[::-1]
+    best = start
+    for x in xs:
+        if verdict[x] == "bad":
+            break
+        if verdict[x] == "ok":
+            best = x
+    return best
+
+
+def plan_data(rows: dict) -> dict:
+    """The study reduced to what ``dem plan`` needs, per grain kind.
+
+    ``stiffness``: the error against the reference at each Young's modulus (the base one and
+    the reference's included); ``timestep``, ``section_*``, ``resolution``, ``contact_model``:
+    the effect of each setting against the base settings (0 there). ``cheapest``: walking
+    from the reference (stiffness) or the base value (the others) towards the cheap side,
+    the last setting still acceptable.
+    """
+    out = {"provenance": provenance.record(), "tolerance": TOLERANCE,
+           "base": BASE, "reference": {"overrides": REFERENCE,
+                         "timestep_fraction": REFERENCE_TIMESTEP_FRACTION,
+                         "seeds": {k: list(v) for k, v in FILL_SEEDS.items()}},
+           "cases": {}}  # fmt: skip
+    for case in CASES:
+        ref = reference_of(case, rows)
+        ship = [rows[p.key] for p in default_points("x", case, FILL_SEEDS[case])]
+        shipped_err = (ref.shipped - ref.velocity_norm) / ref.velocity_norm
+        c = load(default_points("x", case)[0])  # the case at the study's base settings
+        g_len = plan.grain_length(c)
+        v_ref = ref.velocity_norm
+        stderr = float(np.mean([r["stderr"] for r in ship])) / v_ref
+        d = {
+            "reference": v_ref,
+            "fill_spread": ref.fill_spread / v_ref,
+            "base_error": shipped_err,
+            "base_stderr": stderr,
+            "base_cycles": int(ship[0]["cycles"]),
+            "settle_cycles": float(np.mean([r["settle_cycles"] for r in ship])),
+            "particle_steps_per_s_1thread": float(
+                np.mean([r["particle_steps"] / r["wall_time_s"] for r in ship])
+            ),
+        }
+        st = [r for r in table(stiffness.POINTS, rows) if r["case"] == case]
+        at_auto = [r for r in st if r["label"] != "base" and "limit" not in r["label"]
+                   and not r["failed"]]  # fmt: skip
+        e_ship, e_ref = c.contact.youngs_modulus, REFERENCE["contact.youngs_modulus"]
+        d["stiffness"] = [[r["x"], r["relative_error"]] for r in at_auto] + [
+            [e_ship, shipped_err], [e_ref, 0.0]]  # fmt: skip
+        ok = {r["x"]: _verdict(r, "error") for r in at_auto} | {e_ref: "ok"}
+        ok[e_ship] = "ok" if abs(shipped_err) <= TOLERANCE else "bad"
+        stiffer = [abs(r["relative_error"]) for r in at_auto if r["x"] > e_ref]
+        d["reference_uncertainty"] = max(stiffer) if stiffer else 0.0
+        d["combined"] = {r["label"]: r["relative_error"] for r in st if "limit" in r["label"]
+                         and not r["failed"]}  # fmt: skip
+        e_ok = _walk(ok, e_ref, upward=False)
+
+        ts = [r for r in table(timestep.POINTS, rows) if r["case"] == case]
+        auto = float(np.mean([r["timestep"] / r["timestep_limit"] for r in ship]))
+        d["timestep"], ok = _effects(ts, lambda r: r["x"], auto)
+        f_ok = _walk(ok, auto, upward=True)
+
+        cm = [r for r in table(contact_model.POINTS, rows) if r["case"] == case]
+        d["contact_model"] = {"hertz_mindlin coulomb": 0.0} | {
+            r["x"].replace("hertz", "hertz_mindlin"): r["relative_effect"]
+            for r in cm if r["label"] != "base" and not r["failed"]
+        }  # fmt: skip
+
+        sec = [r for r in table(section.POINTS, rows) if r["case"] == case]
+        cheapest_section = {}
+        for axis, size in (("length", c.trough.length), ("width", c.trough.width)):
+            sel = [r for r in sec if str(r["x"]).startswith(axis) or r["label"] == "base"]
+            grains = {r["x"]: size * float(r["x"].split("x")[-1]) / g_len
+                      for r in sel if r["label"] != "base"}  # fmt: skip
+            d[f"section_{axis}"], ok = _effects(sel, lambda r, g=grains: g[r["x"]], size / g_len)
+            cheapest_section[axis] = _walk(ok, size / g_len, upward=False)
+        if case == "screw-trough":
+            res = table(resolution.POINTS, rows)
+            per = c.particles.grain.count
+            d["resolution"], ok = _effects(res, lambda r: r["x"], per)
+            res_ok = _walk(ok, per, upward=False)
+        lad = {r["label"]: r for r in ladder.pointmass_rows(rows) + table(ladder.POINTS, rows)
+               if r["case"] == case}  # fmt: skip
+        pm, one = lad["point mass"]["velocity_norm"], lad["one grain"]["velocity_norm"]
+        d["ladder"] = {
+            "point mass": (pm - v_ref) / v_ref,
+            "one grain": (one - v_ref) / v_ref,
+            "one grain vs point mass": (one - pm) / pm,
+            "point mass wall_time_s": lad["point mass"]["wall_time_s"],
+            "one grain wall_time_s": lad["one grain"]["wall_time_s"],
+        }
+        d["cheapest"] = {
+            "youngs_modulus": e_ok, "timestep_fraction": f_ok,
+            "section_length_grains": cheapest_section["length"],
+            "section_width_grains": cheapest_section["width"],
+        }  # fmt: skip
+        if case == "screw-trough":
+            d["cheapest"]["spheres_per_grain"] = res_ok
+        out["cases"][case] = d
+    return out
 
 
 if __name__ == "__main__":

@@ -7,18 +7,16 @@ grain count scaled by the floor area, so the bed keeps its depth. Grain length: 
 diameter (4 mm), a screw's length (22 mm).
 """
 
-from study import CASES, ROOT, Point, default_points, main
-
-from dem.case import load_case
+from study import CASES, FILL_SEEDS, Point, default_points, load, main
 
 FACTORS = (0.5, 2.0)
 
 
 def points(case_name: str) -> list[Point]:
-    case = load_case(ROOT / "cases" / case_name)
+    case = load(Point("section", case_name, "base", "base"))
     t, pt = case.trough, case.particles
     grain = 2.0 * pt.radius if pt.shape == "sphere" else pt.length
-    out = default_points("section", case_name)
+    out = default_points("section", case_name, FILL_SEEDS[case_name])
     for f in FACTORS:
         n = int(round(pt.count * f))
         out.append(
