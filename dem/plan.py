@@ -373,10 +373,12 @@ def _expected_error(case, data, kind, step, cycles, advice) -> tuple[float, dict
     source = f"study of cases/{kind}"
     if outside:
         source += f"; {', '.join(outside)} outside the studied range"
-        advice.append(Advice("warn", outside[0], "outside the settings the speed-accuracy study "
-                             "covered: the expected error is an extrapolation"))  # fmt: skip
     _advise_settings(case, data, step, fraction, e_equiv, advice)
     _advise_section(case, data, g_len, advice)
+    for key in outside:  # unless a more specific warning already names the key
+        if not any(a.key == key and a.level == "warn" for a in advice):
+            advice.append(Advice("warn", key, "outside the settings the speed-accuracy study "
+                                 "covered: the expected error is an extrapolation"))  # fmt: skip
     _advise_cycles(statistical, within, cycles, advice)
     _advise_ladder(case, data, kind, advice)
     return math.sqrt(systematic**2 + statistical**2 + reference**2), parts, source
