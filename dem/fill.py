@@ -6,14 +6,19 @@ over the trough floor and keeps it if it overlaps nothing placed before (periodi
 function of the case alone (:func:`box_height`), which is what the automatic time step
 (:mod:`dem.timestep`) takes its impact speed from: the time step never depends on the draw.
 
-Cost: each try tests the candidate against every grain placed so far, O(N) per try, so a fill
-of N grains costs O(N^2) distance tests.
+Cost: O(N). Grains placed so far are kept in a grid of cells at least one interaction range
+wide (a sphere diameter; a clump's bounding diameter), so a try tests only the grains of the 27
+cells around it. The draws and the accept/reject decisions are those of a test against every
+grain placed so far, so a seed gives the same fill as it did before the grid (tested). Spheres
+run in a compiled loop over pre-drawn uniforms (the same stream as one ``uniform`` call per
+coordinate); clumps, whose orientation draws interleave, in Python with the grid.
 """
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES
@@ -96,27 +101,117 @@ def random_fill(
         raise ValueError(f"trough width {width} m leaves no room for spheres of radius {radius} m")
     if height is None:
         height = sphere_box_height(n, radius, length, width)
-    section = Trough(length, width)
     pos = np.empty((n, 3))
-    d2_min = (2.0 * radius) ** 2
-    placed = 0
+    nxt = np.full(n, -1, dtype=np.int64)
+    placed, fails = 0, 0
+    u = np.empty(0)
+    k = 0
+    batch = 3 * max(1024, min(n, 1 << 20))
+    grid = _Grid(length, width, height, 2.0 * radius)
     while placed < n:
-        for _ in range(DEM_FILL_TRIES):
-            c = np.array(
-                [
-                    rng.uniform(0.0, length),
-                    rng.uniform(-0.5 * width + radius, 0.5 * width - radius),
-                    rng.uniform(radius, max(radius, height - radius)),
-                ]
-            )
-            d = section.minimum_image(pos[:placed] - c)
-            if placed == 0 or np.min(np.einsum("ij,ij->i", d, d)) >= d2_min:
-                pos[placed] = c
-                placed += 1
-                break
-        else:
+        if k >= u.size:
+            u, k = rng.random(batch), 0
+        placed, k, fails, stuck = _place_spheres(
+            u, k, pos, placed, n, radius, length, width, height, fails, DEM_FILL_TRIES,
+            grid.head, nxt, grid.shape, grid.cell,
+        )  # fmt: skip
+        if stuck:  # DEM_FILL_TRIES failures for one sphere: a taller box, a grid to match
             height *= 1.25
+            fails = 0
+            grid = _Grid(length, width, height, 2.0 * radius)
+            nxt[:] = -1
+            _insert_all(pos, placed, grid.head, nxt, grid.shape, grid.cell, width)
     return pos, height
+
+
+class _Grid:
+    """Cells at least ``size`` wide over the fill box, for the sphere fill.
+
+    x in [0, length), y in [-width/2, width/2], z in [0, height] (a point above height goes in
+    the top layer); ``head`` is the first grain of each cell (-1: none), linked through a
+    per-grain ``next`` array.
+    """
+
+    def __init__(self, length: float, width: float, height: float, size: float):
+        n = [max(1, int(extent / size)) for extent in (length, width, height)]
+        self.shape = np.array(n, dtype=np.int64)
+        self.cell = np.array([length / n[0], width / n[1], height / n[2]])
+        self.head = np.full(n[0] * n[1] * n[2], -1, dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _cell_of(x, y, z, shape, cell, width):
+    ix = min(max(int(x / cell[0]), 0), shape[0] - 1)
+    iy = min(max(int((y + 0.5 * width) / cell[1]), 0), shape[1] - 1)
+    iz = min(max(int(z / cell[2]), 0), shape[2] - 1)
+    return ix, iy, iz
+
+
+@numba.njit(cache=True)
+def _insert_all(pos, placed, head, nxt, shape, cell, width):
+    for i in range(placed):
+        ix, iy, iz = _cell_of(pos[i, 0], pos[i, 1], pos[i, 2], shape, cell, width)
+        c = (ix * shape[1] + iy) * shape[2] + iz
+        nxt[i] = head[c]
+        head[c] = i
+
+
+@numba.njit(cache=True)
+def _free(cx, cy, cz, pos, d2_min, length, width, head, nxt, shape, cell):
+    """True if no sphere in the 27 cells around (cx, cy, cz) is closer than sqrt(d2_min)."""
+    ix, iy, iz = _cell_of(cx, cy, cz, shape, cell, width)
+    nx = shape[0]
+    wide = nx >= 3  # else every x column, once (no double visits through the wrap)
+    for a in range(3 if wide else nx):
+        jx = (ix + a - 1) % nx if wide else a
+        for jy in range(max(iy - 1, 0), min(iy + 2, shape[1])):
+            for jz in range(max(iz - 1, 0), min(iz + 2, shape[2])):
+                j = head[(jx * shape[1] + jy) * shape[2] + jz]
+                while j >= 0:
+                    dx = pos[j, 0] - cx
+                    dx -= length * np.round(dx / length)
+                    dy = pos[j, 1] - cy
+                    dz = pos[j, 2] - cz
+                    if dx * dx + dy * dy + dz * dz < d2_min:
+                        return False
+                    j = nxt[j]
+    return True
+
+
+@numba.njit(cache=True)
+def _place_spheres(u, k, pos, placed, n, radius, length, width, height, fails, tries, head, nxt,
+                   shape, cell):  # fmt: skip
+    """Place spheres by tries from ``u[k:]``, three uniforms each.
+
+    Runs until all n are placed, the draws run out, or ``tries`` tries in a row fail (stuck: the
+    caller raises the box). Returns (placed, k, fails, stuck).
+    """
+    d2_min = (2.0 * radius) ** 2
+    y_lo = -0.5 * width + radius
+    y_range = (0.5 * width - radius) - y_lo
+    z_range = max(radius, height - radius) - radius
+    while placed < n:
+        if k + 3 > u.size:
+            return placed, u.size, fails, False
+        cx = 0.0 + length * u[k]
+        cy = y_lo + y_range * u[k + 1]
+        cz = radius + z_range * u[k + 2]
+        k += 3
+        if _free(cx, cy, cz, pos, d2_min, length, width, head, nxt, shape, cell):
+            pos[placed, 0] = cx
+            pos[placed, 1] = cy
+            pos[placed, 2] = cz
+            ix, iy, iz = _cell_of(cx, cy, cz, shape, cell, width)
+            c = (ix * shape[1] + iy) * shape[2] + iz
+            nxt[placed] = head[c]
+            head[c] = placed
+            placed += 1
+            fails = 0
+        else:
+            fails += 1
+            if fails == tries:
+                return placed, k, fails, True
+    return placed, k, fails, False
 
 
 def random_orientations(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -170,6 +265,7 @@ def random_fill_clumps(
     members = np.empty((n * k, 3))
     member_r = np.tile(radii, n)
     y_max = 0.5 * width - r_min
+    grid = _ClumpGrid(length, width, height, 2.0 * bound)
     placed = 0
     while placed < n:
         for _ in range(DEM_FILL_TRIES):
@@ -186,10 +282,11 @@ def random_fill_clumps(
                 continue
             m = placed * k
             if placed:
-                near = section.minimum_image(pos[:placed] - c)
-                close = np.einsum("ij,ij->i", near, near) < (2.0 * bound) ** 2
-                if np.any(close):
-                    idx = (np.flatnonzero(close)[:, None] * k + np.arange(k)).ravel()
+                cand = grid.near(c)
+                near = section.minimum_image(pos[cand] - c)
+                close = cand[np.einsum("ij,ij->i", near, near) < (2.0 * bound) ** 2]
+                if close.size:
+                    idx = (np.sort(close)[:, None] * k + np.arange(k)).ravel()
                     d = section.minimum_image(members[idx][None, :, :] - xs[:, None, :])
                     dist2 = np.einsum("abi,abi->ab", d, d)
                     reach = radii[:, None] + member_r[idx][None, :]
@@ -198,8 +295,45 @@ def random_fill_clumps(
             pos[placed] = c
             quat[placed] = q
             members[m : m + k] = xs
+            grid.add(placed, c)
             placed += 1
             break
         else:
             height *= 1.25
+            grid = _ClumpGrid(length, width, height, 2.0 * bound, pos[:placed])
     return pos, quat, height
+
+
+class _ClumpGrid:
+    """Placed clumps by cell (cells at least one bounding diameter wide), for the fill."""
+
+    def __init__(self, length: float, width: float, height: float, size: float, placed=()):
+        self.width = width
+        self.length = length
+        self.n = [max(1, int(extent / size)) for extent in (length, width, height)]
+        self.size = [length / self.n[0], width / self.n[1], height / self.n[2]]
+        self.cells: dict[tuple[int, int, int], list[int]] = {}
+        for i, c in enumerate(placed):
+            self.add(i, c)
+
+    def _index(self, c) -> tuple[int, int, int]:
+        shifted = (c[0], c[1] + 0.5 * self.width, c[2])
+        return tuple(
+            min(max(int(v / h), 0), n - 1)
+            for v, h, n in zip(shifted, self.size, self.n, strict=True)
+        )
+
+    def add(self, i: int, c) -> None:
+        self.cells.setdefault(self._index(c), []).append(i)
+
+    def near(self, c) -> np.ndarray:
+        """Clumps in the 27 cells around c (each x column once when the grid wraps onto itself)."""
+        ix, iy, iz = self._index(c)
+        nx = self.n[0]
+        xs = {(ix + a) % nx for a in (-1, 0, 1)}
+        out: list[int] = []
+        for jx in xs:
+            for jy in range(max(iy - 1, 0), min(iy + 2, self.n[1])):
+                for jz in range(max(iz - 1, 0), min(iz + 2, self.n[2])):
+                    out.extend(self.cells.get((jx, jy, jz), ()))
+        return np.array(out, dtype=np.int64)
