@@ -340,6 +340,27 @@ def _cmd_plan(args) -> int:
     return 0
 
 
+def _cmd_dem_sweep(args) -> int:
+    from dem.sweep import parse_set, run_sweep
+
+    sets = [parse_set(text) for text in args.set]
+    out = Path(args.out) if args.out else Path(args.case_dir) / "sweep"
+    result = run_sweep(
+        args.case_dir, sets, out, scheduler=args.scheduler, workers=args.workers,
+        threads=args.threads or 1, cycles=args.cycles, frames=args.frames,
+    )  # fmt: skip
+    if args.json:
+        _print_json(result)
+    else:
+        failed = len(result["failed"])
+        print(f"{result['points']} points: {result['done']} done "
+              f"({result['skipped']} from an earlier run), {failed} failed")  # fmt: skip
+        print(f"wrote {result['csv']}, sweep.h5 and sweep.png")
+    for name, error in result["failed"].items():
+        print(f"dem: sweep point {name} failed: {error}", file=sys.stderr)
+    return 1 if result["failed"] else 0
+
+
 def _cmd_report(args) -> int:
     from dem.report import make_report
 
@@ -481,6 +502,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_plan)
+
+    p = sub.add_parser("sweep", help="run a grid of cases on Dask and gather one table")
+    p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument(
+        "--set", action="append", required=True, metavar="TABLE.KEY=VALUES",
+        help="swept key: a value, a comma list or start:stop:step (stop included); repeat the "
+        "option for a grid",
+    )  # fmt: skip
+    p.add_argument("--out", help="sweep folder (default CASE_DIR/sweep), one folder per point")
+    p.add_argument("--scheduler", help="address of a running dask scheduler (default: local)")
+    p.add_argument("--workers", type=_whole, help="local workers (default: one per core)")
+    p.add_argument("--threads", type=_whole, help="numba threads per point (default 1)")
+    p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
+    p.add_argument("--frames", action="store_true", help="write VTK/HDF5 frames for every point")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_dem_sweep)
 
     p = sub.add_parser(
         "calibrate", help="fit the tangential contact to eps_t by virtual impacts (writes case)"

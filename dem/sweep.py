@@ -1,0 +1,322 @@
+"""``dem sweep``: a grid of cases from one case directory, run on Dask, gathered into one table.
+
+``dem sweep CASE_DIR --set drive.angle=10:60:5 --set material.friction=0.25,0.35`` runs the
+Cartesian product of the ``--set`` values. Each point is the case with those keys overridden
+(:func:`dem.case.load_case` ``overrides``: checked as if written in the file, all of them before
+anything runs) and runs ``dem run`` into its own folder under ``--out``. Points run as tasks on
+Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thread workers, one per
+core, by default; a running ``dask scheduler`` when ``--scheduler ADDRESS`` is given (the point
+folders must then be on storage that every worker sees).
+
+A rerun skips the points whose folder holds a summary.json and resumes the ones that hold a
+checkpoint. A point that fails (bad physics the guard stops, a lost worker) is reported with its
+error and leaves the others running; the sweep's exit status says that some failed. The results
+are gathered into ``sweep.csv``, ``sweep.h5`` (one dataset per column) and ``sweep.png`` (the
+bulk velocity against the first swept key, with the point-mass model beside it).
+
+Cost: the points are independent; a grid of P points takes about P / workers times one run.
+Gathering reads each summary.json once: O(P).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+from dem.errors import InputError
+
+#: summary.json values gathered into the sweep table, beside the swept keys.
+COLUMNS = (
+    "mean_velocity",
+    "mean_velocity_stderr",
+    "mean_velocity_norm",
+    "mean_velocity_norm_stderr",
+    "pointmass_velocity_norm",
+    "mass_flow_rate",
+    "throw_number",
+    "amplitude",
+    "grains",
+    "timestep",
+    "settle_cycles",
+    "cycles",
+    "wall_time_s",
+)
+#: Keys that take whole numbers.
+WHOLE = {"count", "cycles", "settle_cycles", "seed", "frames_per_cycle"}
+TABLE = "sweep"
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One point of a sweep: its index, its overrides and its output folder."""
+
+    index: int
+    overrides: dict
+    folder: Path
+
+    @property
+    def name(self) -> str:
+        """The folder's name, which identifies the point in messages."""
+        return self.folder.name
+
+
+def parse_set(text: str) -> tuple[str, list]:
+    """Parse ``"table.key=values"`` into the key and its list of values.
+
+    Values as ``dem pointmass sweep`` takes them (a number, a comma list, start:stop:step with
+    stop included), or words (``contact.model=linear,hertz_mindlin``).
+    """
+    from dem.pointmass.sweep import parse_values
+
+    key, sep, values = text.partition("=")
+    key = key.strip()
+    if not sep or "." not in key or not values.strip():
+        raise InputError("--set", text, "table.key=values, e.g. drive.angle=10:60:5")
+    words = [v.strip() for v in values.split(",")]
+    try:
+        numbers = parse_values(values.strip(), f"--set {key}")
+    except InputError:
+        if ":" in values:
+            raise
+        return key, [_word(w) for w in words]
+    if key.rsplit(".", 1)[1] in WHOLE:
+        if not all(float(v).is_integer() for v in numbers):
+            raise InputError(f"--set {key}", values, "whole numbers") from None
+        return key, [int(v) for v in numbers]
+    return key, numbers
+
+
+def _word(text: str):
+    return {"true": True, "false": False}.get(text.lower(), text)
+
+
+def grid(sets: list[tuple[str, list]]) -> list[dict]:
+    """The Cartesian product of the ``--set`` values, in order (the last key varies fastest)."""
+    keys = [k for k, _ in sets]
+    if len(set(keys)) != len(keys):
+        raise InputError("--set", ", ".join(keys), "each key at most once")
+    return [
+        dict(zip(keys, combo, strict=True)) for combo in itertools.product(*(v for _, v in sets))
+    ]
+
+
+def folder_name(index: int, overrides: dict) -> str:
+    """``003_drive.angle=25_material.friction=0.35`` (safe on every file system)."""
+    parts = [f"{k}={_fmt(v)}" for k, v in overrides.items()]
+    return re.sub(r"[^A-Za-z0-9_.=+-]", "-", f"{index:03d}_" + "_".join(parts))
+
+
+def _fmt(value) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def plan_points(case_dir: Path, sets: list[tuple[str, list]], out: Path) -> list[SweepPoint]:
+    """The points, each checked by loading its case (an error names the point and the key)."""
+    from dem.case import load_case
+
+    points = []
+    for i, overrides in enumerate(grid(sets)):
+        try:
+            load_case(case_dir, overrides)
+        except InputError as err:
+            raise InputError(err.key, err.value, f"{err.allowed} (sweep point {overrides})",
+                             err.source) from None  # fmt: skip
+        points.append(SweepPoint(i, overrides, out / folder_name(i, overrides)))
+    return points
+
+
+def status(point: SweepPoint) -> str:
+    """Whether a point is "done" (summary.json), "interrupted" (a checkpoint) or "new"."""
+    from dem.runner import CHECKPOINT, SUMMARY
+
+    if (point.folder / SUMMARY).is_file():
+        return "done"
+    if (point.folder / CHECKPOINT).is_file():
+        return "interrupted"
+    return "new"
+
+
+def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
+              frames: bool) -> dict:  # fmt: skip
+    """Run one point (a Dask task; also callable directly); returns its summary."""
+    from dem.case import load_case
+    from dem.plan import PlanWarning
+    from dem.runner import run_case
+
+    case = load_case(case_dir, overrides)
+    point = SweepPoint(0, overrides, Path(folder))
+    resume = status(point) == "interrupted"
+    with warnings.catch_warnings():  # the sweep warns once, for its first point
+        warnings.simplefilter("ignore", PlanWarning)
+        return run_case(case, Path(folder), cycles=cycles, threads=threads, progress=False,
+                        overwrite=not resume and Path(folder).exists(), resume=resume,
+                        frames=frames)  # fmt: skip
+
+
+def run_sweep(
+    case_dir: str | Path,
+    sets: list[tuple[str, list]],
+    out: str | Path,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    threads: int = 1,
+    cycles: int | None = None,
+    frames: bool = False,
+    progress: bool = True,
+) -> dict:
+    """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``."""
+    case_dir, out = Path(case_dir), Path(out)
+    points = plan_points(case_dir, sets, out)
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:  # pragma: no cover - the message is the point
+        raise InputError("dem sweep", "dask", "the sweep extra: pip install 'dem[sweep]'") from None
+    out.mkdir(parents=True, exist_ok=True)
+    todo = [p for p in points if status(p) != "done"]
+    if todo:
+        _warn_plan(case_dir, todo[0], threads, cycles)
+    skipped = len(points) - len(todo)
+    failed: dict[str, str] = {}
+    if todo:
+        cluster = None
+        if scheduler:
+            client = Client(scheduler)
+        else:
+            from dem import config
+
+            n = workers or max(1, config.default_threads() // max(threads, 1))
+            cluster = LocalCluster(n_workers=min(n, len(todo)), threads_per_worker=1,
+                                   processes=True, dashboard_address=None)  # fmt: skip
+            client = Client(cluster)
+        try:
+            futures = {
+                client.submit(run_point, str(case_dir), p.overrides, str(p.folder), cycles,
+                              threads, frames, key=f"dem-sweep-{p.name}", pure=False): p
+                for p in todo
+            }  # fmt: skip
+            bar = None
+            if progress:
+                from tqdm import tqdm
+
+                bar = tqdm(total=len(points), initial=skipped, unit="point", desc="dem sweep")
+            for future in as_completed(futures):
+                p = futures[future]
+                if future.status == "error":
+                    err = future.exception()
+                    failed[p.name] = f"{type(err).__name__}: {err}"
+                    if bar is not None:
+                        bar.write(f"dem sweep: point {p.name} failed: {failed[p.name]}")
+                if bar is not None:
+                    bar.update(1)
+            if bar is not None:
+                bar.close()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    rows = gather(points, failed)
+    csv_path = write_table(rows, out)
+    plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
+    return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
+            "failed": failed, "csv": str(csv_path)}  # fmt: skip
+
+
+def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
+    """The plan's warnings for one point, once (``dem run`` would give them for every point)."""
+    from dem import plan
+    from dem.case import load_case
+
+    estimate = plan.plan(load_case(case_dir, point.overrides), threads=threads, cycles=cycles)
+    for a in estimate.warnings():
+        warnings.warn(f"sweep point {point.name}: {a.key}: {a.text}", plan.PlanWarning,
+                      stacklevel=3)  # fmt: skip
+
+
+def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
+    """One row per point: its overrides, its summary's values, and its status."""
+    from dem.runner import SUMMARY
+
+    rows = []
+    for p in points:
+        row = {"point": p.name} | {k: v for k, v in p.overrides.items()}
+        path = p.folder / SUMMARY
+        if path.is_file():
+            summary = json.loads(path.read_text())
+            row |= {c: summary.get(c) for c in COLUMNS} | {"status": "done", "error": ""}
+        else:
+            row |= {c: None for c in COLUMNS}
+            row |= {"status": "failed", "error": failed.get(p.name, "no summary.json")}
+        rows.append(row)
+    return rows
+
+
+def write_table(rows: list[dict], out: Path) -> Path:
+    """``sweep.csv`` and ``sweep.h5`` (one dataset per column; numbers as float64, NaN for none)."""
+    import h5py
+    import numpy as np
+
+    from dem.provenance import header_lines
+
+    fields = list(rows[0])
+    path = out / f"{TABLE}.csv"
+    with open(path, "w", newline="") as fh:
+        fh.write("\n".join(header_lines("dem sweep")) + "\n")
+        writer = csv.DictWriter(fh, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+    with h5py.File(out / f"{TABLE}.h5", "w") as h5:
+        g = h5.create_group(TABLE)
+        for f in fields:
+            values = [r[f] for r in rows]
+            if all(isinstance(v, (int, float)) or v is None for v in values) and not all(
+                isinstance(v, bool) for v in values
+            ):
+                g[f] = np.array([math.nan if v is None else float(v) for v in values])
+            else:
+                g[f] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
+        g.attrs["columns"] = json.dumps(fields)
+    return path
+
+
+def plot(rows: list[dict], path: Path, keys: list[str]) -> None:
+    """V / (A omega cos phi) against the first swept key, a line per value of the others."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    first, rest = keys[0], keys[1:]
+    numeric = all(isinstance(r[first], (int, float)) for r in rows)
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[k] for k in rest), []).append(r)
+    for i, (label, sel) in enumerate(groups.items()):
+        sel = [r for r in sel if r["status"] == "done"]
+        if not sel:
+            continue
+        xs = [r[first] if numeric else j for j, r in enumerate(sel)]
+        name = ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(rest, label, strict=True)) or "bed"
+        ax.errorbar(xs, [r["mean_velocity_norm"] for r in sel],
+                    yerr=[r["mean_velocity_norm_stderr"] for r in sel], fmt="o-", capsize=2,
+                    color=f"C{i}", label=f"DEM {name}")  # fmt: skip
+        ax.plot(xs, [r["pointmass_velocity_norm"] for r in sel], "--", color=f"C{i}",
+                lw=1, label=f"point mass {name}")  # fmt: skip
+        if not numeric:
+            ax.set_xticks(xs, [str(r[first]) for r in sel])
+    ax.set_xlabel(first)
+    ax.set_ylabel("v / (A omega cos phi)")
+    failed = sum(r["status"] != "done" for r in rows)
+    title = f"dem sweep: {len(rows) - failed} points" + (f", {failed} failed" if failed else "")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
