@@ -361,6 +361,35 @@ def _cmd_dem_sweep(args) -> int:
     return 1 if result["failed"] else 0
 
 
+def _cmd_dem_optimum(args) -> int:
+    from dem.optimum import bulk_optimum
+
+    bounds = None
+    if args.bounds:
+        try:
+            lo, hi = (float(v) for v in args.bounds.split(":"))
+        except ValueError:
+            raise InputError("--bounds", args.bounds, "LO:HI, two numbers") from None
+        bounds = (lo, hi)
+    out = Path(args.out) if args.out else Path(args.case_dir) / "optimum"
+    result = bulk_optimum(
+        args.case_dir, args.over, args.hold, out, bounds=bounds, tolerance=args.tolerance,
+        max_runs=args.max_runs, scheduler=args.scheduler, workers=args.workers,
+        cycles=args.cycles,
+    )  # fmt: skip
+    if args.json:
+        _print_json(result)
+    else:
+        b, p = result["bulk"], result["pointmass"]
+        print(f"bulk optimum {args.over} = {b['x']:.4g} +- {b['uncertainty']:.2g} "
+              f"({result['objective']} {b['value']:.4g}; {b['reason']}; "
+              f"{len(result['samples'])} runs)")  # fmt: skip
+        print(f"point-mass optimum {args.over} = {p['value']:.4g} "
+              f"(90 % plateau {p['plateau_90'][0]:.3g}-{p['plateau_90'][1]:.3g})")  # fmt: skip
+        print(f"wrote {out / 'optimum.json'}, optimum.csv and optimum.png")
+    return 0
+
+
 def _cmd_report(args) -> int:
     from dem.report import make_report
 
@@ -518,6 +547,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frames", action="store_true", help="write VTK/HDF5 frames for every point")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_dem_sweep)
+
+    p = sub.add_parser("optimum", help="the bulk optimum angle (or throw number) of a case")
+    p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument("--over", required=True, choices=("drive.angle", "drive.throw_number"))
+    p.add_argument("--hold", default="throw_number", help="held fixed: throw_number or "
+                   "amplitude over drive.angle; frequency over drive.throw_number")  # fmt: skip
+    p.add_argument("--bounds", help="LO:HI of the search (default 10:60 deg, Gamma 0.5:4)")
+    p.add_argument("--tolerance", type=_number, help="bracket half-width to stop at (1 deg)")
+    p.add_argument("--max-runs", type=_whole, default=20, help="most DEM runs (default 20)")
+    p.add_argument("--out", help="output folder (default CASE_DIR/optimum)")
+    p.add_argument("--scheduler", help="address of a running dask scheduler (default: local)")
+    p.add_argument("--workers", type=_whole, help="local workers (default: one per core)")
+    p.add_argument("--cycles", type=_whole, help="measured cycles per run (overrides run.cycles)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_dem_optimum)
 
     p = sub.add_parser(
         "calibrate", help="fit the tangential contact to eps_t by virtual impacts (writes case)"

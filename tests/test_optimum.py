@@ -1,0 +1,88 @@
+"""The noisy bracketing search of ``dem optimum`` and its wiring to DEM runs."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from small_case import SMALL_CASE, write_case
+
+from dem.cli import main
+from dem.errors import InputError
+from dem.optimum import maximize_noisy
+
+
+def noisy(peak: float, width: float, noise: float, seed: int):
+    """A Gaussian bump of height 1 at ``peak`` plus noise of known standard deviation."""
+    rng = np.random.default_rng(seed)
+    calls = []
+
+    def evaluate(batch):
+        calls.append(len(batch))
+        return [
+            (math.exp(-0.5 * ((x - peak) / width) ** 2) + noise * rng.standard_normal(), noise)
+            for x, _ in batch
+        ]
+
+    return evaluate, calls
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_known_maximum_is_found_within_its_stated_uncertainty(seed):
+    evaluate, calls = noisy(31.7, 15.0, 0.01, seed)
+    r = maximize_noisy(evaluate, 10.0, 60.0, tolerance=1.0, max_evaluations=24, seed=seed)
+    assert len(r.samples) <= 24 and sum(calls) == len(r.samples)
+    assert 0.02 < r.uncertainty < 5.0
+    # the stated uncertainty is honest: 3 sigma covers the truth
+    assert abs(r.x - 31.7) < 3.0 * r.uncertainty + 0.5, (r.x, r.uncertainty, r.reason)
+
+
+def test_coverage_over_many_noisy_searches():
+    """About 95 % of 2-sigma intervals hold the maximum (at least 80 % over 40 searches)."""
+    hits = 0
+    for seed in range(40):
+        evaluate, _ = noisy(42.0, 12.0, 0.02, 100 + seed)
+        r = maximize_noisy(evaluate, 10.0, 60.0, tolerance=1.0, seed=seed)
+        hits += abs(r.x - 42.0) <= 2.0 * r.uncertainty
+    assert hits >= 32
+
+
+def test_without_noise_the_search_closes_on_the_maximum():
+    evaluate, _ = noisy(25.0, 10.0, 0.0, 0)
+    r = maximize_noisy(evaluate, 10.0, 60.0, tolerance=0.25, max_evaluations=40)
+    assert r.converged and abs(r.x - 25.0) < 0.3
+
+
+def test_a_flat_objective_is_reported_as_flat_not_as_an_optimum():
+    rng = np.random.default_rng(3)
+
+    def flat(batch):
+        return [(0.5 + 0.01 * rng.standard_normal(), 0.01) for _ in batch]
+
+    r = maximize_noisy(flat, 10.0, 60.0, tolerance=1.0, max_evaluations=30)
+    assert not r.converged
+    assert r.uncertainty > 5.0 or "flat" in r.reason
+
+
+def test_bad_bounds_are_refused():
+    evaluate, _ = noisy(30.0, 10.0, 0.0, 0)
+    with pytest.raises(InputError):
+        maximize_noisy(evaluate, 60.0, 10.0, tolerance=1.0)
+
+
+@pytest.mark.integration
+def test_dem_optimum_runs_a_case_and_writes_its_files(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    text = SMALL_CASE.replace("count = 120", "count = 20").replace("cycles = 6", "cycles = 2")
+    case = write_case(tmp_path / "case", text.replace("settle_cycles = 2", "settle_cycles = 1"))
+    out = tmp_path / "opt"
+    code = main(["optimum", str(case), "--over", "drive.angle", "--hold", "amplitude",
+                 "--bounds", "15:45", "--max-runs", "7", "--tolerance", "5", "--workers", "2",
+                 "--out", str(out), "--json"])  # fmt: skip
+    assert code == 0
+    result = json.loads(capsys.readouterr().out)
+    assert 3 <= len(result["samples"]) <= 7
+    assert 15.0 <= result["bulk"]["x"] <= 45.0
+    assert 15.0 <= result["pointmass"]["value"] <= 45.0
+    for name in ("optimum.json", "optimum.csv", "optimum.png"):
+        assert (out / name).stat().st_size > 0
