@@ -6,14 +6,16 @@ golden-section search would chase the noise. :func:`maximize_noisy` brackets ins
 1. evaluate a coarse grid over the bounds (``initial`` points);
 2. bracket the best point by its evaluated neighbours; evaluate the midpoints on both sides;
    when the best leads its runner-up by less than ``z`` combined standard errors, first add a
-   replicate (a new fill) at both, so a bracket is never narrowed on noise;
+   replicate (a new fill) at both, so a bracket is never narrowed on noise, and if they are
+   still level, look at the point between them;
 3. stop when the bracket is narrower than ``2 tolerance``, when the budget of evaluations is
    spent, or when the best no longer stands out from its neighbours after replication (the
    objective is flat within the noise there);
 4. fit a parabola, weighted by 1 / stderr^2, through the points nearest the best; its vertex is
    the optimum, and a parametric bootstrap of the fit (each point redrawn within its standard
-   error) gives the optimum's uncertainty. Where no downward parabola fits, the best point
-   stands, with half the bracket as its uncertainty.
+   error) gives the optimum's uncertainty. Where the curvature is not negative by two standard
+   errors, the objective is flat within the noise: the best point stands, and the uncertainty
+   is half the span of the points level with it (within two combined standard errors).
 
 :func:`bulk_optimum` applies it to a case (each evaluation a ``dem run`` of the case with the
 scanned key set, in its own folder, run on Dask as ``dem sweep`` runs its points) and sets the
@@ -120,6 +122,10 @@ def maximize_noisy(
         lead = best - means[rival]
         if lead < z * math.hypot(best_se, est(xs[rival])[1]):
             reps = min(len(runs[xs[i]]), len(runs[xs[rival]]))
+            middle = 0.5 * (xs[i] + xs[rival])
+            if reps >= 2 and abs(xs[rival] - xs[i]) > 2.0 * tolerance and middle not in runs:
+                run([(middle, 0)])  # level after a replicate: look between them
+                continue
             if reps >= 4:  # replicated and still level: flat within the noise here
                 reason = "flat within the noise: the best does not stand out after 4 fills"
                 break
@@ -137,10 +143,15 @@ def _fit(runs, est, samples, lo, hi, reason, converged, seed) -> NoisyOptimum:
     i = int(np.argmax(m))
     a, b = xs[max(i - 1, 0)], xs[min(i + 1, len(xs) - 1)]
     near = np.argsort(np.abs(xs - xs[i]))[: min(5, len(xs))]
-    fallback = NoisyOptimum(float(xs[i]), float(0.5 * (b - a)), float(m[i]), float(s[i]),
-                            (float(a), float(b)), converged, reason, samples)  # fmt: skip
+    # Points level with the best within the noise: where the optimum may lie if nothing
+    # sharper is known.
+    level = xs[m >= m[i] - 2.0 * np.hypot(s, s[i])]
+    flat = NoisyOptimum(float(xs[i]), float(0.5 * (level.max() - level.min())), float(m[i]),
+                        float(s[i]), (float(level.min()), float(level.max())), False,
+                        f"{reason}; no significant curvature: flat within the noise over "
+                        f"{level.min():.4g}-{level.max():.4g}", samples)  # fmt: skip
     if len(near) < 3:
-        return fallback
+        return flat
 
     def vertex(values):
         c2, c1, c0 = np.polyfit(xs[near], values, 2, w=1.0 / s[near])
@@ -149,9 +160,13 @@ def _fit(runs, est, samples, lo, hi, reason, converged, seed) -> NoisyOptimum:
         xv = -c1 / (2.0 * c2)
         return float(xv), float(c0 + c1 * xv + c2 * xv**2)
 
+    if len(near) > 3:
+        coef, cov = np.polyfit(xs[near], m[near], 2, w=1.0 / s[near], cov="unscaled")
+        if coef[0] + 2.0 * math.sqrt(cov[0, 0]) >= 0.0:  # curvature not below zero by 2 sigma
+            return flat
     top = vertex(m[near])
     if top is None or not (xs[near].min() <= top[0] <= xs[near].max()):
-        return fallback
+        return flat
     rng = np.random.default_rng(seed)
     draws = [vertex(m[near] + s[near] * rng.standard_normal(len(near))) for _ in range(400)]
     ok = np.array([d[0] for d in draws if d is not None])

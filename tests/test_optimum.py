@@ -60,8 +60,8 @@ def test_a_flat_objective_is_reported_as_flat_not_as_an_optimum():
         return [(0.5 + 0.01 * rng.standard_normal(), 0.01) for _ in batch]
 
     r = maximize_noisy(flat, 10.0, 60.0, tolerance=1.0, max_evaluations=30)
-    assert not r.converged
-    assert r.uncertainty > 5.0 or "flat" in r.reason
+    assert not r.converged and "flat within the noise" in r.reason
+    assert r.uncertainty > 10.0  # the whole range is level with the best
 
 
 def test_bad_bounds_are_refused():
