@@ -249,19 +249,10 @@ def bulk_optimum(
         client.close()
         if cluster is not None:
             cluster.close()
-    m = case.material
-    pm_over = "angle" if over == "drive.angle" else "throw_number"
-    pm_hold = hold
-    held_values = {"throw_number": case.drive.throw_number, "amplitude": case.drive.amplitude}
-    pm = pointmass_optimum(
-        pm_over, pm_hold, friction=m.friction, frequency=case.drive.frequency,
-        inclination=case.trough.inclination, eps_t=m.restitution_tangential,
-        eps_n=m.restitution_normal, bounds=(lo, hi),
-        angle=case.drive.angle if pm_over == "throw_number" else None,
-        **({pm_hold: held_values[pm_hold]} if pm_hold in held_values else {}),
-    )  # fmt: skip
+    pm = _pointmass(case, over, hold, (lo, hi), pointmass_optimum)
     summary = {
-        "case": case.name, "over": over, "hold": hold, "objective": objective,
+        "case": case.name, "case_dir": str(case_dir.resolve()), "over": over, "hold": hold,
+        "objective": objective, "bounds": [lo, hi],
         "bulk": {k: v for k, v in asdict(result).items() if k != "samples"},
         "pointmass": {"value": pm.value, "plateau_90": list(pm.plateau),
                       objective: getattr(pm, objective)},
@@ -298,6 +289,35 @@ def _write_csv(path: Path, samples, over: str, objective: str) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def replot(out: str | Path) -> None:
+    """Redraw optimum.png from optimum.json (and the point mass, recomputed)."""
+    from dem.case import load_case
+    from dem.pointmass.sweep import optimum as pointmass_optimum
+
+    out = Path(out)
+    d = json.loads((out / "optimum.json").read_text())
+    b = d["bulk"]
+    samples = [(s["x"], s["fill"], s["value"], s["stderr"]) for s in d["samples"]]
+    result = NoisyOptimum(b["x"], b["uncertainty"], b["value"], b["value_stderr"],
+                          tuple(b["bracket"]), b["converged"], b["reason"], samples)  # fmt: skip
+    case = load_case(d["case_dir"])
+    pm = _pointmass(case, d["over"], d["hold"], tuple(d["bounds"]), pointmass_optimum)
+    _plot(out / "optimum.png", result, pm, d["over"], d["objective"], case.name)
+
+
+def _pointmass(case, over, hold, bounds, pointmass_optimum):
+    m = case.material
+    pm_over = "angle" if over == "drive.angle" else "throw_number"
+    held_values = {"throw_number": case.drive.throw_number, "amplitude": case.drive.amplitude}
+    return pointmass_optimum(
+        pm_over, hold, friction=m.friction, frequency=case.drive.frequency,
+        inclination=case.trough.inclination, eps_t=m.restitution_tangential,
+        eps_n=m.restitution_normal, bounds=bounds,
+        angle=case.drive.angle if pm_over == "throw_number" else None,
+        **({hold: held_values[hold]} if hold in held_values else {}),
+    )  # fmt: skip
+
+
 def _plot(path: Path, result: NoisyOptimum, pm, over: str, objective: str, name: str) -> None:
     import matplotlib
 
@@ -308,7 +328,10 @@ def _plot(path: Path, result: NoisyOptimum, pm, over: str, objective: str, name:
     x = np.array([s[0] for s in result.samples])
     ax.errorbar(x, [s[2] for s in result.samples], yerr=[s[3] for s in result.samples], fmt="o",
                 color="C0", capsize=2, label="DEM runs (fills)")  # fmt: skip
-    ax.axvspan(result.x - result.uncertainty, result.x + result.uncertainty, color="C0", alpha=0.15)
+    flat = "flat within the noise" in result.reason
+    u = result.uncertainty
+    band = result.bracket if flat else (result.x - u, result.x + u)
+    ax.axvspan(*band, color="C0", alpha=0.15, label="level with the best" if flat else None)
     ax.axvline(
         result.x, color="C0", label=f"bulk optimum {result.x:.3g} +- {result.uncertainty:.2g}"
     )

@@ -9,7 +9,7 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.optimum import maximize_noisy
+from dem.optimum import maximize_noisy, replot
 
 
 def noisy(peak: float, width: float, noise: float, seed: int):
@@ -86,3 +86,6 @@ def test_dem_optimum_runs_a_case_and_writes_its_files(tmp_path, capsys):
     assert 15.0 <= result["pointmass"]["value"] <= 45.0
     for name in ("optimum.json", "optimum.csv", "optimum.png"):
         assert (out / name).stat().st_size > 0
+    (out / "optimum.png").unlink()
+    replot(out)  # the figure again, from optimum.json alone
+    assert (out / "optimum.png").stat().st_size > 0
