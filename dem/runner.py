@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 import shutil
 import signal
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -162,6 +163,7 @@ def run_case(
     estimate = plan.plan(case, threads=n_threads, cycles=cycles)
     if not resume:
         _warn_plan(estimate)
+    _compile_first(case, progress)
     sim = setup.from_case(case)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
@@ -264,6 +266,29 @@ def run_case(
         vtk.close()
     checkpoint.unlink(missing_ok=True)
     return summary
+
+
+def _compile_first(case, progress: bool) -> None:
+    """Compile the kernels on two grains of the case, saying so, when none are cached yet.
+
+    The run itself then starts from the cache, so its trajectory is the same whether or not this
+    process compiled (a warm-up on the run's own grains would shift it by the warm-up's steps).
+    """
+    from dataclasses import replace
+
+    from dem import kernels
+
+    if kernels.compiled(clumps=case.particles.shape != "sphere"):
+        return
+    t0 = time.perf_counter()
+    if progress:
+        print("dem: compiling the DEM kernels for this machine, once (about a minute; they are "
+              "cached, later runs start at once) ...", file=sys.stderr, flush=True)  # fmt: skip
+    small = replace(case, particles=replace(case.particles, count=min(2, case.particles.count)))
+    setup.from_case(small, check_limit=False).run(2)
+    if progress:
+        print(f"dem: kernels compiled in {time.perf_counter() - t0:.0f} s", file=sys.stderr,
+              flush=True)  # fmt: skip
 
 
 def _warn_plan(estimate) -> None:

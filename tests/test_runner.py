@@ -208,3 +208,18 @@ def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_pa
             for key in ("positions", "velocity"):
                 assert np.isfinite(frames[i][key]).all()
         assert np.isfinite(res["cycles"]["mean_velocity"]).all()
+
+
+def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, monkeypatch,
+                                                                     capsys):  # fmt: skip
+    """The warm-up compiles on two separate grains: the run's own grains never see it."""
+    from dem import kernels
+
+    case = load_case(write_case(tmp_path / "case"))
+    plain = run_case(case, tmp_path / "a", progress=False, frames=False)
+    assert kernels.compiled(clumps=False)  # the cache now holds the sphere kernels
+    monkeypatch.setattr(kernels, "compiled", lambda clumps=False: False)
+    first = run_case(case, tmp_path / "b", progress=True, frames=False)
+    err = capsys.readouterr().err
+    assert "compiling the DEM kernels" in err and "kernels compiled in" in err
+    assert first["per_cycle_velocity"] == plain["per_cycle_velocity"]

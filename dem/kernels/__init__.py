@@ -52,3 +52,19 @@ def _drop_stale_cache() -> None:
 
 
 _drop_stale_cache()
+
+
+def compiled(clumps: bool = False) -> bool:
+    """True if numba's on-disk cache holds the step kernel (of clumps if ``clumps``).
+
+    A first run on a machine compiles the kernels (about a minute) and caches them next to their
+    sources (or under NUMBA_CACHE_DIR); ``dem run`` says so before it starts.
+    """
+    name = "integrate.advance_clumps-*.nbi" if clumps else "integrate.advance-*.nbi"
+    here = Path(__file__).resolve().parent
+    places = [here / "__pycache__"]
+    if numba.config.CACHE_DIR:
+        places += list(Path(numba.config.CACHE_DIR).rglob("__pycache__")) + [
+            Path(numba.config.CACHE_DIR)
+        ]
+    return any(any(p.rglob(name)) for p in places if p.is_dir())
