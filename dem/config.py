@@ -102,6 +102,12 @@ DEM_AUTO_SETTLE_TOLERANCE = 1e-4
 #: sets OMP_WAIT_POLICY; None leaves libgomp's default (spin, then sleep). A trade-off measured on
 #: the 2-core machines (sphere-bed, 2 threads, 2026-11-21): with both cores free the default gave
 #: 1.7e7 particle-steps/s and PASSIVE 0.7-0.9e7; with another process holding a core the default
-#: (and ACTIVE) fell to 0.08-0.27e7 while PASSIVE kept 0.7-0.9e7. Set OMP_WAIT_POLICY=PASSIVE, or
-#: run with --threads 1, on a shared machine.
+#: (and ACTIVE) fell to 0.08-0.27e7 while PASSIVE kept 0.7-0.9e7. The thread guard below now
+#: handles a shared machine (validation/performance/threads_shared.py).
 DEM_OMP_WAIT_POLICY: str | None = None
+#: Thread guard (dem.threads): with more than one thread, try one thread every this many chunks
+#: of DEM_CHECK_INTERVAL steps and keep the faster; False leaves the thread count alone.
+DEM_THREAD_GUARD = True
+DEM_THREAD_GUARD_PERIOD = 8
+#: ... timing only chunks of at least this many steps.
+DEM_THREAD_GUARD_MIN_STEPS = 100

@@ -39,6 +39,7 @@ from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
 from dem.provenance import record
 from dem.simulation import Simulation
+from dem.threads import ThreadGuard
 
 CHECKPOINT = "checkpoint.npz"
 SUMMARY = "summary.json"
@@ -165,6 +166,8 @@ def run_case(
         _warn_plan(estimate)
     _compile_first(case, progress)
     sim = setup.from_case(case)
+    if config.DEM_THREAD_GUARD and n_threads > 1:
+        sim.guard = ThreadGuard(n_threads)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
@@ -260,6 +263,14 @@ def run_case(
 
     summary = _summary(case, sim, loop, cycles, n_threads)
     summary["plan"] = estimate.as_dict()
+    if sim.guard is not None:
+        sim.guard.restore()
+        summary["thread_guard"] = sim.guard.as_dict()
+        share = summary["thread_guard"]["fraction_on_one_thread"]
+        if progress and share > 0.5:
+            print(f"dem: {n_threads} threads ran slower than one here (another process on the "
+                  f"cores?): {share:.0%} of the steps ran on one thread",
+                  file=sys.stderr)  # fmt: skip
     (out_dir / SUMMARY).write_text(json.dumps(summary, indent=2) + "\n")
     results.close()
     if vtk is not None:

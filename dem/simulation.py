@@ -29,6 +29,7 @@ make them) and raises :class:`dem.errors.SimulationError` naming the cause and t
 from __future__ import annotations
 
 import math
+import time
 
 import numba
 import numpy as np
@@ -110,6 +111,8 @@ class Simulation:
             trough.drive_speed + math.sqrt(2 * config.GRAVITY * 10 * r_max)
         )
         self.forces_valid = False
+        #: A :class:`dem.threads.ThreadGuard` (the runner sets one for runs on several threads).
+        self.guard = None
 
     # --- stepping ---------------------------------------------------------------------------
 
@@ -203,9 +206,16 @@ class Simulation:
     def run(self, n_steps: int) -> None:
         """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``."""
         left = int(n_steps)
+        guard = self.guard
         while left > 0:
             chunk = min(left, config.DEM_CHECK_INTERVAL)
-            self._advance(chunk)
+            if guard is None:
+                self._advance(chunk)
+            else:
+                threads = guard.choose()
+                t0 = time.perf_counter()
+                self._advance(chunk)
+                guard.record(threads, chunk, time.perf_counter() - t0)
             left -= chunk
             self.check()
 

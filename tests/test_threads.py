@@ -99,3 +99,45 @@ def test_one_and_two_threads_give_identical_trajectories(tmp_path, monkeypatch, 
     assert np.any(spin != 0.0)
     for name in one:
         assert np.array_equal(one[name], two[name]), f"{name} differs between 1 and 2 threads"
+
+
+def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
+    from dem import threads
+
+    chosen = []
+    monkeypatch.setattr(threads.numba, "set_num_threads", chosen.append)
+    guard = threads.ThreadGuard(2, period=4)
+    slow = {2: 3.0, 1: 1.0}  # seconds per 1000 steps: a busy machine, one thread is faster
+    for _ in range(12):
+        k = guard.choose()
+        guard.record(k, 1000, slow[k])
+    # N threads first, then one thread, then the faster (one), the other probed every 4 chunks
+    assert chosen == [2, 1, 1, 1, 2, 1, 1, 1, 2, 1, 1, 1]
+    assert guard.best == 1 and guard.as_dict()["fraction_on_one_thread"] == 9 / 12
+    chosen.clear()
+    fast = threads.ThreadGuard(2, period=4)
+    for _ in range(8):
+        k = fast.choose()
+        fast.record(k, 1000, {2: 1.0, 1: 1.8}[k])
+    assert chosen[2:] == [2, 2, 1, 2, 2, 2] and fast.best == 2
+
+
+def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
+    """Momentum sums in fixed chunks: the same bits on one thread and on two."""
+    import numba
+    from small_case import write_case
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("needs two numba threads")
+
+    from dem import config
+    from dem.case import load_case
+    from dem.runner import run_case
+
+    case = load_case(write_case(tmp_path / "case"))
+    guarded = run_case(case, tmp_path / "a", threads=2, progress=False, frames=False)
+    assert "thread_guard" in guarded
+    monkeypatch.setattr(config, "DEM_THREAD_GUARD", False)
+    two = run_case(case, tmp_path / "b", threads=2, progress=False, frames=False)
+    one = run_case(case, tmp_path / "c", threads=1, progress=False, frames=False)
+    assert guarded["per_cycle_velocity"] == two["per_cycle_velocity"] == one["per_cycle_velocity"]

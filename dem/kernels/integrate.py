@@ -21,6 +21,7 @@ read by name, shapes in :mod:`dem.state`.
 import math
 
 import numba
+import numpy as np
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
 from dem.kernels.forces import pair_forces, sphere_force
@@ -37,6 +38,10 @@ from dem.kernels.rigid import (
 
 #: status returned by :func:`advance` when all steps were done.
 DONE = OK
+
+#: Fixed chunks of the per-step momentum sums (parallel over chunks, summed in order), so the
+#: reported per-cycle velocity has the same bits on any number of threads.
+MOMENTUM_CHUNKS = 256
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -65,14 +70,44 @@ def forces_kick(
     dt v_{n+3/2}.
 
     Returns:
-        sum_i m_i v_x,i after the (second) half kick, kg m/s.
+        sum_i m_i v_x,i after the (second) half kick, kg m/s, summed over ``MOMENTUM_CHUNKS``
+        fixed chunks in order: the same bits on any number of threads (the trajectory never
+        depended on it; the reported per-cycle velocity now does not either).
 
     """
     x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
     part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
     h = 0.5 * dt
+    chunks = min(MOMENTUM_CHUNKS, max(n, 1))
+    partial = np.zeros(chunks)
+    for c in numba.prange(chunks):
+        lo = c * n // chunks
+        hi = (c + 1) * n // chunks
+        partial[c] = _forces_kick_range(
+            lo, hi, model, p, x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia,
+            wall_hist, half_width, dt, h, part_start, part_pairs, pf, pt, ax, ay, az, rotation,
+            kick, next_drift,
+        )  # fmt: skip
+    return _ordered_sum(partial)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def _ordered_sum(values):
+    """Sum in index order: the same bits whatever the number of threads."""
+    total = 0.0
+    for k in range(values.shape[0]):
+        total += values[k]
+    return total
+
+
+@numba.njit(inline="always")
+def _forces_kick_range(
+    lo, hi, model, p, x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist,
+    half_width, dt, h, part_start, part_pairs, pf, pt, ax, ay, az, rotation, kick, next_drift,
+):  # fmt: skip
+    """:func:`forces_kick` for spheres lo..hi-1, in order; returns their sum of m v_x."""
     px = 0.0
-    for i in numba.prange(n):
+    for i in range(lo, hi):
         f = sphere_force(
             i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
             part_pairs, pf, pt, ax, ay, az,
@@ -253,22 +288,11 @@ def _bodies_half_step(dt, drift, rotation, bod, sph, length):
     )
 
 
-@numba.njit(**NUMBA_PARALLEL_OPTIONS)
-def bodies_forces_kick(
-    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
+@numba.njit(inline="always")
+def _bodies_range(
+    lo, hi, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
 ):  # fmt: skip
-    """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
-
-    Body b gathers the forces of its members (:func:`dem.kernels.forces.sphere_force`, walls, no
-    body force), reduces them to F_b, T_b about X_b as :func:`dem.kernels.rigid.reduce_to_bodies`
-    does (same order of sums), adds M a_body, takes the closing half kick and, with
-    ``next_drift``, the next step's half kick, drift, free rotation and wrap; then places its
-    members. Each body writes only its own rows and its members' rows: race-free.
-
-    Returns:
-        sum_b M_b V_x,b after the closing half kick, kg m/s.
-
-    """
+    """:func:`bodies_forces_kick` for bodies lo..hi-1, in order; returns their sum of M V_x."""
     x, v, omega, force, torque, radius, mass, wall_hist = (
         sph.x, sph.v, sph.omega, sph.force, sph.torque, sph.radius, sph.mass, sph.wall_hist
     )  # fmt: skip
@@ -280,7 +304,7 @@ def bodies_forces_kick(
         bod.force, bod.torque, bod.omega, bod.start, bod.members, bod.offsets
     )  # fmt: skip
     px = 0.0
-    for b in numba.prange(body_x.shape[0]):
+    for b in range(lo, hi):
         fx = fy = fz = 0.0
         tx = ty = tz = 0.0
         for e in range(start[b], start[b + 1]):
@@ -321,6 +345,34 @@ def bodies_forces_kick(
             b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega
         )  # fmt: skip
     return px
+
+
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def bodies_forces_kick(
+    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
+):  # fmt: skip
+    """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
+
+    Body b gathers the forces of its members (:func:`dem.kernels.forces.sphere_force`, walls, no
+    body force), reduces them to F_b, T_b about X_b as :func:`dem.kernels.rigid.reduce_to_bodies`
+    does (same order of sums), adds M a_body, takes the closing half kick and, with
+    ``next_drift``, the next step's half kick, drift, free rotation and wrap; then places its
+    members. Each body writes only its own rows and its members' rows: race-free.
+
+    Returns:
+        sum_b M_b V_x,b after the closing half kick, kg m/s, summed over ``MOMENTUM_CHUNKS``
+        fixed chunks in order: the same bits on any number of threads.
+
+    """
+    n_bodies = bod.x.shape[0]
+    chunks = min(MOMENTUM_CHUNKS, max(n_bodies, 1))
+    partial = np.zeros(chunks)
+    for c in numba.prange(chunks):
+        partial[c] = _bodies_range(
+            c * n_bodies // chunks, (c + 1) * n_bodies // chunks, model, p, sph, nb, half_width,
+            dt, ax, ay, az, rotation, next_drift, bod, length,
+        )  # fmt: skip
+    return _ordered_sum(partial)
 
 
 @numba.njit(**NUMBA_OPTIONS)
