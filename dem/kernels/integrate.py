@@ -80,14 +80,40 @@ def forces_kick(
     h = 0.5 * dt
     chunks = min(MOMENTUM_CHUNKS, max(n, 1))
     partial = np.zeros(chunks)
-    for c in numba.prange(chunks):
-        lo = c * n // chunks
-        hi = (c + 1) * n // chunks
-        partial[c] = _forces_kick_range(
-            lo, hi, model, p, x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia,
-            wall_hist, half_width, dt, h, part_start, part_pairs, pf, pt, ax, ay, az, rotation,
-            kick, next_drift,
-        )  # fmt: skip
+    for chunk in numba.prange(chunks):
+        px = 0.0
+        for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
+            f = sphere_force(
+                i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+                part_pairs, pf, pt, ax, ay, az,
+            )  # fmt: skip
+            force[i, 0] = f[0]
+            force[i, 1] = f[1]
+            force[i, 2] = f[2]
+            torque[i, 0] = f[3]
+            torque[i, 1] = f[4]
+            torque[i, 2] = f[5]
+            if kick:
+                a = h * inv_mass[i]
+                v[i, 0] += a * f[0]
+                v[i, 1] += a * f[1]
+                v[i, 2] += a * f[2]
+                if rotation:
+                    b = h * inv_inertia[i]
+                    omega[i, 0] += b * f[3]
+                    omega[i, 1] += b * f[4]
+                    omega[i, 2] += b * f[5]
+            px += mass[i] * v[i, 0]
+            if next_drift:
+                a = h * inv_mass[i]
+                for c in range(3):
+                    v[i, c] += a * f[c]
+                    x[i, c] += dt * v[i, c]
+                if rotation:
+                    b = h * inv_inertia[i]
+                    for c in range(3):
+                        omega[i, c] += b * f[3 + c]
+        partial[chunk] = px
     return _ordered_sum(partial)
 
 
@@ -98,47 +124,6 @@ def _ordered_sum(values):
     for k in range(values.shape[0]):
         total += values[k]
     return total
-
-
-@numba.njit(inline="always")
-def _forces_kick_range(
-    lo, hi, model, p, x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist,
-    half_width, dt, h, part_start, part_pairs, pf, pt, ax, ay, az, rotation, kick, next_drift,
-):  # fmt: skip
-    """:func:`forces_kick` for spheres lo..hi-1, in order; returns their sum of m v_x."""
-    px = 0.0
-    for i in range(lo, hi):
-        f = sphere_force(
-            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-            part_pairs, pf, pt, ax, ay, az,
-        )  # fmt: skip
-        force[i, 0] = f[0]
-        force[i, 1] = f[1]
-        force[i, 2] = f[2]
-        torque[i, 0] = f[3]
-        torque[i, 1] = f[4]
-        torque[i, 2] = f[5]
-        if kick:
-            a = h * inv_mass[i]
-            v[i, 0] += a * f[0]
-            v[i, 1] += a * f[1]
-            v[i, 2] += a * f[2]
-            if rotation:
-                b = h * inv_inertia[i]
-                omega[i, 0] += b * f[3]
-                omega[i, 1] += b * f[4]
-                omega[i, 2] += b * f[5]
-        px += mass[i] * v[i, 0]
-        if next_drift:
-            a = h * inv_mass[i]
-            for c in range(3):
-                v[i, c] += a * f[c]
-                x[i, c] += dt * v[i, c]
-            if rotation:
-                b = h * inv_inertia[i]
-                for c in range(3):
-                    omega[i, c] += b * f[3 + c]
-    return px
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -288,65 +273,6 @@ def _bodies_half_step(dt, drift, rotation, bod, sph, length):
     )
 
 
-@numba.njit(inline="always")
-def _bodies_range(
-    lo, hi, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
-):  # fmt: skip
-    """:func:`bodies_forces_kick` for bodies lo..hi-1, in order; returns their sum of M V_x."""
-    x, v, omega, force, torque, radius, mass, wall_hist = (
-        sph.x, sph.v, sph.omega, sph.force, sph.torque, sph.radius, sph.mass, sph.wall_hist
-    )  # fmt: skip
-    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
-    body_x, body_v, q, ang_mom, inv_mass, body_mass, moments = (
-        bod.x, bod.v, bod.q, bod.ang_mom, bod.inv_mass, bod.mass, bod.moments
-    )  # fmt: skip
-    body_force, body_torque, body_omega, start, members, offsets = (
-        bod.force, bod.torque, bod.omega, bod.start, bod.members, bod.offsets
-    )  # fmt: skip
-    px = 0.0
-    for b in range(lo, hi):
-        fx = fy = fz = 0.0
-        tx = ty = tz = 0.0
-        for e in range(start[b], start[b + 1]):
-            s = members[e]
-            f = sphere_force(
-                s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-                part_pairs, pf, pt, 0.0, 0.0, 0.0,
-            )  # fmt: skip
-            for c in range(3):
-                force[s, c] = f[c]
-                torque[s, c] = f[3 + c]
-            rx, ry, rz = member_arm(x, s, body_x, b, length)
-            fx += f[0]
-            fy += f[1]
-            fz += f[2]
-            tx += f[3] + ry * f[2] - rz * f[1]
-            ty += f[4] + rz * f[0] - rx * f[2]
-            tz += f[5] + rx * f[1] - ry * f[0]
-        m = body_mass[b]
-        body_force[b, 0] = fx + m * ax
-        body_force[b, 1] = fy + m * ay
-        body_force[b, 2] = fz + m * az
-        body_torque[b, 0] = tx
-        body_torque[b, 1] = ty
-        body_torque[b, 2] = tz
-        kick_drift_one(
-            b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
-            moments, body_omega,
-        )  # fmt: skip
-        px += m * body_v[b, 0]
-        if next_drift:
-            kick_drift_one(
-                b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
-                inv_mass, moments, body_omega,
-            )  # fmt: skip
-            body_x[b, 0] = wrap(body_x[b, 0], length)
-        place_members_of(
-            b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega
-        )  # fmt: skip
-    return px
-
-
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def bodies_forces_kick(
     model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
@@ -364,14 +290,62 @@ def bodies_forces_kick(
         fixed chunks in order: the same bits on any number of threads.
 
     """
-    n_bodies = bod.x.shape[0]
+    x, v, omega, force, torque, radius, mass, wall_hist = (
+        sph.x, sph.v, sph.omega, sph.force, sph.torque, sph.radius, sph.mass, sph.wall_hist
+    )  # fmt: skip
+    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
+    body_x, body_v, q, ang_mom, inv_mass, body_mass, moments = (
+        bod.x, bod.v, bod.q, bod.ang_mom, bod.inv_mass, bod.mass, bod.moments
+    )  # fmt: skip
+    body_force, body_torque, body_omega, start, members, offsets = (
+        bod.force, bod.torque, bod.omega, bod.start, bod.members, bod.offsets
+    )  # fmt: skip
+    n_bodies = body_x.shape[0]
     chunks = min(MOMENTUM_CHUNKS, max(n_bodies, 1))
     partial = np.zeros(chunks)
-    for c in numba.prange(chunks):
-        partial[c] = _bodies_range(
-            c * n_bodies // chunks, (c + 1) * n_bodies // chunks, model, p, sph, nb, half_width,
-            dt, ax, ay, az, rotation, next_drift, bod, length,
-        )  # fmt: skip
+    for chunk in numba.prange(chunks):
+        px = 0.0
+        for b in range(chunk * n_bodies // chunks, (chunk + 1) * n_bodies // chunks):
+            fx = fy = fz = 0.0
+            tx = ty = tz = 0.0
+            for e in range(start[b], start[b + 1]):
+                s = members[e]
+                f = sphere_force(
+                    s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+                    part_pairs, pf, pt, 0.0, 0.0, 0.0,
+                )  # fmt: skip
+                for c in range(3):
+                    force[s, c] = f[c]
+                    torque[s, c] = f[3 + c]
+                rx, ry, rz = member_arm(x, s, body_x, b, length)
+                fx += f[0]
+                fy += f[1]
+                fz += f[2]
+                tx += f[3] + ry * f[2] - rz * f[1]
+                ty += f[4] + rz * f[0] - rx * f[2]
+                tz += f[5] + rx * f[1] - ry * f[0]
+            m = body_mass[b]
+            body_force[b, 0] = fx + m * ax
+            body_force[b, 1] = fy + m * ay
+            body_force[b, 2] = fz + m * az
+            body_torque[b, 0] = tx
+            body_torque[b, 1] = ty
+            body_torque[b, 2] = tz
+            kick_drift_one(
+                b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
+                inv_mass, moments, body_omega,
+            )  # fmt: skip
+            px += m * body_v[b, 0]
+            if next_drift:
+                kick_drift_one(
+                    b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
+                    inv_mass, moments, body_omega,
+                )  # fmt: skip
+                body_x[b, 0] = wrap(body_x[b, 0], length)
+            place_members_of(
+                b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega
+            )  # fmt: skip
+        partial[chunk] = px
     return _ordered_sum(partial)
 
 
