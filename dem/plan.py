@@ -245,18 +245,37 @@ def _scale(rate_used: float, used: int, threads: int) -> float:
     return rate_used * speed(threads) / speed(used)
 
 
+def grain_mass_radius(case) -> tuple[float, float]:
+    """A grain's mass, kg, and its largest sphere radius, m (the grain-floor impact's)."""
+    pt = case.particles
+    if pt.shape == "sphere":
+        return case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3, pt.radius
+    return pt.grain.mass, float(max(pt.grain.radii))
+
+
+def linear_equivalent_stiffness(case) -> float:
+    """The linear k_n, N/m, whose contact lasts as long as the case's Hertz impact.
+
+    The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2.
+    """
+    from dem.kernels import contacts
+
+    mass, radius = grain_mass_radius(case)
+    c = case.contact
+    y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
+    speed = case.drive.amplitude * case.drive.omega
+    t_c = contacts.hertz_collision_time(y_star, radius, mass, speed)
+    return mass * (math.pi / t_c) ** 2
+
+
 def equivalent_youngs_modulus(case) -> float:
     """The study's stiffness axis: the case's Young's modulus, Pa.
 
     For the linear law: the modulus whose Hertz grain-floor impact at A omega lasts as long as
     the linear contact, pi sqrt(m / k_n).
     """
-    c, pt = case.contact, case.particles
-    if pt.shape == "sphere":
-        mass = case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
-        radius = pt.radius
-    else:
-        mass, radius = pt.grain.mass, float(max(pt.grain.radii))
+    c = case.contact
+    mass, radius = grain_mass_radius(case)
     if c.model == "hertz_mindlin":
         return float(c.youngs_modulus)
     t_c = math.pi * math.sqrt(mass / c.stiffness)

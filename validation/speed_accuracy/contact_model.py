@@ -10,26 +10,15 @@ Coulomb law its k_t and gamma_t are derived from eps_t = 0.8, under the LIGGGHTS
 k_t / k_n = 2/7. The LIGGGHTS law with Hertz takes Mindlin's k_t, as a LIGGGHTS deck does.
 """
 
-import math
-
 from study import CASES, FILL_SEEDS, Point, default_points, load, main
 
-from dem.kernels import contacts
+from dem import plan
 
 
 def linear_stiffness(case_name: str) -> float:
-    """k_n, N/m, with the contact time of a Hertz grain-floor impact at A omega."""
+    """k_n, N/m (3 digits), with the contact time of a Hertz grain-floor impact at A omega."""
     case = load(Point("contact_model", case_name, "base", "base"))
-    pt, c = case.particles, case.contact
-    if pt.shape == "sphere":
-        mass = case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
-        radius = pt.radius
-    else:
-        mass, radius = pt.grain.mass, float(max(pt.grain.radii))
-    y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
-    speed = case.drive.amplitude * case.drive.omega
-    t_c = contacts.hertz_collision_time(y_star, radius, mass, speed)
-    return float(f"{mass * (math.pi / t_c) ** 2:.3g}")
+    return float(f"{plan.linear_equivalent_stiffness(case):.3g}")
 
 
 def points(case_name: str) -> list[Point]:
