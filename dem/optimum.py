@@ -223,7 +223,10 @@ def bulk_optimum(
     key = "mean_velocity_norm" if objective == "velocity_norm" else "mean_velocity"
     out.mkdir(parents=True, exist_ok=True)
     counter = [0]
-    client, cluster = _client(scheduler, workers)
+    from dem import config
+    from dem.sweep import dask_client
+
+    client, cluster = dask_client(scheduler, workers or config.default_threads(), "dem optimum")
 
     def evaluate(batch):
         from dem.sweep import run_point
@@ -263,22 +266,6 @@ def bulk_optimum(
     _write_csv(out / "optimum.csv", result.samples, over, objective)
     _plot(out / "optimum.png", result, pm, over, objective, case.name)
     return summary
-
-
-def _client(scheduler, workers):
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError:  # pragma: no cover
-        raise InputError(
-            "dem optimum", "dask", "the sweep extra: pip install 'dem[sweep]'"
-        ) from None
-    if scheduler:
-        return Client(scheduler), None
-    from dem import config
-
-    cluster = LocalCluster(n_workers=workers or config.default_threads(), threads_per_worker=1,
-                           processes=True, dashboard_address=None)  # fmt: skip
-    return Client(cluster), cluster
 
 
 def _write_csv(path: Path, samples, over: str, objective: str) -> None:

@@ -174,10 +174,6 @@ def run_sweep(
     """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``."""
     case_dir, out = Path(case_dir), Path(out)
     points = plan_points(case_dir, sets, out)
-    try:
-        from dask.distributed import Client, LocalCluster, as_completed
-    except ImportError:  # pragma: no cover - the message is the point
-        raise InputError("dem sweep", "dask", "the sweep extra: pip install 'dem[sweep]'") from None
     out.mkdir(parents=True, exist_ok=True)
     todo = [p for p in points if status(p) != "done"]
     if todo:
@@ -185,16 +181,12 @@ def run_sweep(
     skipped = len(points) - len(todo)
     failed: dict[str, str] = {}
     if todo:
-        cluster = None
-        if scheduler:
-            client = Client(scheduler)
-        else:
-            from dem import config
+        from dask.distributed import as_completed
 
-            n = workers or max(1, config.default_threads() // max(threads, 1))
-            cluster = LocalCluster(n_workers=min(n, len(todo)), threads_per_worker=1,
-                                   processes=True, dashboard_address=None)  # fmt: skip
-            client = Client(cluster)
+        from dem import config
+
+        n = workers or max(1, config.default_threads() // max(threads, 1))
+        client, cluster = dask_client(scheduler, min(n, len(todo)), "dem sweep")
         try:
             futures = {
                 client.submit(run_point, str(case_dir), p.overrides, str(p.folder), cycles,
@@ -226,6 +218,23 @@ def run_sweep(
     plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
     return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
             "failed": failed, "csv": str(csv_path)}  # fmt: skip
+
+
+def dask_client(scheduler: str | None, workers: int, command: str):
+    """A Dask client and its local cluster (None with ``scheduler``); close both.
+
+    The client is of the running scheduler at ``scheduler``, or of a new local cluster of
+    ``workers`` one-thread processes.
+    """
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:  # pragma: no cover - the message is the point
+        raise InputError(command, "dask", "the sweep extra: pip install 'dem[sweep]'") from None
+    if scheduler:
+        return Client(scheduler), None
+    cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
+                           dashboard_address=None)  # fmt: skip
+    return Client(cluster), cluster
 
 
 def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
