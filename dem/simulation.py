@@ -163,7 +163,7 @@ class Simulation:
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
             self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs, self.geom,
-            self.drive_time, self.gravity, self._drive(), False, False,
+            self.drive_time, self.gravity, self._drive(), False, False, False,
         )  # fmt: skip
         self.forces_valid = True
 
@@ -181,20 +181,21 @@ class Simulation:
             self.compute_forces()
         done = 0
         resume = False
+        serial = numba.get_num_threads() == 1
         while done < n_steps:
             if self.bodies is None:
                 status, steps, need = advance(
                     n_steps - done, self.step_index - self.drive_start_step, resume,
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
                     self.spheres.as_layout(), self.spheres.body, self.pairs.as_layout(),
-                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
+                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
                 )  # fmt: skip
             else:
                 status, steps, need = advance_clumps(
                     n_steps - done, self.step_index - self.drive_start_step, resume,
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
                     self.spheres.as_layout(), self.bodies.as_layout(), self.pairs.as_layout(),
-                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats,
+                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
                 )  # fmt: skip
             done += steps
             self.step_index += steps

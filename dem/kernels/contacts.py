@@ -259,7 +259,7 @@ def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
     return ftx, fty, ftz, sx, sy, sz
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def contact_force(
     model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
     ci, cj, m_eff, r_eff, hist, k, dt,

@@ -1,6 +1,6 @@
 """The pair loop and the wall contacts: forces and torques on every sphere.
 
-Race-free by construction, no atomics:
+Race-free by construction, no atomics. On several threads:
 
 1. :func:`pair_forces` runs in parallel over the pair list; pair k writes only row k of
    ``out_pf`` (force on i; j gets -out_pf[k]), rows 2k and 2k + 1 of ``out_pt`` (torques on i
@@ -10,6 +10,11 @@ Race-free by construction, no atomics:
    index of :mod:`dem.kernels.neighbours` (entry e = 2 k + role: force sign 1 - 2 role, torque
    row e, so the gather has no branch), adds its wall contacts (history rows 3 i + w, its own)
    and the body force m a_body. Each pair is computed once.
+
+On one thread, :func:`pair_forces_serial` adds each pair's force and torques to its two spheres
+directly (no per-pair rows, no gather: the rows' memory is never touched) and the sphere loop
+adds only the walls (:func:`wall_forces`). Every sphere's sum has the same terms in the same
+order both ways, so one thread and several give the same bits (tested).
 
 Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
 wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
@@ -29,18 +34,52 @@ from dem.kernels.periodic import minimum_image
 N_WALLS = 3
 
 
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, half, dt):
+    """Force on i and torques on i and j of pair k = (i, j); zeros (history reset) if apart.
+
+    Returns:
+        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz) in N and N m.
+
+    """
+    dx = minimum_image(x[i, 0] - x[j, 0], length, half)
+    dy = x[i, 1] - x[j, 1]
+    dz = x[i, 2] - x[j, 2]
+    d2 = dx * dx + dy * dy + dz * dz
+    ri = radius[i]
+    rj = radius[j]
+    rsum = ri + rj
+    if d2 >= rsum * rsum:
+        hist[k, 0] = 0.0
+        hist[k, 1] = 0.0
+        hist[k, 2] = 0.0
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    delta = rsum - d
+    inv_d = 1.0 / d
+    mi = mass[i]
+    mj = mass[j]
+    f = contact_force(
+        model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
+        v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
+        omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
+        ri - 0.5 * delta, rj - 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
+    )  # fmt: skip
+    return f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]
+
+
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def pair_forces(
     model, p, x, v, omega, radius, mass, pair_i, pair_j, n_pairs, hist, length, dt, out_pf, out_pt,
 ):  # fmt: skip
-    """Contact force and torques of each pair of the list (zero and history reset if apart).
+    """Contact force and torques of each pair of the list into per-pair rows (parallel).
 
     Args:
         model, p: Contact law id and parameters (:mod:`dem.kernels.contacts`).
         x, v, omega: Positions (m), velocities (m/s), spins (rad/s), shape (n, 3).
         radius, mass: Shape (n,), m and kg.
         pair_i, pair_j: Pairs i < j, shape (cap,); the first ``n_pairs`` are valid.
-        hist: Tangential elongation per pair, shape (cap, 3), m; updated.
+        hist: Tangential elongation per pair, shape (cap, 3), m; updated (reset if apart).
         length: Period in x, m (minimum image).
         dt: Time step, s.
         out_pf: Force on i per pair, shape (cap, 3), N.
@@ -49,33 +88,9 @@ def pair_forces(
     """
     half = 0.5 * length
     for k in numba.prange(n_pairs):
-        i = pair_i[k]
-        j = pair_j[k]
-        dx = minimum_image(x[i, 0] - x[j, 0], length, half)
-        dy = x[i, 1] - x[j, 1]
-        dz = x[i, 2] - x[j, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        ri = radius[i]
-        rj = radius[j]
-        rsum = ri + rj
-        if d2 >= rsum * rsum:
-            for c in range(3):
-                hist[k, c] = 0.0
-                out_pf[k, c] = 0.0
-                out_pt[2 * k, c] = 0.0
-                out_pt[2 * k + 1, c] = 0.0
-            continue
-        d = math.sqrt(d2)
-        delta = rsum - d
-        inv_d = 1.0 / d
-        mi = mass[i]
-        mj = mass[j]
-        f = contact_force(
-            model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
-            v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
-            omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
-            ri - 0.5 * delta, rj - 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
-        )  # fmt: skip
+        f = pair_contact(
+            model, p, x, v, omega, radius, mass, pair_i[k], pair_j[k], hist, k, length, half, dt
+        )
         out_pf[k, 0] = f[0]
         out_pf[k, 1] = f[1]
         out_pf[k, 2] = f[2]
@@ -87,7 +102,52 @@ def pair_forces(
         out_pt[2 * k + 1, 2] = f[8]
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(**NUMBA_PARALLEL_OPTIONS)
+def pair_forces_serial(
+    model, p, x, v, omega, radius, mass, pair_i, pair_j, n_pairs, hist, length, dt, n, ax, ay, az,
+    force, torque,
+):  # fmt: skip
+    """One thread: ``force`` = m a + the pairs' forces, ``torque`` = the pairs' torques.
+
+    Pair k adds its force to i and subtracts it from j directly, in pair order. Each sphere's
+    pairs come in increasing k either way, so the sums have the same terms in the same order
+    as :func:`pair_forces` followed by the gather of :func:`sphere_force`: the same bits, without
+    the per-pair rows and the gather.
+
+    The loop is the single iteration of a ``prange(1)``: one thread runs it whatever the thread
+    count, and numba compiles a parallel loop's body with its arrays marked as not aliasing each
+    other, which made this loop twice as fast as the same loop in a plain function (measured in
+    validation/performance/README.md, "Where a step's time goes").
+    """
+    for _ in numba.prange(1):
+        for i in range(n):
+            m = mass[i]
+            force[i, 0] = m * ax
+            force[i, 1] = m * ay
+            force[i, 2] = m * az
+            torque[i, 0] = 0.0
+            torque[i, 1] = 0.0
+            torque[i, 2] = 0.0
+        half = 0.5 * length
+        for k in range(n_pairs):
+            i = pair_i[k]
+            j = pair_j[k]
+            f = pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, half, dt)
+            force[i, 0] += f[0]
+            force[i, 1] += f[1]
+            force[i, 2] += f[2]
+            force[j, 0] -= f[0]
+            force[j, 1] -= f[1]
+            force[j, 2] -= f[2]
+            torque[i, 0] += f[3]
+            torque[i, 1] += f[4]
+            torque[i, 2] += f[5]
+            torque[j, 0] += f[6]
+            torque[j, 1] += f[7]
+            torque[j, 2] += f[8]
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def sphere_force(
     i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, part_pairs,
     pf, pt, ax, ay, az,
@@ -115,7 +175,29 @@ def sphere_force(
         tx += pt[row, 0]
         ty += pt[row, 1]
         tz += pt[row, 2]
+    return wall_forces(
+        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz
+    )
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def wall_forces(
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """(fx, ..., tz) plus the forces and torques of sphere i's wall contacts, N and N m.
+
+    Most spheres touch no wall: they only reset their wall history (r - gap <= 0 exactly when
+    gap >= r, so the early exit is the loop's own test). Without it the loop, with three inlined
+    contact laws in it, cost 50 ns a sphere touching nothing (validation/performance/README.md).
+    """
     r = radius[i]
+    m = mass[i]
+    if x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r:
+        for row in range(N_WALLS * i, N_WALLS * i + N_WALLS):
+            wall_hist[row, 0] = 0.0
+            wall_hist[row, 1] = 0.0
+            wall_hist[row, 2] = 0.0
+        return fx, fy, fz, tx, ty, tz
     for w in range(N_WALLS):
         nz = 0.0
         ny = 0.0

@@ -24,7 +24,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.forces import pair_forces, sphere_force
+from dem.kernels.forces import pair_forces, pair_forces_serial, sphere_force, wall_forces
 from dem.kernels.neighbours import OK, max_displacement_sq, rebuild
 from dem.kernels.periodic import wrap
 from dem.kernels.rigid import (
@@ -61,9 +61,12 @@ def kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotatio
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def forces_kick(
-    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift,
+    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift, gathered,
 ):  # fmt: skip
     """Gather forces per sphere into ``force``/``torque``; then (if ``kick``) the half kick.
+
+    With ``gathered``, ``force``/``torque`` already hold m a_body plus the pairs
+    (:func:`dem.kernels.forces.pair_forces_serial`) and only the walls are added.
 
     With ``next_drift`` the next step's first half kick and drift follow in the same loop (one
     parallel region less per step): v_{n+3/2} = v_{n+1} + dt/2 F_{n+1}/m, x_{n+2} = x_{n+1} +
@@ -83,10 +86,17 @@ def forces_kick(
     for chunk in numba.prange(chunks):
         px = 0.0
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
-            f = sphere_force(
-                i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-                part_pairs, pf, pt, ax, ay, az,
-            )  # fmt: skip
+            if gathered:
+                f = wall_forces(
+                    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                    force[i, 0], force[i, 1], force[i, 2], torque[i, 0], torque[i, 1],
+                    torque[i, 2],
+                )  # fmt: skip
+            else:
+                f = sphere_force(
+                    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+                    part_pairs, pf, pt, ax, ay, az,
+                )  # fmt: skip
             force[i, 0] = f[0]
             force[i, 1] = f[1]
             force[i, 2] = f[2]
@@ -135,18 +145,29 @@ def body_acceleration(t, gravity, drive):
 
 @numba.njit(**NUMBA_OPTIONS)
 def evaluate_forces(
-    n, model, p, rotation, sph, nb, n_pairs, geom, t, gravity, drive, kick, next_drift,
+    n, model, p, rotation, sph, nb, n_pairs, geom, t, gravity, drive, kick, next_drift, serial,
 ):  # fmt: skip
-    """Pair forces then per-sphere gather at time t (see :func:`forces_kick`); sum m v_x."""
+    """Pair forces then per-sphere gather at time t (see :func:`forces_kick`); sum m v_x.
+
+    ``serial`` (one thread): the pairs add to the spheres directly
+    (:func:`dem.kernels.forces.pair_forces_serial`), the same bits as the parallel pair loop and
+    gather.
+    """
     x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
     length, width, dt = geom.length, geom.width, geom.dt
-    pair_forces(
-        model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length, dt,
-        nb.pf, nb.pt,
-    )  # fmt: skip
     ax, ay, az = body_acceleration(t, gravity, drive)
+    if serial:
+        pair_forces_serial(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
+            dt, n, ax, ay, az, force, torque,
+        )  # fmt: skip
+    else:
+        pair_forces(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
+            dt, nb.pf, nb.pt,
+        )  # fmt: skip
     return forces_kick(
-        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift
+        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial
     )
 
 
@@ -171,7 +192,7 @@ def build(n, sph, body, nb, counters, geom):
 @numba.njit(**NUMBA_OPTIONS)
 def advance(
     n_steps, step0, resume, n, model, p, rotation, sph, body, nb, counters, geom, gravity, drive,
-    out_stats,
+    out_stats, serial,
 ):  # fmt: skip
     """Advance ``n_steps`` velocity-Verlet steps from step index ``step0`` (t = step dt).
 
@@ -187,6 +208,7 @@ def advance(
         gravity: float64 (3,), m/s^2, trough frame.
         drive: float64 (5,): A omega^2 (m/s^2), omega (rad/s), e_x, e_y, e_z.
         out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
+        serial: True on one thread: pair forces added to the spheres directly (same bits).
 
     Returns:
         (status, steps_done, need): status DONE, or a neighbour-list overflow code with the
@@ -208,7 +230,7 @@ def advance(
         t = (step0 + s + 1) * dt
         px = evaluate_forces(
             n, model, p, rotation, sph, nb, counters[0], geom, t, gravity, drive, True,
-            s < n_steps - 1,
+            s < n_steps - 1, serial,
         )  # fmt: skip
         out_stats[0] += px
         out_stats[1] += 1.0
@@ -251,7 +273,7 @@ def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, driv
         model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length, dt,
         nb.pf, nb.pt,
     )  # fmt: skip
-    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False)
+    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, False)
     reduce_to_bodies(
         sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
     )  # fmt: skip
@@ -275,7 +297,7 @@ def _bodies_half_step(dt, drift, rotation, bod, sph, length):
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def bodies_forces_kick(
-    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length,
+    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length, gathered,
 ):  # fmt: skip
     """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
 
@@ -283,7 +305,9 @@ def bodies_forces_kick(
     body force), reduces them to F_b, T_b about X_b as :func:`dem.kernels.rigid.reduce_to_bodies`
     does (same order of sums), adds M a_body, takes the closing half kick and, with
     ``next_drift``, the next step's half kick, drift, free rotation and wrap; then places its
-    members. Each body writes only its own rows and its members' rows: race-free.
+    members. Each body writes only its own rows and its members' rows: race-free. With
+    ``gathered``, the members' ``force``/``torque`` already hold their pairs
+    (:func:`dem.kernels.forces.pair_forces_serial` with a = 0) and only the walls are added.
 
     Returns:
         sum_b M_b V_x,b after the closing half kick, kg m/s, summed over ``MOMENTUM_CHUNKS``
@@ -310,10 +334,17 @@ def bodies_forces_kick(
             tx = ty = tz = 0.0
             for e in range(start[b], start[b + 1]):
                 s = members[e]
-                f = sphere_force(
-                    s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-                    part_pairs, pf, pt, 0.0, 0.0, 0.0,
-                )  # fmt: skip
+                if gathered:
+                    f = wall_forces(
+                        s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                        force[s, 0], force[s, 1], force[s, 2], torque[s, 0], torque[s, 1],
+                        torque[s, 2],
+                    )  # fmt: skip
+                else:
+                    f = sphere_force(
+                        s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                        part_start, part_pairs, pf, pt, 0.0, 0.0, 0.0,
+                    )  # fmt: skip
                 for c in range(3):
                     force[s, c] = f[c]
                     torque[s, c] = f[3 + c]
@@ -352,7 +383,7 @@ def bodies_forces_kick(
 @numba.njit(**NUMBA_OPTIONS)
 def advance_clumps(
     n_steps, step0, resume, n, model, p, rotation, sph, bod, nb, counters, geom, gravity, drive,
-    out_stats,
+    out_stats, serial,
 ):  # fmt: skip
     """Advance ``n_steps`` steps of rigid clumps (arguments and return as :func:`advance`).
 
@@ -361,7 +392,7 @@ def advance_clumps(
     1. bodies: V += dt/2 F/M, L += dt/2 T (rotation on), X += dt V, q <- Phi_free(dt) q, X_x
        wrapped into [0, length); members x, v, spin from the bodies;
     2. neighbour list rebuilt if a member moved more than skin/2 (same-body pairs excluded);
-    3. pair forces (parallel over pairs);
+    3. pair forces (parallel over pairs; one thread: added to the members directly);
     4. per body (:func:`bodies_forces_kick`, parallel over bodies): gather of the members with
        the walls (no body force per member), reduction to F_b, T_b about X_b, plus M a_body at
        the centre of mass; V += dt/2 F/M, L += dt/2 T; out_stats += sum M V_x; members placed
@@ -381,14 +412,20 @@ def advance_clumps(
             if status != OK:
                 return status, s, need
         t = (step0 + s + 1) * dt
-        pair_forces(
-            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist, length,
-            dt, nb.pf, nb.pt,
-        )  # fmt: skip
+        if serial:
+            pair_forces_serial(
+                model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist,
+                length, dt, n, 0.0, 0.0, 0.0, sph.force, sph.torque,
+            )  # fmt: skip
+        else:
+            pair_forces(
+                model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist,
+                length, dt, nb.pf, nb.pt,
+            )  # fmt: skip
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(
             model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, s < n_steps - 1, bod,
-            length,
+            length, serial,
         )  # fmt: skip
         out_stats[1] += 1.0
     return DONE, n_steps, 0

@@ -344,7 +344,7 @@ def _omega_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2):
     return _rotate(w, qx, qy, qz, p0 / i0, p1 / i1, p2 / i2)
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def _store_omega(b, q, ang_mom, inertia, out_omega):
     """out_omega[b] = R I^-1 R^T L of body b."""
     o0, o1, o2 = _omega_one(
@@ -461,7 +461,7 @@ def update_members(
 
 
 # --- one body at a time (for fused loops over bodies, e.g. dem.kernels.integrate) -------------
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def kick_drift_one(
     b, dt, drift, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass, inertia,
     out_omega,
@@ -487,7 +487,7 @@ def kick_drift_one(
     _store_omega(b, q, ang_mom, inertia, out_omega)
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def place_members_of(
     b, body_x, body_v, q, body_omega, offsets, body_start, body_members, out_x, out_v, out_omega,
 ):  # fmt: skip
