@@ -66,8 +66,28 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     rng = np.random.default_rng(case.run.seed)
     if pt.shape == "sphere":
         positions, height = random_fill(pt.count, pt.radius, t.length, t.width, rng)
-        return positions, None, height
-    return random_fill_clumps(pt.count, pt.grain, t.length, t.width, rng)
+        order = spatial_order(positions, 2.0 * pt.radius, t.width)
+        return positions[order], None, height
+    positions, quats, height = random_fill_clumps(pt.count, pt.grain, t.length, t.width, rng)
+    order = spatial_order(positions, 2.0 * pt.grain.bounding_radius, t.width)
+    return positions[order], quats[order], height
+
+
+def spatial_order(positions: np.ndarray, cell: float, width: float) -> np.ndarray:
+    """Grain order by cells of edge ``cell``: x slowest, then y, then z (a permutation).
+
+    Random placement numbers grains in random spatial order. Numbered along the trough instead,
+    neighbours have nearby indices: the step reads nearby memory, and the threads, which split
+    the grains into contiguous index ranges, each take a slab of the section (the bed moves as
+    a whole, so the slabs persist) and seldom touch each other's grains. On two threads the
+    sphere bed stepped 1.4 times faster for it (validation/performance/README.md). O(N log N).
+    """
+    if len(positions) == 0:
+        return np.arange(0)
+    cx = np.floor(positions[:, 0] / cell).astype(np.int64)
+    cy = np.floor((positions[:, 1] + 0.5 * width) / cell).astype(np.int64)
+    cz = np.floor((positions[:, 2] - positions[:, 2].min()) / cell).astype(np.int64)
+    return np.lexsort((cz, cy, cx))
 
 
 def random_fill(
