@@ -152,20 +152,31 @@ class Simulation:
         contact forces plus m a_body.
         """
         self._build()
+        serial = self._serial()
         if self.bodies is not None:
             evaluate_forces_clumps(
                 self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_layout(),
                 self.pairs.as_layout(), self.pairs.n_pairs, self.geom, self.drive_time,
-                self.gravity, self._drive(), self.bodies.as_layout(),
+                self.gravity, self._drive(), self.bodies.as_layout(), serial,
             )  # fmt: skip
             self.forces_valid = True
             return
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
             self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs, self.geom,
-            self.drive_time, self.gravity, self._drive(), False, False, False,
+            self.drive_time, self.gravity, self._drive(), False, False, serial,
         )  # fmt: skip
         self.forces_valid = True
+
+    def _serial(self) -> bool:
+        """One thread: True, the pairs add to the spheres directly; else allocate the inbox.
+
+        Both paths give the same bits (:mod:`dem.kernels.forces`).
+        """
+        if numba.get_num_threads() == 1:
+            return True
+        self.pairs.ensure_inbox()
+        return False
 
     def _advance(self, n_steps: int) -> None:
         threads = numba.get_num_threads()
@@ -181,8 +192,8 @@ class Simulation:
             self.compute_forces()
         done = 0
         resume = False
-        serial = numba.get_num_threads() == 1
         while done < n_steps:
+            serial = self._serial()
             if self.bodies is None:
                 status, steps, need = advance(
                     n_steps - done, self.step_index - self.drive_start_step, resume,

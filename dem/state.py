@@ -236,12 +236,14 @@ class PairList:
         slots: Neighbour slots j > i per sphere during a build (``scratch_j``, (n slots,)).
         counters: int64 (2,): valid pairs, builds so far.
         x_ref: Positions at the last build, (n, 3).
-        pair_i, pair_j, pair_key: int64 (cap,): i < j, key i n + j, sorted by key.
+        pair_i, pair_j: int64 (cap,): i < j, sorted by the key i n + j (:attr:`pair_key`).
         hist: Tangential elongation per pair, (cap, 3), m.
-        pf: Per-pair force on i of the last evaluation, (cap, 3), N.
-        pt: Per-pair torques on i (row 2 k) and j (row 2 k + 1), (2 cap, 3), N m.
-        part_start, part_pairs: CSR sphere -> pairs, int64 (n + 1,) and (2 cap,); an entry
-            2 k + role is pair k with this sphere as i (role 0) or j (role 1).
+        part_start: CSR sphere -> its pair ends, int64 (n + 1,): sphere s owns the slots
+            ``part_start[s]`` to ``part_start[s + 1]``, in increasing pair index.
+        part_slot: The slot of pair k's end i (entry 2 k) and end j (entry 2 k + 1), int64
+            (2 cap,).
+        inbox: Force and torque each pair end received in the last parallel evaluation, by
+            slot, (2 cap, 6), N and N m (one thread never touches it).
 
     """
 
@@ -257,10 +259,8 @@ class PairList:
         self.x_ref = np.full((n, 3), np.inf)  # forces a build at the first step
         self.pair_i = np.zeros(cap, dtype=np.int64)
         self.pair_j = np.zeros(cap, dtype=np.int64)
-        self.pair_key = np.zeros(cap, dtype=np.int64)
         self.hist = np.zeros((cap, 3))
-        self.scratch_j = np.zeros(n * self.slots, dtype=np.int64)
-        self.scratch_key = np.zeros(cap, dtype=np.int64)
+        self.scratch_j = np.zeros(n * self.slots, dtype=np.int32)
         self.scratch_hist = np.zeros((cap, 3))
         self.counts = np.zeros(n, dtype=np.int64)
         self.offsets = np.zeros(n + 1, dtype=np.int64)
@@ -268,14 +268,26 @@ class PairList:
         self.cell_start = np.zeros(self.cell_capacity + 1, dtype=np.int64)
         self.cell_particles = np.zeros(n, dtype=np.int64)
         self.part_start = np.zeros(n + 1, dtype=np.int64)
-        self.part_pairs = np.zeros(2 * cap, dtype=np.int64)
-        self.pf = np.zeros((cap, 3))
-        self.pt = np.zeros((2 * cap, 3))
+        self.part_slot = np.zeros(2 * cap, dtype=np.int64)
+        self.inbox = np.zeros((0, 6))  # allocated by ensure_inbox() for the parallel pair loop
 
     @classmethod
     def for_spheres(cls, n: int) -> PairList:
-        """A list sized for a dense packing of n equal spheres (regrown when it overflows)."""
-        return cls(n=n, capacity=max(16, 8 * n), cell_capacity=max(64, 4 * n))
+        """A list for n spheres with room for 4 pairs each, regrown when a build overflows.
+
+        A dense bed of equal spheres uses 2.9 pairs a sphere with the skin.
+        """
+        return cls(n=n, capacity=max(16, 4 * n), cell_capacity=max(64, 4 * n))
+
+    @property
+    def pair_key(self) -> np.ndarray:
+        """The history key i n + j of every pair slot, (cap,) int64 (sorted over the valid ones)."""
+        return self.pair_i * self.n + self.pair_j
+
+    def ensure_inbox(self) -> None:
+        """Allocate ``inbox`` before a parallel pair loop (one thread never needs it)."""
+        if self.inbox.shape[0] < 2 * self.capacity:
+            self.inbox = np.zeros((2 * self.capacity, 6))
 
     @property
     def n_pairs(self) -> int:
@@ -293,10 +305,8 @@ class PairList:
             self.x_ref,
             self.pair_i,
             self.pair_j,
-            self.pair_key,
             self.hist,
             self.scratch_j,
-            self.scratch_key,
             self.scratch_hist,
             self.counts,
             self.offsets,
@@ -304,16 +314,15 @@ class PairList:
             self.cell_start,
             self.cell_particles,
             self.part_start,
-            self.part_pairs,
-            self.pf,
-            self.pt,
+            self.part_slot,
+            self.inbox,
         )
 
     def grow(self, status: int, need: int) -> None:
         """Regrow after a kernel reported overflow ``status`` needing ``need``; keeps the pairs."""
         if status == OVERFLOW_SLOTS:
             self.slots = int(need * DEM_GROWTH_FACTOR) + 1
-            self.scratch_j = np.zeros(self.n * self.slots, dtype=np.int64)
+            self.scratch_j = np.zeros(self.n * self.slots, dtype=np.int32)
             return
         if status == OVERFLOW_CELLS:
             self.cell_capacity = int(need * DEM_GROWTH_FACTOR) + 1
@@ -322,10 +331,7 @@ class PairList:
         if status != OVERFLOW_PAIRS:
             raise ValueError(f"unknown overflow status {status}")
         old = self.n_pairs
-        keep = {
-            name: getattr(self, name)[:old].copy()
-            for name in ("pair_i", "pair_j", "pair_key", "hist")
-        }
+        keep = {name: getattr(self, name)[:old].copy() for name in ("pair_i", "pair_j", "hist")}
         counters = self.counters.copy()
         x_ref = self.x_ref.copy()
         self.capacity = int(need * DEM_GROWTH_FACTOR) + 1

@@ -49,13 +49,16 @@ def test_pair_list_equals_brute_force(n, length, width):
     np.testing.assert_array_equal(p.pair_key[:k], expected)
     np.testing.assert_array_equal(p.pair_key[:k], p.pair_i[:k] * n + p.pair_j[:k])
     assert np.all((sim.spheres.x[:, 0] >= 0) & (sim.spheres.x[:, 0] < length))
-    # CSR: every sphere lists exactly the pairs it is in, with its role
+    # CSR: every sphere owns the slots of exactly the pair ends it is, in increasing pair index
+    slots = p.part_slot[: 2 * k]
+    assert sorted(slots) == list(range(2 * k))  # every slot used once
     for s in range(0, n, 7):
-        entries = p.part_pairs[p.part_start[s] : p.part_start[s + 1]]
-        as_i = sorted(e // 2 for e in entries if e % 2 == 0)
-        as_j = sorted(e // 2 for e in entries if e % 2 == 1)
-        assert as_i == list(np.flatnonzero(p.pair_i[:k] == s))
-        assert as_j == list(np.flatnonzero(p.pair_j[:k] == s))
+        own = range(p.part_start[s], p.part_start[s + 1])
+        ends = [e for e in range(2 * k) if slots[e] in own]
+        assert [e // 2 for e in ends] == sorted(e // 2 for e in ends)
+        assert sorted(slots[ends]) == list(own)
+        assert [e // 2 for e in ends if e % 2 == 0] == list(np.flatnonzero(p.pair_i[:k] == s))
+        assert [e // 2 for e in ends if e % 2 == 1] == list(np.flatnonzero(p.pair_j[:k] == s))
 
 
 def test_overflow_regrows_to_the_same_list():
@@ -102,7 +105,7 @@ def test_overflow_inside_the_step_loop_resumes_the_step_exactly():
             small.counters[:] = sim.pairs.counters
             for name in ("pair_i", "pair_j", "pair_key", "hist"):
                 getattr(small, name)[:k] = getattr(sim.pairs, name)[:k]
-            for name in ("part_start", "part_pairs", "pf", "pt"):
+            for name in ("part_start", "part_slot", "inbox"):
                 getattr(small, name)[:] = getattr(sim.pairs, name)[: len(getattr(small, name))]
             small.x_ref[:] = sim.pairs.x_ref
             sim.pairs = small

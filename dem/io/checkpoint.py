@@ -2,7 +2,8 @@
 
 A checkpoint holds everything the step loop reads, so that a run restored from it continues bit
 for bit: sphere arrays (``sph.*``), rigid bodies (``body.*``), the pair list with its contact
-history, scratch and CSR index (``nb.*``, capacities included), the step counters, the stored
+history, scratch and CSR index (``nb.*``, capacities included; not the parallel pair loop's
+``inbox``, which every step writes before it reads it), the step counters, the stored
 forces (a fresh force evaluation would update the contact history a second time) and the
 measurement sums; the runner adds its own loop position as JSON (``loop.json``).
 
@@ -22,6 +23,8 @@ from dem.errors import SimulationError
 from dem.state import PairList
 
 LOOP_KEY = "loop.json"
+#: Pair-list arrays each step writes before reading them: not saved.
+TRANSIENT = ("inbox",)
 
 
 def state_dict(sim) -> dict[str, np.ndarray]:
@@ -30,7 +33,11 @@ def state_dict(sim) -> dict[str, np.ndarray]:
     if sim.bodies is not None:
         state |= {f"body.{k}": v for k, v in vars(sim.bodies).items()}
     pairs = sim.pairs
-    state |= {f"nb.{k}": v for k, v in vars(pairs).items() if isinstance(v, np.ndarray)}
+    state |= {
+        f"nb.{k}": v
+        for k, v in vars(pairs).items()
+        if isinstance(v, np.ndarray) and k not in TRANSIENT
+    }
     state["nb.sizes"] = np.array([pairs.n, pairs.capacity, pairs.cell_capacity, pairs.slots])
     state["sim.counters"] = np.array(
         [sim.step_index, sim.drive_start_step, int(sim.drive_on), int(sim.forces_valid)]
@@ -58,8 +65,18 @@ def load_state(sim, state: dict[str, np.ndarray]) -> None:
             setattr(sim.bodies, key, np.ascontiguousarray(state[f"body.{key}"]).copy())
         sim.spheres.body = sim.bodies.body_of
     sim.pairs = PairList(n, capacity, cell_capacity, slots)
+    missing = [
+        f"nb.{key}"
+        for key, value in vars(sim.pairs).items()
+        if isinstance(value, np.ndarray) and key not in TRANSIENT and f"nb.{key}" not in state
+    ]
+    if missing:
+        raise SimulationError(
+            f"checkpoint lacks {', '.join(missing)}: it was written by another version of dem; "
+            "start the run again without --resume"
+        )
     for key, value in vars(sim.pairs).items():
-        if isinstance(value, np.ndarray):
+        if isinstance(value, np.ndarray) and key not in TRANSIENT:
             setattr(sim.pairs, key, np.ascontiguousarray(state[f"nb.{key}"]).copy())
     step, drive_start, drive_on, forces_valid = (int(v) for v in state["sim.counters"])
     sim.step_index, sim.drive_start_step = step, drive_start

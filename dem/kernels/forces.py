@@ -2,14 +2,14 @@
 
 Race-free by construction, no atomics. On several threads:
 
-1. :func:`pair_forces` runs in parallel over the pair list; pair k writes only row k of
-   ``out_pf`` (force on i; j gets -out_pf[k]), rows 2k and 2k + 1 of ``out_pt`` (torques on i
-   and on j) and of the tangential history.
+1. :func:`pair_forces` runs in parallel over the pair list; pair k writes what each of its two
+   ends receives (force and torque, six floats) into that end's slot of ``inbox``:
+   ``part_slot[2 k]`` for i, ``part_slot[2 k + 1]`` for j (:mod:`dem.kernels.neighbours`), and
+   row k of the tangential history. No two pairs share a slot.
 2. :func:`sphere_force` is called by a parallel loop over spheres
-   (:func:`dem.kernels.integrate.forces_kick`); sphere i gathers its own pairs through the CSR
-   index of :mod:`dem.kernels.neighbours` (entry e = 2 k + role: force sign 1 - 2 role, torque
-   row e, so the gather has no branch), adds its wall contacts (history rows 3 i + w, its own)
-   and the body force m a_body. Each pair is computed once.
+   (:func:`dem.kernels.integrate.forces_kick`); sphere i sums its own slots, which lie together
+   in increasing pair index (a sequential read), adds its wall contacts (history rows 3 i + w,
+   its own) and the body force m a_body. Each pair is computed once.
 
 On one thread, :func:`pair_forces_serial` adds each pair's force and torques to its two spheres
 directly (no per-pair rows, no gather: the rows' memory is never touched) and the sphere loop
@@ -70,9 +70,10 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def pair_forces(
-    model, p, x, v, omega, radius, mass, pair_i, pair_j, n_pairs, hist, length, dt, out_pf, out_pt,
+    model, p, x, v, omega, radius, mass, pair_i, pair_j, n_pairs, hist, length, dt, part_slot,
+    inbox,
 ):  # fmt: skip
-    """Contact force and torques of each pair of the list into per-pair rows (parallel).
+    """Contact force and torques of each pair of the list into its ends' slots (parallel).
 
     Args:
         model, p: Contact law id and parameters (:mod:`dem.kernels.contacts`).
@@ -82,8 +83,9 @@ def pair_forces(
         hist: Tangential elongation per pair, shape (cap, 3), m; updated (reset if apart).
         length: Period in x, m (minimum image).
         dt: Time step, s.
-        out_pf: Force on i per pair, shape (cap, 3), N.
-        out_pt: Torque on i (row 2k) and on j (row 2k + 1) per pair, shape (2 cap, 3), N m.
+        part_slot: Slot of pair k's end i (2 k) and end j (2 k + 1), shape (2 cap,).
+        inbox: Out: force (N) and torque (N m) each end receives, by slot, shape (2 cap, 6);
+            end j gets minus the force on i, exactly.
 
     """
     half = 0.5 * length
@@ -91,15 +93,20 @@ def pair_forces(
         f = pair_contact(
             model, p, x, v, omega, radius, mass, pair_i[k], pair_j[k], hist, k, length, half, dt
         )
-        out_pf[k, 0] = f[0]
-        out_pf[k, 1] = f[1]
-        out_pf[k, 2] = f[2]
-        out_pt[2 * k, 0] = f[3]
-        out_pt[2 * k, 1] = f[4]
-        out_pt[2 * k, 2] = f[5]
-        out_pt[2 * k + 1, 0] = f[6]
-        out_pt[2 * k + 1, 1] = f[7]
-        out_pt[2 * k + 1, 2] = f[8]
+        a = part_slot[2 * k]
+        b = part_slot[2 * k + 1]
+        inbox[a, 0] = f[0]
+        inbox[a, 1] = f[1]
+        inbox[a, 2] = f[2]
+        inbox[a, 3] = f[3]
+        inbox[a, 4] = f[4]
+        inbox[a, 5] = f[5]
+        inbox[b, 0] = -f[0]
+        inbox[b, 1] = -f[1]
+        inbox[b, 2] = -f[2]
+        inbox[b, 3] = f[6]
+        inbox[b, 4] = f[7]
+        inbox[b, 5] = f[8]
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -111,8 +118,8 @@ def pair_forces_serial(
 
     Pair k adds its force to i and subtracts it from j directly, in pair order. Each sphere's
     pairs come in increasing k either way, so the sums have the same terms in the same order
-    as :func:`pair_forces` followed by the gather of :func:`sphere_force`: the same bits, without
-    the per-pair rows and the gather.
+    as :func:`pair_forces` followed by the gather of :func:`sphere_force` (x - f and x + (-f)
+    are the same float): the same bits, without the slots and the gather.
 
     The loop is the single iteration of a ``prange(1)``: one thread runs it whatever the thread
     count, and numba compiles a parallel loop's body with its arrays marked as not aliasing each
@@ -149,10 +156,10 @@ def pair_forces_serial(
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def sphere_force(
-    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, part_pairs,
-    pf, pt, ax, ay, az,
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
+    ax, ay, az,
 ):  # fmt: skip
-    """Total force and torque on sphere i: its pairs, its wall contacts and m (ax, ay, az).
+    """Total force and torque on sphere i: its pairs' slots, its walls and m (ax, ay, az).
 
     Returns:
         (fx, fy, fz, tx, ty, tz) in N and N m.
@@ -166,15 +173,12 @@ def sphere_force(
     ty = 0.0
     tz = 0.0
     for e in range(part_start[i], part_start[i + 1]):
-        row = part_pairs[e]
-        k = row >> 1
-        sign = 1.0 - 2.0 * (row & 1)
-        fx += sign * pf[k, 0]
-        fy += sign * pf[k, 1]
-        fz += sign * pf[k, 2]
-        tx += pt[row, 0]
-        ty += pt[row, 1]
-        tz += pt[row, 2]
+        fx += inbox[e, 0]
+        fy += inbox[e, 1]
+        fz += inbox[e, 2]
+        tx += inbox[e, 3]
+        ty += inbox[e, 4]
+        tz += inbox[e, 5]
     return wall_forces(
         i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz
     )

@@ -79,7 +79,7 @@ def forces_kick(
 
     """
     x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
-    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
+    part_start, inbox = nb.part_start, nb.inbox
     h = 0.5 * dt
     chunks = min(MOMENTUM_CHUNKS, max(n, 1))
     partial = np.zeros(chunks)
@@ -95,7 +95,7 @@ def forces_kick(
             else:
                 f = sphere_force(
                     i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-                    part_pairs, pf, pt, ax, ay, az,
+                    inbox, ax, ay, az,
                 )  # fmt: skip
             force[i, 0] = f[0]
             force[i, 1] = f[1]
@@ -164,7 +164,7 @@ def evaluate_forces(
     else:
         pair_forces(
             model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
-            dt, nb.pf, nb.pt,
+            dt, nb.part_slot, nb.inbox,
         )  # fmt: skip
     return forces_kick(
         n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial
@@ -180,8 +180,8 @@ def build(n, sph, body, nb, counters, geom):
     x, radius = sph.x, sph.radius
     status, n_pairs, need = rebuild(
         x, radius, body, n, geom.skin, geom.length, geom.width, nb.x_ref, nb.pair_i, nb.pair_j,
-        nb.pair_key, nb.hist, counters[0], nb.scratch_j, nb.scratch_key, nb.scratch_hist, nb.counts,
-        nb.offsets, nb.cell_of, nb.cell_start, nb.cell_particles, nb.part_start, nb.part_pairs,
+        nb.hist, counters[0], nb.scratch_j, nb.scratch_hist, nb.counts,
+        nb.offsets, nb.cell_of, nb.cell_start, nb.cell_particles, nb.part_start, nb.part_slot,
     )  # fmt: skip
     counters[0] = n_pairs
     if status == OK:
@@ -261,19 +261,26 @@ def _add_body_force(body_force, mass, ax, ay, az):
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, drive, bod):
+def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, drive, bod, serial):
     """Pair forces, per-member gather (walls, no body force), reduction to the bodies + M a_body.
 
     Leaves ``sph.force``/``torque`` with the members' contact forces and the bodies'
     ``force``/``torque`` (about X) with F_b = sum F_s + M a_body, T_b = sum (T_s + r_s x F_s).
+    ``serial`` as :func:`evaluate_forces`.
     """
     x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
     length, width, dt = geom.length, geom.width, geom.dt
-    pair_forces(
-        model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length, dt,
-        nb.pf, nb.pt,
-    )  # fmt: skip
-    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, False)
+    if serial:
+        pair_forces_serial(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
+            dt, n, 0.0, 0.0, 0.0, sph.force, sph.torque,
+        )  # fmt: skip
+    else:
+        pair_forces(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
+            dt, nb.part_slot, nb.inbox,
+        )  # fmt: skip
+    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, serial)
     reduce_to_bodies(
         sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
     )  # fmt: skip
@@ -317,7 +324,7 @@ def bodies_forces_kick(
     x, v, omega, force, torque, radius, mass, wall_hist = (
         sph.x, sph.v, sph.omega, sph.force, sph.torque, sph.radius, sph.mass, sph.wall_hist
     )  # fmt: skip
-    part_start, part_pairs, pf, pt = nb.part_start, nb.part_pairs, nb.pf, nb.pt
+    part_start, inbox = nb.part_start, nb.inbox
     body_x, body_v, q, ang_mom, inv_mass, body_mass, moments = (
         bod.x, bod.v, bod.q, bod.ang_mom, bod.inv_mass, bod.mass, bod.moments
     )  # fmt: skip
@@ -343,7 +350,7 @@ def bodies_forces_kick(
                 else:
                     f = sphere_force(
                         s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                        part_start, part_pairs, pf, pt, 0.0, 0.0, 0.0,
+                        part_start, inbox, 0.0, 0.0, 0.0,
                     )  # fmt: skip
                 for c in range(3):
                     force[s, c] = f[c]
@@ -420,7 +427,7 @@ def advance_clumps(
         else:
             pair_forces(
                 model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist,
-                length, dt, nb.pf, nb.pt,
+                length, dt, nb.part_slot, nb.inbox,
             )  # fmt: skip
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(

@@ -1,7 +1,7 @@
 """Named array layouts the kernels take: no index number carries physics.
 
 Each layout is a :class:`typing.NamedTuple`, which numba compiles as a tuple whose fields are read
-by name (``sph.inv_mass``, ``nb.part_pairs``). :mod:`dem.state` builds them from its dataclasses
+by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.state` builds them from its dataclasses
 (``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap`` pair
 capacity.
 """
@@ -51,10 +51,8 @@ class PairArrays(NamedTuple):
     x_ref: np.ndarray  # (n, 3) positions at the last build, m
     pair_i: np.ndarray  # (cap,) int64 first sphere of each pair
     pair_j: np.ndarray  # (cap,) int64 second sphere
-    pair_key: np.ndarray  # (cap,) int64 i n + j, the history key, sorted
     hist: np.ndarray  # (cap, 3) tangential elongation per pair, m
-    scratch_j: np.ndarray  # build scratch: partners
-    scratch_key: np.ndarray  # build scratch: keys
+    scratch_j: np.ndarray  # build scratch: partners, int32 (n slots,)
     scratch_hist: np.ndarray  # build scratch: carried history
     counts: np.ndarray  # per-sphere pair counts
     offsets: np.ndarray  # per-sphere pair offsets
@@ -62,9 +60,8 @@ class PairArrays(NamedTuple):
     cell_start: np.ndarray  # CSR start per cell
     cell_particles: np.ndarray  # spheres, cell by cell
     part_start: np.ndarray  # (n + 1,) CSR start of each sphere's pairs
-    part_pairs: np.ndarray  # (2 cap,) int64 entries 2 k + role, sphere by sphere
-    pf: np.ndarray  # (cap, 3) pair forces on the first sphere, N
-    pt: np.ndarray  # (2 cap, 3) pair torques on i (row 2 k) and j (row 2 k + 1), N m
+    part_slot: np.ndarray  # (2 cap,) int64 CSR slot of pair k's end i (2 k) and end j (2 k + 1)
+    inbox: np.ndarray  # (2 cap, 6) force and torque of each pair end by CSR slot, N and N m
 
 
 class Geometry(NamedTuple):

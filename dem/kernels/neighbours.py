@@ -10,12 +10,14 @@ A build:
 2. finds, per sphere i, the neighbours j > i with |x_i - x_j| < r_i + r_j + skin in the 27
    surrounding cells and writes them, sorted by j, into i's own fixed block of slots (parallel
    over i, race-free: each i writes only its own block and count);
-3. compacts the blocks at the prefix-sum offsets, so the pair keys i N + j come out sorted;
-   Members of one rigid clump are never paired (no contacts inside a clump);
+3. compacts the blocks at the prefix-sum offsets, so the pairs come out sorted by the key
+   i N + j (computed, never stored); members of one rigid clump are never paired;
 4. carries the tangential history over from the previous list by one merge of the sorted new
    and old keys (pairs not found start from zero);
-5. builds the CSR index sphere -> its pairs (``part_start``, ``part_pairs``; an entry 2 k means
-   "pair k, this sphere is i", 2 k + 1 "pair k, this sphere is j"), serially.
+5. builds the CSR index sphere -> its pair ends, serially: sphere s owns the slots
+   ``part_start[s]`` to ``part_start[s + 1]`` in increasing pair index, and ``part_slot[2 k]``,
+   ``part_slot[2 k + 1]`` are the slots of pair k's ends i and j (where the parallel pair loop
+   writes what each end receives, :mod:`dem.kernels.forces`).
 
 Capacities are fixed; a build that would overflow the pair, slot or cell arrays changes nothing
 and reports the size it needs (status :data:`OVERFLOW_PAIRS` / :data:`OVERFLOW_SLOTS` /
@@ -132,31 +134,35 @@ def _scan_neighbours(
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _carry_history(new_keys, n_new, old_keys, old_hist, n_old, out_hist):
-    """Copy each new pair's history from the old pair with the same key, else 0.
+def _carry_history(n, counts, offsets, scratch_j, slots, pair_i, pair_j, hist, n_old, out_hist):
+    """Each new pair's history from the old pair with the same key i n + j, else 0.
 
-    Both key lists are sorted, so one merge pass finds all matches: O(n_new + n_old).
+    The new pairs (sphere i's ``counts[i]`` partners in ``scratch_j``, sorted) and the old list
+    are both in key order, so one merge pass finds all matches: O(n_new + n_old). Keys are
+    computed, not stored.
     """
     m = 0
-    for k in range(n_new):
-        key = new_keys[k]
-        while m < n_old and old_keys[m] < key:
-            m += 1
-        if m < n_old and old_keys[m] == key:
-            out_hist[k, 0] = old_hist[m, 0]
-            out_hist[k, 1] = old_hist[m, 1]
-            out_hist[k, 2] = old_hist[m, 2]
-        else:
-            out_hist[k, 0] = 0.0
-            out_hist[k, 1] = 0.0
-            out_hist[k, 2] = 0.0
+    for i in range(n):
+        for s in range(counts[i]):
+            k = offsets[i] + s
+            key = i * n + scratch_j[i * slots + s]
+            while m < n_old and pair_i[m] * n + pair_j[m] < key:
+                m += 1
+            if m < n_old and pair_i[m] * n + pair_j[m] == key:
+                out_hist[k, 0] = hist[m, 0]
+                out_hist[k, 1] = hist[m, 1]
+                out_hist[k, 2] = hist[m, 2]
+            else:
+                out_hist[k, 0] = 0.0
+                out_hist[k, 1] = 0.0
+                out_hist[k, 2] = 0.0
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def rebuild(
-    x, radius, body, n, skin, length, width, x_ref, pair_i, pair_j, pair_key, hist, n_pairs_old,
-    scratch_j, scratch_key, scratch_hist, counts, offsets, cell_of, cell_start, cell_particles,
-    part_start, part_pairs,
+    x, radius, body, n, skin, length, width, x_ref, pair_i, pair_j, hist, n_pairs_old,
+    scratch_j, scratch_hist, counts, offsets, cell_of, cell_start, cell_particles,
+    part_start, part_slot,
 ):  # fmt: skip
     """Build the Verlet pair list of the current positions, keeping the contact history.
 
@@ -168,14 +174,14 @@ def rebuild(
         skin: Verlet skin, m.
         length, width: Periodic length and wall distance, m.
         x_ref: Out: positions at this build, shape (n, 3).
-        pair_i, pair_j, pair_key: In/out pair list (i < j, key i n + j, sorted), shape (cap,).
+        pair_i, pair_j: In/out pair list (i < j, sorted by the key i n + j), shape (cap,).
         hist: In/out tangential history per pair, shape (cap, 3).
         n_pairs_old: Number of valid pairs on entry.
         scratch_j: Neighbour slots, shape (n slots,), int64.
-        scratch_key, scratch_hist: Work arrays of the pair capacity.
+        scratch_hist: Work array of the pair capacity, shape (cap, 3).
         counts, offsets: Work arrays, shapes (n,) and (n + 1,).
         cell_of, cell_particles: Work arrays, shape (n,); cell_start: shape (cell_cap + 1,).
-        part_start, part_pairs: Out CSR index, shapes (n + 1,) and (2 cap,); entries 2 k + role.
+        part_start, part_slot: Out CSR index, shapes (n + 1,) and (2 cap,) (module docstring).
 
     Returns:
         (status, n_pairs, needed): status OK or an OVERFLOW_* code; on overflow the list is
@@ -223,18 +229,19 @@ def rebuild(
     n_new = offsets[n]
     if n_new > pair_j.shape[0]:
         return OVERFLOW_PAIRS, n_pairs_old, n_new
+    _carry_history(
+        n, counts, offsets, scratch_j, slots, pair_i, pair_j, hist, n_pairs_old, scratch_hist
+    )
     for i in range(n):
         for m in range(counts[i]):
-            scratch_key[offsets[i] + m] = i * n + scratch_j[i * slots + m]
-    _carry_history(scratch_key, n_new, pair_key, hist, n_pairs_old, scratch_hist)
+            k = offsets[i] + m
+            pair_i[k] = i
+            pair_j[k] = scratch_j[i * slots + m]
     for k in range(n_new):
-        pair_i[k] = scratch_key[k] // n
-        pair_j[k] = scratch_key[k] - pair_i[k] * n
-        pair_key[k] = scratch_key[k]
         hist[k, 0] = scratch_hist[k, 0]
         hist[k, 1] = scratch_hist[k, 1]
         hist[k, 2] = scratch_hist[k, 2]
-    # CSR: sphere -> pairs (2 k as i, 2 k + 1 as j)
+    # CSR: sphere -> its pair ends; slot of end i (2 k) and end j (2 k + 1)
     counts[:n] = 0
     for k in range(n_new):
         counts[pair_i[k]] += 1
@@ -245,10 +252,10 @@ def rebuild(
         counts[i] = part_start[i]
     for k in range(n_new):
         a = pair_i[k]
-        part_pairs[counts[a]] = 2 * k
+        part_slot[2 * k] = counts[a]
         counts[a] += 1
         b = pair_j[k]
-        part_pairs[counts[b]] = 2 * k + 1
+        part_slot[2 * k + 1] = counts[b]
         counts[b] += 1
     for i in range(n):
         x_ref[i, 0] = x[i, 0]

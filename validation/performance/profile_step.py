@@ -64,7 +64,7 @@ def loop_pairs(k, model, p, sph, nb, n_pairs, geom, serial):
                                sph.x.shape[0], 0.0, 0.0, -9.81, sph.force, sph.torque)
         else:
             pair_forces(model, p, sph.x, sph.v, sph.omega, sph.radius, sph.mass, nb.pair_i,
-                        nb.pair_j, n_pairs, nb.hist, geom.length, geom.dt, nb.pf, nb.pt)
+                        nb.pair_j, n_pairs, nb.hist, geom.length, geom.dt, nb.part_slot, nb.inbox)
 
 
 @numba.njit
