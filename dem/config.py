@@ -105,8 +105,9 @@ DEM_AUTO_SETTLE_TOLERANCE = 1e-4
 #: (and ACTIVE) fell to 0.08-0.27e7 while PASSIVE kept 0.7-0.9e7. The thread guard below now
 #: handles a shared machine (validation/performance/threads_shared.py).
 DEM_OMP_WAIT_POLICY: str | None = None
-#: Thread guard (dem.threads): with more than one thread, try one thread every this many chunks
-#: of DEM_CHECK_INTERVAL steps and keep the faster; False leaves the thread count alone.
+#: Thread guard (dem.threads): with more than one thread, try the other choice (one thread, or
+#: back to N) after this many chunks of DEM_CHECK_INTERVAL steps, the wait doubling (up to 8x)
+#: while the choice holds, and keep the faster; False leaves the thread count alone.
 DEM_THREAD_GUARD = True
 DEM_THREAD_GUARD_PERIOD = 8
 #: ... timing only chunks of at least this many steps.

@@ -9,7 +9,8 @@ rung of the model ladder (point mass, one grain, bed) already answers the questi
 Where the numbers come from:
 
 - memory: the state's arrays allocated as a run allocates them (zeros, so nothing is touched),
-  with the pair list at its starting capacity;
+  with the pair list at its starting capacity (and, on several threads, the parallel pair
+  loop's inbox);
 - wall time: particle-steps (spheres x steps: the drive-off settle, the settling cycles and the
   measured cycles) over a rate: the rate the last run of this case measured on this machine
   (``CASE_DIR/output/summary.json``), else the rate the speed-accuracy study measured for the
@@ -188,8 +189,11 @@ def _interpolate(series: list[list[float]], x: float, cheap: str = "low") -> tup
 # --- the pieces ---------------------------------------------------------------------------------
 
 
-def memory_bytes(case, spheres: int, grains: int) -> int:
-    """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start)."""
+def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
+    """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start).
+
+    Several threads add the parallel pair loop's inbox (:meth:`dem.state.PairList.ensure_inbox`).
+    """
     from dem.state import Bodies, PairList, Spheres
 
     total = 0
@@ -201,7 +205,10 @@ def memory_bytes(case, spheres: int, grains: int) -> int:
         q[:, 0] = 1.0
         b, s = Bodies.create(case.particles.grain, np.zeros((grains, 3)), q)
         arrays = [s, b]
-    arrays.append(PairList.for_spheres(spheres))
+    pairs = PairList.for_spheres(spheres)
+    if threads > 1:
+        pairs.ensure_inbox()
+    arrays.append(pairs)
     seen = set()
     for obj in arrays:
         for value in vars(obj).values():
@@ -335,7 +342,7 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     else:
         expected, parts = math.nan, {}
         error_source = "no study data: dem/data/speed_accuracy.json is missing"
-    mem = memory_bytes(case, spheres, grains)
+    mem = memory_bytes(case, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:
         advice.append(Advice("warn", "particles.count", f"the state needs {_size(mem)}, over half "

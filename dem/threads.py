@@ -8,11 +8,14 @@ busy process: 2 threads 0.2-0.4e7 particle-steps/s, 1 thread 1.6e7; validation/p
 (``numba.set_num_threads``), and then runs at one thread's full speed.
 
 :class:`ThreadGuard` times each chunk of steps (``DEM_CHECK_INTERVAL``) on the thread count it
-chose: the first chunk on N threads, the second on one, then on whichever was faster per step,
-trying the other again every ``DEM_THREAD_GUARD_PERIOD`` chunks, since load comes and goes. The
-trajectory and every reported value are the same on any number of threads (the momentum sums
-are taken in fixed chunks), so the guard changes only the wall time. Its cost is one chunk in
-``DEM_THREAD_GUARD_PERIOD`` run on the slower choice.
+chose: the first chunk on N threads, the second on one, then on whichever was faster per step
+(the choice it keeps is re-timed every chunk, so it leaves a choice that slows down at once).
+Since load comes and goes, it tries the other choice again after ``DEM_THREAD_GUARD_PERIOD``
+chunks; each try that confirms the choice doubles the wait (up to 8 periods), a try that
+overturns it resets the wait. The trajectory and every reported value are the same on any number
+of threads (the momentum sums are taken in fixed chunks), so the guard changes only the wall
+time. Its cost is one chunk in 8 to one in 64 run on the slower choice (one in 8 throughout cost
+the idle sphere bed a tenth of its two-thread rate: validation/performance/README.md).
 """
 
 from __future__ import annotations
@@ -31,6 +34,9 @@ class ThreadGuard:
         self.chunks = 0
         self.seconds_per_step: dict[int, float] = {}
         self.steps = {self.threads: 0, 1: 0}
+        self.wait = self.period  # chunks from one try of the other choice to the next
+        self.next_try = 1  # the second chunk tries one thread
+        self._tried: int | None = None  # the choice a try interrupted
 
     @property
     def best(self) -> int:
@@ -41,10 +47,12 @@ class ThreadGuard:
 
     def choose(self) -> int:
         """Thread count for the next chunk (also set in numba)."""
+        self._tried = None
         if self.chunks == 0:
             k = self.threads
-        elif self.chunks == 1 or self.chunks % self.period == 0:
-            k = 1 if self.best != 1 else self.threads  # probe the other choice
+        elif self.chunks == self.next_try:
+            self._tried = self.best
+            k = 1 if self.best != 1 else self.threads  # try the other choice
         else:
             k = self.best
         numba.set_num_threads(k)
@@ -56,6 +64,11 @@ class ThreadGuard:
         self.steps[threads] += steps
         if steps >= config.DEM_THREAD_GUARD_MIN_STEPS and seconds > 0.0:
             self.seconds_per_step[threads] = seconds / steps
+        if self._tried is not None:
+            held = self.best == self._tried
+            self.wait = min(2 * self.wait, 8 * self.period) if held else self.period
+            self.next_try = self.chunks + self.wait
+            self._tried = None
 
     def restore(self) -> None:
         """Back to ``threads`` (the count the process asked for)."""

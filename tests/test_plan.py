@@ -70,7 +70,7 @@ def test_plan_on_every_shipped_case(directory, capsys):
     assert out["spheres"] == case.particles.count * per
     assert out["timestep"] == step.dt and out["timestep_limit"] == step.limit
     assert out["steps_per_cycle"] == pytest.approx(1.0 / case.drive.frequency / step.dt)
-    assert 0 < out["memory_bytes"] < 2000 * out["spheres"] + 8000  # 2 kB a sphere, 8 kB fixed
+    assert 0 < out["memory_bytes"] < 1200 * out["spheres"] + 8000  # 1.2 kB a sphere, 8 kB fixed
     assert out["wall_time_s"] > 0
     if case.particles.count > 1:  # a bed: the study's error; one grain: the point mass's
         assert 0 <= out["expected_error"] < 1
@@ -85,7 +85,7 @@ def test_memory_estimate_matches_what_a_run_allocates(tmp_path, study):
     """Independent check: tracemalloc's count of the bytes the built simulation holds."""
     case = small(tmp_path, {"particles.count": 3000})
     case = dataclasses.replace(case, particles=dataclasses.replace(case.particles, count=3000))
-    expected = plan.plan(case).memory_bytes
+    expected = plan.plan(case, threads=1).memory_bytes
     tracemalloc.start()
     sim = setup.from_case(case)
     held, _ = tracemalloc.get_traced_memory()

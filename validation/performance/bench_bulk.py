@@ -13,9 +13,12 @@ dem half: ``dem.runner.run_case`` on the same case with the same time step, 1 an
 each in its own process (numba's thread count is fixed per process); the rate is the
 ``particle_steps_per_s`` of its summary.json. Skipped with a message if the engine is missing.
 
-Each configuration runs ``--repeat`` times and the fastest is kept (the machine is shared; the
-slowest runs measure the neighbours). Results are merged into results_CASE.json: a half that is
-skipped keeps its previous entry; the deck is kept in liggghts_deck_CASE/.
+The configurations are interleaved: each repeat runs every one once, the order reversed on
+every other repeat, so dem and LIGGGHTS meet the same minutes of a shared machine. The ratios
+dem / LIGGGHTS are taken within each repeat (median and range printed); the fastest run of each
+configuration is kept too. ``--busy`` spins a second process on one core meanwhile, as on a
+shared workstation. Results go into results_CASE.json under "interleaved" (or "busy"), with
+every run's load average; the deck is kept in liggghts_deck_CASE/.
 
     .venv/bin/python validation/performance/bench_bulk.py               # sphere-bed, both halves
     .venv/bin/python validation/performance/bench_bulk.py --skip-dem
@@ -102,63 +105,41 @@ def mpirun_prefix(ranks: int) -> list[str] | None:
     return prefix
 
 
-def bench_liggghts(args, case) -> dict:
-    """Time LIGGGHTS on the exported deck; the rate comes from its last 'Loop time' line."""
-    if find_liggghts() is None:
-        msg = f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})"
-        print(msg)
-        return {"skipped": msg}
+def liggghts_deck(args, case) -> tuple[Path, int]:
+    """Write the deck of the case (measured driven steps last); returns (folder, steps)."""
     deck_dir = HERE / f"liggghts_deck_{case.name}"
     steps_per_cycle = 1.0 / (case.drive.frequency * args.timestep)
     steps = round(args.cycles * steps_per_cycle)
-    deck = write_deck(case, deck_dir, timestep=args.timestep, steps=steps)
-    print(f"deck: {deck}")
-    scratch = HERE / "scratch" / "liggghts"
-    runs, version = [], None
-    for ranks in args.ranks:
-        prefix = mpirun_prefix(ranks)
-        if prefix is None:
-            print(f"mpirun not found: {ranks}-rank LIGGGHTS run skipped")
-            continue
-        command = " ".join(os.path.basename(c) for c in [*prefix, "liggghts", "-in", DECK_NAME])
-        best = None
-        for repeat in range(args.repeat):
-            work = scratch / f"np{ranks}"
-            if work.exists():
-                shutil.rmtree(work)
-            shutil.copytree(deck_dir, work)
-            load = wait_until_quiet(args)
-            run = run_liggghts(work, DECK_NAME, prefix=prefix)
-            version = run.version or version
-            loop_time, procs, n_steps, atoms = run.loop_times[-1]
-            if atoms != spheres(case) or n_steps != steps:
-                raise SystemExit(f"LIGGGHTS ran {atoms} atoms x {n_steps} steps, not as asked")
-            rate = atoms * n_steps / loop_time
-            print(
-                f"LIGGGHTS {ranks} rank(s), repeat {repeat + 1}: {loop_time:.3f} s for "
-                f"{n_steps} steps x {atoms} spheres = {rate:.3g} particle-steps/s "
-                f"(load average {load} at start)"
-            )
-            if best is None or rate > best["particle_steps_per_s"]:
-                best = {
-                    "ranks": procs,
-                    "command": f"cd {deck_dir.relative_to(ROOT)} && {command}",
-                    "loop_time_s": loop_time,
-                    "steps": n_steps,
-                    "spheres": atoms,
-                    "particle_steps_per_s": rate,
-                    "load_average_at_start": load,
-                }
-        best["repeats"] = args.repeat
-        runs.append(best)
+    print(f"deck: {write_deck(case, deck_dir, timestep=args.timestep, steps=steps)}")
+    return deck_dir, steps
+
+
+def liggghts_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict | None:
+    """One LIGGGHTS run on ``ranks`` ranks; the rate comes from its last 'Loop time' line."""
+    prefix = mpirun_prefix(ranks)
+    if prefix is None:
+        print(f"mpirun not found: {ranks}-rank LIGGGHTS run skipped")
+        return None
+    command = " ".join(os.path.basename(c) for c in [*prefix, "liggghts", "-in", DECK_NAME])
+    work = HERE / "scratch" / "liggghts" / f"np{ranks}"
+    if work.exists():
+        shutil.rmtree(work)
+    shutil.copytree(deck_dir, work)
+    load = wait_until_quiet(args)
+    run = run_liggghts(work, DECK_NAME, prefix=prefix)
+    loop_time, procs, n_steps, atoms = run.loop_times[-1]
+    if atoms != spheres(case) or n_steps != steps:
+        raise SystemExit(f"LIGGGHTS ran {atoms} atoms x {n_steps} steps, not as asked")
     return {
-        "version": version,
-        "deck": str((deck_dir / DECK_NAME).relative_to(ROOT)),
-        "timestep": args.timestep,
-        "settle_cycles": args.settle_cycles,
-        "measured_steps": steps,
-        "timing": "last 'Loop time' line (the measured driven run), fastest of the repeats",
-        "runs": runs,
+        "code": "liggghts",
+        "ranks": procs,
+        "version": run.version,
+        "command": f"cd {deck_dir.relative_to(ROOT)} && {command}",
+        "loop_time_s": loop_time,
+        "steps": n_steps,
+        "spheres": atoms,
+        "particle_steps_per_s": atoms * n_steps / loop_time,
+        "load_average_at_start": load,
     }
 
 
@@ -174,64 +155,97 @@ run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
 """
 
 
-def run_dem(args, case) -> dict:
-    """Time dem.runner.run_case, one process per thread count."""
+def dem_once(args, threads: int) -> dict:
+    """One dem.runner.run_case in its own process (numba's thread count is fixed per process)."""
+    out = HERE / "scratch" / "dem" / f"threads{threads}"
+    code = DEM_CHILD.format(
+        case=str(Path(args.case).resolve()),
+        dt=args.timestep,
+        settle=args.settle_cycles,
+        cycles=args.cycles,
+        out=str(out),
+        threads=threads,
+    )
+    env = {**os.environ, "NUMBA_NUM_THREADS": str(threads)}
+    load = wait_until_quiet(args)
     try:
-        import dem.simulation  # noqa: F401
-    except ImportError as exc:
-        msg = f"dem.simulation is not available ({exc}): dem half skipped"
-        print(msg)
-        return {"skipped": msg}
-    runs = []
-    for threads in args.threads:
-        best = None
-        for repeat in range(args.repeat):
-            out = HERE / "scratch" / "dem" / f"threads{threads}"
-            code = DEM_CHILD.format(
-                case=str(Path(args.case).resolve()),
-                dt=args.timestep,
-                settle=args.settle_cycles,
-                cycles=args.cycles,
-                out=str(out),
-                threads=threads,
-            )
-            env = {**os.environ, "NUMBA_NUM_THREADS": str(threads)}
-            load = wait_until_quiet(args)
-            try:
-                subprocess.run(
-                    [sys.executable, "-c", code], check=True, env=env, timeout=args.dem_timeout
-                )
-            except subprocess.TimeoutExpired:
-                msg = f"dem with {threads} thread(s) did not finish in {args.dem_timeout} s"
-                print(msg)
-                best = {"threads": threads, "failed": msg}
-                break
-            summary = json.loads((out / "summary.json").read_text())
-            rate = summary["particle_steps_per_s"]
-            print(
-                f"dem {threads} thread(s), repeat {repeat + 1}: {rate:.3g} particle-steps/s "
-                f"(load average {load} at start)"
-            )
-            if best is None or rate > best["particle_steps_per_s"]:
-                best = {
-                    "threads": threads,
-                    "particle_steps_per_s": rate,
-                    "steps": summary["steps"],
-                    "timestep": summary["timestep"],
-                    "wall_time_s": summary["wall_time_s"],
-                    "spheres": summary.get("spheres"),
-                    "load_average_at_start": load,
-                }
-        best["repeats"] = args.repeat
-        runs.append(best)
+        subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=args.dem_timeout)
+    except subprocess.TimeoutExpired:
+        return {"code": "dem", "threads": threads, "failed": f"no result in {args.dem_timeout} s"}
+    summary = json.loads((out / "summary.json").read_text())
     return {
-        "command": "validation/performance/bench_bulk.py (dem.runner.run_case, "
-        "NUMBA_NUM_THREADS = threads)",
-        "timestep": args.timestep,
-        "settle_cycles": args.settle_cycles,
-        "cycles": args.cycles,
-        "runs": runs,
+        "code": "dem",
+        "threads": threads,
+        "particle_steps_per_s": summary["particle_steps_per_s"],
+        "steps": summary["steps"],
+        "timestep": summary["timestep"],
+        "wall_time_s": summary["wall_time_s"],
+        "spheres": summary.get("spheres"),
+        "thread_guard": summary.get("thread_guard"),
+        "load_average_at_start": load,
     }
+
+
+def label(run: dict) -> str:
+    if run["code"] == "liggghts":
+        return f"LIGGGHTS {run['ranks']} rank(s)"
+    return f"dem {run['threads']} thread(s)"
+
+
+def interleaved(args, case) -> list[dict]:
+    """Every configuration once per repeat, the order reversed on every other repeat."""
+    configs = []
+    deck = None
+    if not args.skip_liggghts:
+        if find_liggghts() is None:
+            print(f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})")
+        else:
+            deck = liggghts_deck(args, case)
+            configs += [("liggghts", r) for r in args.ranks]
+    if not args.skip_dem:
+        configs += [("dem", t) for t in args.threads]
+    runs = []
+    for repeat in range(args.repeat):
+        for code, count in configs if repeat % 2 == 0 else configs[::-1]:
+            if code == "liggghts":
+                run = liggghts_once(args, case, count, *deck)
+            else:
+                run = dem_once(args, count)
+            if run is None:
+                continue
+            run["repeat"] = repeat
+            runs.append(run)
+            rate = run.get("particle_steps_per_s")
+            shown = f"{rate:.3g} particle-steps/s" if rate else run.get("failed")
+            print(
+                f"repeat {repeat + 1}: {label(run)}: {shown} "
+                f"(load average {run['load_average_at_start']} at start)",
+                flush=True,
+            )
+    return runs
+
+
+def ratios(runs: list[dict]) -> dict:
+    """dem against LIGGGHTS within each repeat (same minutes of the machine): median and range."""
+    out = {}
+    pairs = {"dem 1 thread / LIGGGHTS 1 rank": (1, 1), "dem 2 threads / LIGGGHTS 2 ranks": (2, 2)}
+    for name, (threads, ranks) in pairs.items():
+        values = []
+        for repeat in sorted({r["repeat"] for r in runs}):
+            mine = [r for r in runs if r["repeat"] == repeat and r.get("particle_steps_per_s")]
+            d = [r for r in mine if r["code"] == "dem" and r["threads"] == threads]
+            g = [r for r in mine if r["code"] == "liggghts" and r["ranks"] == ranks]
+            if d and g:
+                values.append(d[0]["particle_steps_per_s"] / g[0]["particle_steps_per_s"])
+        if values:
+            values.sort()
+            out[name] = {
+                "median": values[len(values) // 2] if len(values) % 2 else
+                0.5 * (values[len(values) // 2 - 1] + values[len(values) // 2]),
+                "range": [values[0], values[-1]],
+                "per_repeat": values,
+            }  # fmt: skip
+    return out
 
 
 def main(argv=None) -> None:
@@ -250,6 +264,7 @@ def main(argv=None) -> None:
     parser.add_argument("--dem-timeout", type=float, default=300.0, help="s per dem run")
     parser.add_argument("--skip-liggghts", action="store_true")
     parser.add_argument("--skip-dem", action="store_true")
+    parser.add_argument("--busy", action="store_true", help="spin one core meanwhile")
     parser.add_argument("--results", help="default: results_CASE.json in this folder")
     args = parser.parse_args(argv)
 
@@ -270,13 +285,45 @@ def main(argv=None) -> None:
         "dem_version": __version__,
         "git_commit": provenance.git_commit(),
     }
-    halves = [("liggghts", bench_liggghts, args.skip_liggghts), ("dem", run_dem, args.skip_dem)]
-    for name, bench, skip in halves:
-        if skip:
-            continue
-        results[name] = {**stamp, **bench(args, case)}
-        path.write_text(json.dumps(results, indent=2) + "\n")  # after each half
-        print(f"wrote {path}")
+    busy = None
+    if args.busy:
+        busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        print("a busy process spins on one core meanwhile")
+    try:
+        runs = interleaved(args, case)
+    finally:
+        if busy is not None:
+            busy.kill()
+            busy.wait()
+    best = {}
+    for run in runs:
+        rate = run.get("particle_steps_per_s")
+        key = label(run)
+        if rate and (key not in best or rate > best[key]["particle_steps_per_s"]):
+            best[key] = run
+    measured = ratios(runs)
+    key = "busy" if args.busy else "interleaved"
+    results[key] = {
+        **stamp,
+        "timestep": args.timestep,
+        "settle_cycles": args.settle_cycles,
+        "cycles": args.cycles,
+        "repeats": args.repeat,
+        "busy_process": bool(args.busy),
+        "timing": "LIGGGHTS: last 'Loop time' line (the measured driven run); dem: "
+        "particle_steps_per_s of summary.json (settle and measured cycles)",
+        "runs": runs,
+        "best": best,
+        "ratios": measured,
+    }
+    path.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"\nbest of {args.repeat} repeats:")
+    for name, run in best.items():
+        print(f"  {name:22s} {run['particle_steps_per_s']:.3g} particle-steps/s")
+    for name, r in measured.items():
+        lo, hi = r["range"]
+        print(f"  {name}: median {r['median']:.2f} (range {lo:.2f}-{hi:.2f})")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
