@@ -8,7 +8,8 @@ busy process: 2 threads 0.2-0.4e7 particle-steps/s, 1 thread 1.6e7; validation/p
 (``numba.set_num_threads``), and then runs at one thread's full speed.
 
 :class:`ThreadGuard` times each chunk of steps (``DEM_CHECK_INTERVAL``) on the thread count it
-chose: the first chunk on N threads, the second on one, then on whichever was faster per step
+chose: the first two chunks on N threads (the first, which pays one-time costs, is not timed),
+the third on one, then on whichever was faster per step
 (the choice it keeps is re-timed every chunk, so it leaves a choice that slows down at once).
 Since load comes and goes, it tries the other choice again after ``DEM_THREAD_GUARD_PERIOD``
 chunks; each try that confirms the choice doubles the wait (up to 8 periods), a try that
@@ -35,7 +36,7 @@ class ThreadGuard:
         self.seconds_per_step: dict[int, float] = {}
         self.steps = {self.threads: 0, 1: 0}
         self.wait = self.period  # chunks from one try of the other choice to the next
-        self.next_try = 1  # the second chunk tries one thread
+        self.next_try = 2  # the third chunk tries one thread (the first is not timed)
         self._tried: int | None = None  # the choice a try interrupted
 
     @property
@@ -62,7 +63,8 @@ class ThreadGuard:
         """Time of a chunk of ``steps`` steps run on ``threads``."""
         self.chunks += 1
         self.steps[threads] += steps
-        if steps >= config.DEM_THREAD_GUARD_MIN_STEPS and seconds > 0.0:
+        # the first chunk pays once (cache loads, the inbox's first touch): not a fair time
+        if self.chunks > 1 and steps >= config.DEM_THREAD_GUARD_MIN_STEPS and seconds > 0.0:
             self.seconds_per_step[threads] = seconds / steps
         if self._tried is not None:
             held = self.best == self._tried

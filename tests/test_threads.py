@@ -111,24 +111,24 @@ def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
     for _ in range(16):
         k = guard.choose()
         guard.record(k, 1000, slow[k])
-    # N threads first, one thread second (it wins: the next try 4 chunks after it), then one
-    # thread; the try at chunk 6 confirms one thread, so the next waits 8 chunks (chunk 15)
-    assert chosen == [2, 1, 1, 1, 1, 1, 2, 1, 1, 1, 1, 1, 1, 1, 1, 2]
+    # N threads first (untimed) and second, one thread third (it wins: the next try 4 chunks
+    # after it), then one thread; the try at chunk 7 confirms it: the next waits 8 chunks
+    assert chosen == [2, 2, 1, 1, 1, 1, 1, 2, 1, 1, 1, 1, 1, 1, 1, 1]
     assert guard.best == 1 and guard.as_dict()["fraction_on_one_thread"] == 13 / 16
     chosen.clear()
     fast = threads.ThreadGuard(2, period=4)
     for _ in range(40):
         k = fast.choose()
         fast.record(k, 1000, {2: 1.0, 1: 1.8}[k])
-    # tries of one thread at chunks 1, 10, 27: the wait doubles (8, 16, ...) while two hold
-    assert [c for c, k in enumerate(chosen) if k == 1] == [1, 10, 27] and fast.best == 2
+    # tries of one thread at chunks 2, 11, 28: the wait doubles (8, 16, ...) while two hold
+    assert [c for c, k in enumerate(chosen) if k == 1] == [2, 11, 28] and fast.best == 2
     chosen.clear()
     turn = threads.ThreadGuard(2, period=4)  # two threads win, then the machine gets busy
     for c in range(20):
         k = turn.choose()
         turn.record(k, 1000, ({2: 1.0, 1: 1.8} if c < 6 else {2: 3.0, 1: 1.0})[k])
     # chunk 6 on two threads is slow: the guard leaves at once (no wait for a try)
-    assert chosen[:10] == [2, 1, 2, 2, 2, 2, 2, 1, 1, 1]
+    assert chosen[:10] == [2, 2, 1, 2, 2, 2, 2, 1, 1, 1]
 
 
 def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
