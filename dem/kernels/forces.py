@@ -185,6 +185,27 @@ def sphere_force(
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
+def total_force(
+    i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+    inbox, force, torque, ax, ay, az,
+):  # fmt: skip
+    """Force and torque on sphere i, N and N m, by either path.
+
+    :func:`sphere_force`; or, with ``gathered`` (``force``/``torque`` already hold m a and the
+    pairs, :func:`pair_forces_serial`), the walls added to them.
+    """
+    if gathered:
+        return wall_forces(
+            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+            force[i, 0], force[i, 1], force[i, 2], torque[i, 0], torque[i, 1], torque[i, 2],
+        )  # fmt: skip
+    return sphere_force(
+        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
+        ax, ay, az,
+    )  # fmt: skip
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def wall_forces(
     i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip

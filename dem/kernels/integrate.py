@@ -24,7 +24,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.forces import pair_forces, pair_forces_serial, sphere_force, wall_forces
+from dem.kernels.forces import pair_forces, pair_forces_serial, total_force
 from dem.kernels.neighbours import OK, max_displacement_sq, rebuild
 from dem.kernels.periodic import wrap
 from dem.kernels.rigid import (
@@ -86,17 +86,10 @@ def forces_kick(
     for chunk in numba.prange(chunks):
         px = 0.0
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
-            if gathered:
-                f = wall_forces(
-                    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                    force[i, 0], force[i, 1], force[i, 2], torque[i, 0], torque[i, 1],
-                    torque[i, 2],
-                )  # fmt: skip
-            else:
-                f = sphere_force(
-                    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-                    inbox, ax, ay, az,
-                )  # fmt: skip
+            f = total_force(
+                i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                part_start, inbox, force, torque, ax, ay, az,
+            )  # fmt: skip
             force[i, 0] = f[0]
             force[i, 1] = f[1]
             force[i, 2] = f[2]
@@ -144,6 +137,25 @@ def body_acceleration(t, gravity, drive):
 
 
 @numba.njit(**NUMBA_OPTIONS)
+def _pairs(serial, model, p, sph, nb, n_pairs, geom, n, ax, ay, az):
+    """The pair loop of either path (:mod:`dem.kernels.forces`).
+
+    One thread adds into ``force``/``torque`` (from m a); several threads write the inbox.
+    """
+    x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
+    if serial:
+        pair_forces_serial(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist,
+            geom.length, geom.dt, n, ax, ay, az, sph.force, sph.torque,
+        )  # fmt: skip
+    else:
+        pair_forces(
+            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist,
+            geom.length, geom.dt, nb.part_slot, nb.inbox,
+        )  # fmt: skip
+
+
+@numba.njit(**NUMBA_OPTIONS)
 def evaluate_forces(
     n, model, p, rotation, sph, nb, n_pairs, geom, t, gravity, drive, kick, next_drift, serial,
 ):  # fmt: skip
@@ -153,19 +165,9 @@ def evaluate_forces(
     (:func:`dem.kernels.forces.pair_forces_serial`), the same bits as the parallel pair loop and
     gather.
     """
-    x, v, omega, force, torque, radius, mass, inv_mass, inv_inertia, wall_hist = sph
-    length, width, dt = geom.length, geom.width, geom.dt
+    width, dt = geom.width, geom.dt
     ax, ay, az = body_acceleration(t, gravity, drive)
-    if serial:
-        pair_forces_serial(
-            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
-            dt, n, ax, ay, az, force, torque,
-        )  # fmt: skip
-    else:
-        pair_forces(
-            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
-            dt, nb.part_slot, nb.inbox,
-        )  # fmt: skip
+    _pairs(serial, model, p, sph, nb, n_pairs, geom, n, ax, ay, az)
     return forces_kick(
         n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial
     )
@@ -268,18 +270,9 @@ def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, driv
     ``force``/``torque`` (about X) with F_b = sum F_s + M a_body, T_b = sum (T_s + r_s x F_s).
     ``serial`` as :func:`evaluate_forces`.
     """
-    x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
+    x = sph.x
     length, width, dt = geom.length, geom.width, geom.dt
-    if serial:
-        pair_forces_serial(
-            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
-            dt, n, 0.0, 0.0, 0.0, sph.force, sph.torque,
-        )  # fmt: skip
-    else:
-        pair_forces(
-            model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, n_pairs, nb.hist, length,
-            dt, nb.part_slot, nb.inbox,
-        )  # fmt: skip
+    _pairs(serial, model, p, sph, nb, n_pairs, geom, n, 0.0, 0.0, 0.0)
     forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, serial)
     reduce_to_bodies(
         sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
@@ -341,17 +334,10 @@ def bodies_forces_kick(
             tx = ty = tz = 0.0
             for e in range(start[b], start[b + 1]):
                 s = members[e]
-                if gathered:
-                    f = wall_forces(
-                        s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                        force[s, 0], force[s, 1], force[s, 2], torque[s, 0], torque[s, 1],
-                        torque[s, 2],
-                    )  # fmt: skip
-                else:
-                    f = sphere_force(
-                        s, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                        part_start, inbox, 0.0, 0.0, 0.0,
-                    )  # fmt: skip
+                f = total_force(
+                    s, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                    part_start, inbox, force, torque, 0.0, 0.0, 0.0,
+                )  # fmt: skip
                 for c in range(3):
                     force[s, c] = f[c]
                     torque[s, c] = f[3 + c]
@@ -410,7 +396,7 @@ def advance_clumps(
     length, width, skin, dt = geom.length, geom.width, geom.skin, geom.dt
     limit = 0.25 * skin * skin
     body_of = bod.body_of
-    x, v, omega, radius, mass = sph.x, sph.v, sph.omega, sph.radius, sph.mass
+    x = sph.x
     for s in range(n_steps):
         if s == 0 and not resume:
             _bodies_half_step(dt, True, rotation, bod, sph, length)
@@ -419,16 +405,7 @@ def advance_clumps(
             if status != OK:
                 return status, s, need
         t = (step0 + s + 1) * dt
-        if serial:
-            pair_forces_serial(
-                model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist,
-                length, dt, n, 0.0, 0.0, 0.0, sph.force, sph.torque,
-            )  # fmt: skip
-        else:
-            pair_forces(
-                model, p, x, v, omega, radius, mass, nb.pair_i, nb.pair_j, counters[0], nb.hist,
-                length, dt, nb.part_slot, nb.inbox,
-            )  # fmt: skip
+        _pairs(serial, model, p, sph, nb, counters[0], geom, n, 0.0, 0.0, 0.0)
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(
             model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, s < n_steps - 1, bod,

@@ -26,6 +26,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from threads_shared import prepare  # the same settled, driven state
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
@@ -129,19 +131,6 @@ res["build_s"] = timed(loop_build, n, s.as_layout(), s.body, nb.as_layout(), nb.
                        repeat=1)
 print(json.dumps(res))
 """
-
-
-def prepare(case: str, path: Path) -> None:
-    """The case settled and driven for two cycles, written as a checkpoint."""
-    from dem import setup
-    from dem.case import load_case
-    from dem.io import checkpoint
-
-    sim = setup.from_case(load_case(case))
-    sim.settle()
-    sim.start_drive()
-    sim.run(int(2 * sim.trough.period / sim.dt))
-    checkpoint.write(path, sim, {})
 
 
 def measure(threads: int, steps: int, case: str, state: Path) -> dict:
