@@ -24,6 +24,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from dem import drive, tangential
 from dem.errors import InputError
 from dem.tomltable import Table, suggest
@@ -37,7 +39,7 @@ SHAPES = ("sphere", "screw", "clump")
 SUPPORTED_SHAPES = ("sphere", "screw", "clump")
 #: Whether the engine runs troughs from a mesh file (``trough.mesh``); until it does, the key is
 #: refused when the case is loaded, not when it is run.
-MESH_TROUGHS = False
+MESH_TROUGHS = True
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
 CONTACT_MODELS = ("hertz_mindlin", "linear")
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
@@ -356,10 +358,25 @@ def _read_trough(t: Table) -> TroughSpec:
 
 
 def _read_mesh(t: Table) -> Path | None:
+    """The mesh file, read and checked now (format, triangles, extent against length and width)."""
     mesh = t.path("mesh")
-    if mesh is not None and not MESH_TROUGHS:
+    if mesh is None:
+        return None
+    if not MESH_TROUGHS:
         raise t.error(
             "mesh", t.data["mesh"], "no mesh troughs yet: a flat floor and side walls (remove it)"
+        )
+    from dem.mesh import load_mesh
+
+    length, width = t.quantity("length"), t.quantity("width")
+    try:
+        tri = load_mesh(mesh, length=length).tri
+    except InputError as exc:
+        raise t.error("mesh", t.data["mesh"], exc.allowed) from None
+    span = float(np.ptp(tri[..., 1]))
+    if abs(span - width) > 1e-6 * width:
+        raise t.error(
+            "width", width, f"the mesh's width across y, {span:.6g} m (trough.mesh sets the walls)"
         )
     return mesh
 

@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES
+from dem.errors import InputError
 from dem.kernels.rigid import quat_to_matrix
 from dem.trough import Trough
 
@@ -64,6 +65,8 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     """
     pt, t = case.particles, case.trough
     rng = np.random.default_rng(case.run.seed)
+    if t.mesh is not None:
+        return fill_mesh(case, rng)
     if pt.shape == "sphere":
         positions, height = random_fill(pt.count, pt.radius, t.length, t.width, rng)
         order = spatial_order(positions, 2.0 * pt.radius, t.width)
@@ -71,6 +74,58 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     positions, quats, height = random_fill_clumps(pt.count, pt.grain, t.length, t.width, rng)
     order = spatial_order(positions, 2.0 * pt.grain.bounding_radius, t.width)
     return positions[order], quats[order], height
+
+
+def fill_mesh(case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | None, float]:
+    """The case's grains placed at random inside its mesh trough (returns as :func:`fill`).
+
+    Grains are drawn by the box fill over the mesh's bounding box (x over the section, y across
+    the mesh, z from its lowest point), more of them than asked by the share of the box that
+    lies inside the trough; a grain is kept if its centre lies on the grains' side of the mesh
+    (the closest triangle's normal points to it) and its bounding sphere clears the mesh. The
+    first N kept, in the box fill's order, are the fill. The box grows until N fit. Cost
+    O(N T) for T triangles (every triangle is within reach of the index for this test).
+    """
+    from dem.mesh import load_mesh
+
+    pt, t = case.particles, case.trough
+    sphere = pt.shape == "sphere"
+    reach = pt.radius if sphere else pt.grain.bounding_radius
+    mesh = load_mesh(t.mesh, length=t.length)
+    lo, hi = mesh.tri.min(axis=(0, 1)), mesh.tri.max(axis=(0, 1))
+    mesh.index(max(reach, float(np.max(hi[1:] - lo[1:]))))
+    width = float(hi[1] - lo[1])
+    shift = np.array([0.0, 0.5 * (lo[1] + hi[1]), lo[2]])
+    n = pt.count
+    probe = rng.uniform(size=(4096, 3)) * [t.length, width, 2.0 * (hi[2] - lo[2])]
+    share = max(float(np.mean(_inside(mesh, probe + shift - [0.0, 0.5 * width, 0.0], 0.0))), 0.05)
+    for _ in range(8):
+        extra = int(np.ceil(1.2 * n / share)) + 8
+        if sphere:
+            pos, height = random_fill(extra, pt.radius, t.length, width, rng)
+            quats = None
+        else:
+            pos, quats, height = random_fill_clumps(extra, pt.grain, t.length, width, rng)
+        pos = pos + shift
+        keep = np.flatnonzero(_inside(mesh, pos, reach))
+        if keep.size >= n:
+            keep = keep[:n]
+            pos = pos[keep]
+            quats = None if quats is None else quats[keep]
+            order = spatial_order(pos, 2.0 * reach, width)
+            return pos[order], None if quats is None else quats[order], height + lo[2]
+        share *= max(keep.size, 1) / (1.2 * n)
+    raise InputError(
+        "particles.count", n, f"fewer grains than fit inside the mesh trough {t.mesh} (the fill "
+        "found no room for them: are the triangle normals pointing to the grains' side?)",
+    )  # fmt: skip
+
+
+def _inside(mesh, points: np.ndarray, clearance: float) -> np.ndarray:
+    """Points on the grains' side of the mesh and at least ``clearance`` from it, (n,) bool."""
+    side = mesh.sides(points)
+    gap = mesh.gaps(points)
+    return (np.isnan(side) | (side > 0.0)) & (gap >= clearance)
 
 
 def spatial_order(positions: np.ndarray, cell: float, width: float) -> np.ndarray:

@@ -205,6 +205,8 @@ def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
         q[:, 0] = 1.0
         b, s = Bodies.create(case.particles.grain, np.zeros((grains, 3)), q)
         arrays = [s, b]
+    if case.trough.mesh is not None:
+        s.use_mesh()  # the mesh contact slots (the triangles themselves are not counted)
     pairs = PairList.for_spheres(spheres)
     if threads > 1:
         pairs.ensure_inbox()

@@ -208,7 +208,7 @@ def run_case(
     if frames:
         vtk = VTKSeriesWriter(
             out_dir, case.trough.length, case.trough.width, case.trough.inclination,
-            entries=[tuple(e) for e in loop["vtk_entries"]], lab_frame=lab_frame,
+            entries=[tuple(e) for e in loop["vtk_entries"]], lab_frame=lab_frame, mesh=sim.mesh,
         )  # fmt: skip
     results = ResultsWriter(
         out_dir / RESULTS,

@@ -91,16 +91,21 @@ def _build(case, positions, orientations, velocities, step, reference_speed) -> 
     return Simulation(
         spheres, Trough.from_case(case), ContactLaw.from_case(case), step.dt,
         rotation=pt.rotation, reference_speed=reference_speed, bodies=bodies,
-        timestep_limit=step.limit,
+        timestep_limit=step.limit, mesh=trough_mesh(case),
     )  # fmt: skip
 
 
+def trough_mesh(case):
+    """The case's trough mesh (:class:`dem.mesh.TriangleMesh`), or None for flat walls."""
+    if case.trough.mesh is None:
+        return None
+    from dem.mesh import load_mesh
+
+    return load_mesh(case.trough.mesh, length=case.trough.length)
+
+
 def check_buildable(case) -> None:
-    """Refuse what the engine cannot build yet (a mesh trough, a grain without its template)."""
+    """Refuse what the engine cannot build (a grain without its template)."""
     pt = case.particles
-    if case.trough.mesh is not None:
-        raise InputError(
-            "trough.mesh", str(case.trough.mesh), "no mesh yet: flat floor and side walls"
-        )
     if pt.shape != "sphere" and pt.grain is None:
         raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")

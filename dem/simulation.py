@@ -44,9 +44,10 @@ from dem.kernels.integrate import (
     evaluate_forces,
     evaluate_forces_clumps,
 )
-from dem.kernels.layout import Geometry
+from dem.kernels.layout import Geometry, MeshArrays
 from dem.kernels.neighbours import OK
 from dem.kernels.rigid import rotational_energy
+from dem.mesh import TriangleMesh
 from dem.state import Bodies, PairList, Spheres
 from dem.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
 from dem.trough import Trough, check_section_length
@@ -70,6 +71,8 @@ class Simulation:
         bodies: Rigid clumps owning the spheres (:meth:`dem.state.Bodies.create`), or None for
             plain spheres.
         timestep_limit: The stability limit dt was chosen under, s (reported; nan if unknown).
+        mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`) replacing the flat floor and side
+            walls, or None.
 
     """
 
@@ -85,6 +88,7 @@ class Simulation:
         reference_speed: float | None = None,
         bodies: Bodies | None = None,
         timestep_limit: float = math.nan,
+        mesh: TriangleMesh | None = None,
     ):
         self.spheres = spheres
         self.bodies = bodies
@@ -100,6 +104,10 @@ class Simulation:
         self.skin = config.DEM_SKIN_FRACTION * r_max if skin is None else float(skin)
         reach = 0.0 if bodies is None else float(np.max(np.linalg.norm(bodies.offsets, axis=1)))
         check_section_length(trough.length, r_max, self.skin, reach)
+        self.mesh = mesh
+        if mesh is not None:
+            mesh.index(r_max + self.skin)
+            spheres.use_mesh()
         self.pairs = PairList.for_spheres(spheres.n)
         self.geom = Geometry(trough.length, trough.width, self.skin, self.dt)
         self.gravity = trough.gravity
@@ -135,6 +143,25 @@ class Simulation:
     def _drive(self) -> np.ndarray:
         return self.trough.drive_array(self.drive_on)
 
+    def mesh_layout(self) -> MeshArrays | None:
+        """The trough mesh and the spheres' contact slots as the kernels take them (or None)."""
+        s = self.spheres
+        m = self.mesh
+        if m is None:
+            return None
+        return MeshArrays(m.tri, m.grid, m.dims, m.cell_start, m.cell_tris, s.mesh_hist,
+                          s.mesh_normal)  # fmt: skip
+
+    def wall_gaps(self, x: np.ndarray) -> np.ndarray:
+        """Distance of points (n, 3) from each wall, (walls, n), m.
+
+        The flat floor and side walls (:meth:`dem.trough.Trough.wall_gaps`), or one row: the
+        distance to the mesh.
+        """
+        if self.mesh is None:
+            return self.trough.wall_gaps(x)
+        return self.mesh.gaps(x)[None, :]
+
     def _build(self) -> None:
         while True:
             status, need = build(
@@ -157,14 +184,14 @@ class Simulation:
             evaluate_forces_clumps(
                 self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_layout(),
                 self.pairs.as_layout(), self.pairs.n_pairs, self.geom, self.drive_time,
-                self.gravity, self._drive(), self.bodies.as_layout(), serial,
+                self.gravity, self._drive(), self.bodies.as_layout(), serial, self.mesh_layout(),
             )  # fmt: skip
             self.forces_valid = True
             return
         evaluate_forces(
             self.spheres.n, self.law.model_id, self.law.params, self.rotation,
             self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs, self.geom,
-            self.drive_time, self.gravity, self._drive(), False, False, serial,
+            self.drive_time, self.gravity, self._drive(), False, False, serial, self.mesh_layout(),
         )  # fmt: skip
         self.forces_valid = True
 
@@ -200,6 +227,7 @@ class Simulation:
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
                     self.spheres.as_layout(), self.spheres.body, self.pairs.as_layout(),
                     self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
+                    self.mesh_layout(),
                 )  # fmt: skip
             else:
                 status, steps, need = advance_clumps(
@@ -207,6 +235,7 @@ class Simulation:
                     self.spheres.n, self.law.model_id, self.law.params, self.rotation,
                     self.spheres.as_layout(), self.bodies.as_layout(), self.pairs.as_layout(),
                     self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
+                    self.mesh_layout(),
                 )  # fmt: skip
             done += steps
             self.step_index += steps
@@ -244,7 +273,7 @@ class Simulation:
             d = self.trough.minimum_image(s.x[i] - s.x[j])
             delta = r[i] + r[j] - np.sqrt(np.einsum("ij,ij->i", d, d))
             worst = max(worst, float(np.max(delta / np.minimum(r[i], r[j]))))
-        gaps = self.trough.wall_gaps(s.x)
+        gaps = self.wall_gaps(s.x)
         worst = max(worst, float(np.max((r - gaps) / r)))
         return worst
 
@@ -352,7 +381,7 @@ class Simulation:
             touch = np.einsum("ij,ij->i", d, d) < (s.radius[i] + s.radius[j]) ** 2
             np.add.at(count, i[touch], 1)
             np.add.at(count, j[touch], 1)
-        count += np.sum(self.trough.wall_gaps(s.x) < s.radius, axis=0)
+        count += np.sum(self.wall_gaps(s.x) < s.radius, axis=0)
         return count
 
 

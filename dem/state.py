@@ -40,6 +40,9 @@ class Spheres:
         inv_inertia: 1 / I with I = 2/5 m r^2 (solid sphere), (n,), 1/(kg m^2).
         wall_hist: Tangential elongation per sphere and wall (row 3 s + w), (3 n, 3), m.
         body: Grain index of each sphere, (n,), int64.
+        mesh_hist, mesh_normal: Contact slots with a trough mesh (row ``MESH_SLOTS s + k``):
+            tangential spring, m, and the normal of the slot's last contact, (MESH_SLOTS n, 3);
+            (0, 3) without a mesh (:mod:`dem.kernels.mesh`, :meth:`use_mesh`).
 
     """
 
@@ -54,6 +57,8 @@ class Spheres:
     inv_inertia: np.ndarray
     wall_hist: np.ndarray
     body: np.ndarray
+    mesh_hist: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    mesh_normal: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @classmethod
     def create(cls, positions: np.ndarray, radius: np.ndarray | float, density: float) -> Spheres:
@@ -83,6 +88,14 @@ class Spheres:
     def n(self) -> int:
         """Number of spheres."""
         return self.x.shape[0]
+
+    def use_mesh(self) -> None:
+        """Allocate the mesh contact slots (empty, all springs at rest)."""
+        from dem.kernels.mesh import MESH_SLOTS
+
+        if self.mesh_hist.shape[0] != MESH_SLOTS * self.n:
+            self.mesh_hist = np.zeros((MESH_SLOTS * self.n, 3))
+            self.mesh_normal = np.zeros((MESH_SLOTS * self.n, 3))
 
     def as_layout(self) -> SphereArrays:
         """The arrays as the kernels take them (:class:`dem.kernels.layout.SphereArrays`)."""

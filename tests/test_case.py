@@ -184,23 +184,27 @@ def test_tangential_keys(tmp_path):
     assert contact.tangential_damping_ratio == 0.2
 
 
-def test_explicit_timestep_and_mesh(tmp_path, monkeypatch):
-    monkeypatch.setattr(dem.case, "MESH_TROUGHS", True)  # the reader, once meshes run
+def test_explicit_timestep_and_mesh(tmp_path):
+    import meshio
+
+    from dem.mesh import extrude
+
     (tmp_path / "geometry").mkdir()
-    (tmp_path / "geometry" / "trough.stl").write_text("solid t\nendsolid t\n")
+    box = [[-0.02, 0.02], [-0.02, 0.0], [0.02, 0.0], [0.02, 0.02]]  # floor, walls: 0.04 wide
+    meshio.write(tmp_path / "geometry" / "trough.stl", extrude(box, 0.1), binary=False)
     tables = with_changes({"run.timestep": 1e-6, "trough.mesh": "geometry/trough.stl"})
     case = load_case(write_case(tmp_path, tables))
     assert case.run.timestep == 1e-6
     assert case.trough.mesh == (tmp_path / "geometry" / "trough.stl").resolve()
 
 
-def test_mesh_trough_is_refused_at_load_until_the_engine_runs_it(tmp_path):
+def test_a_mesh_without_triangles_is_refused_at_load(tmp_path):
     (tmp_path / "geometry").mkdir()
     (tmp_path / "geometry" / "trough.stl").write_text("solid t\nendsolid t\n")
     tables = with_changes({"trough.mesh": "geometry/trough.stl"})
     with pytest.raises(InputError, match="trough.mesh") as info:
         load_case(write_case(tmp_path, tables))
-    assert "no mesh troughs yet" in str(info.value)
+    assert "trough.stl" in str(info.value)
 
 
 def test_user_timestep_above_the_stability_limit_is_refused_at_load(tmp_path):

@@ -10,8 +10,9 @@ Layout of an output directory::
 Every frame is one ``<DataSet timestep="t" part="0" .../>`` (the spheres) and one with
 ``part="1"`` (the trough) in the collection, t in seconds of simulated time. The trough's
 geometry is that of :class:`dem.trough.Trough` (:meth:`~dem.trough.Trough.wall_corners`, the
-kernel's walls), built once per writer: in the trough frame it is written once and every frame
-refers to it, in the lab frame each frame writes a shifted copy. The collection is
+kernel's walls), or the triangles of a mesh trough (``trough.mesh``), built once per writer:
+in the trough frame it is written once and every frame refers to it, in the lab frame each frame
+writes a shifted copy. The collection is
 rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
 collection that opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a
 last time.
@@ -76,6 +77,16 @@ def trough_polydata(
     return mesh
 
 
+def mesh_polydata(tri: np.ndarray) -> pv.PolyData:
+    """Triangles (T, 3, 3) of a trough mesh as polydata, m; cell data ``part`` = 0 (the mesh)."""
+    tri = np.asarray(tri, dtype=np.float64).reshape(-1, 3, 3)
+    pts = tri.reshape(-1, 3)
+    faces = np.column_stack([np.full(len(tri), 3), np.arange(pts.shape[0]).reshape(-1, 3)])
+    mesh = pv.PolyData(pts, faces=faces.ravel())
+    mesh.cell_data["part"] = np.zeros(len(tri), dtype=np.int32)
+    return mesh
+
+
 class VTKSeriesWriter:
     """Write sphere frames and the trough as a ParaView time series (see the module docstring).
 
@@ -88,6 +99,7 @@ class VTKSeriesWriter:
         lab_frame: False (default): trough frame, trough fixed. True: spheres and trough shifted
             by the drive displacement given to :meth:`write_frame`.
         wall_height: Height of the drawn side walls, m (default: half the width).
+        mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`): drawn instead of the flat walls.
 
     """
 
@@ -101,6 +113,7 @@ class VTKSeriesWriter:
         lab_frame: bool = False,
         wall_height: float | None = None,
         entries: list[tuple[float, str, str]] | None = None,
+        mesh=None,
     ):
         if trough_length <= 0 or trough_width <= 0:
             raise ValueError(
@@ -118,7 +131,10 @@ class VTKSeriesWriter:
         # (time, particles file, trough file); a resumed run passes the entries it had
         self._entries: list[tuple[float, str, str]] = [tuple(e) for e in entries or []]
         self._section = Trough(self.length, self.width)
-        self._trough_mesh = trough_polydata(self.length, self.width, self.wall_height)
+        if mesh is None:
+            self._trough_mesh = trough_polydata(self.length, self.width, self.wall_height)
+        else:
+            self._trough_mesh = mesh_polydata(mesh.tri)
         self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
 
     @property

@@ -28,7 +28,8 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contacts import contact_force
+from dem.kernels.contacts import contact_force, contact_force_inlined
+from dem.kernels.mesh import mesh_forces
 from dem.kernels.periodic import minimum_image
 
 N_WALLS = 3
@@ -59,7 +60,7 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
     inv_d = 1.0 / d
     mi = mass[i]
     mj = mass[j]
-    f = contact_force(
+    f = contact_force_inlined(
         model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
         v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
         omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
@@ -157,7 +158,7 @@ def pair_forces_serial(
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def sphere_force(
     i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
-    ax, ay, az,
+    ax, ay, az, mesh,
 ):  # fmt: skip
     """Total force and torque on sphere i: its pairs' slots, its walls and m (ax, ay, az).
 
@@ -180,14 +181,15 @@ def sphere_force(
         ty += inbox[e, 4]
         tz += inbox[e, 5]
     return wall_forces(
-        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz
-    )
+        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
+        fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def total_force(
     i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
-    inbox, force, torque, ax, ay, az,
+    inbox, force, torque, ax, ay, az, mesh,
 ):  # fmt: skip
     """Force and torque on sphere i, N and N m, by either path.
 
@@ -196,25 +198,32 @@ def total_force(
     """
     if gathered:
         return wall_forces(
-            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
             force[i, 0], force[i, 1], force[i, 2], torque[i, 0], torque[i, 1], torque[i, 2],
         )  # fmt: skip
     return sphere_force(
         i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
-        ax, ay, az,
+        ax, ay, az, mesh,
     )  # fmt: skip
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def wall_forces(
-    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, fx, fy, fz, tx, ty, tz,
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
+    fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip
     """(fx, ..., tz) plus the forces and torques of sphere i's wall contacts, N and N m.
+
+    A mesh trough (``mesh`` not None) replaces the floor and side walls by its triangles
+    (:func:`dem.kernels.mesh.mesh_forces`). Without one, ``mesh`` is None and numba compiles the
+    kernels without the mesh code at all (a separate, cached specialisation for mesh troughs).
 
     Most spheres touch no wall: they only reset their wall history (r - gap <= 0 exactly when
     gap >= r, so the early exit is the loop's own test). Without it the loop, with three inlined
     contact laws in it, cost 50 ns a sphere touching nothing (validation/performance/README.md).
     """
+    if mesh is not None:
+        return mesh_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz)
     r = radius[i]
     m = mass[i]
     if x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r:

@@ -61,7 +61,7 @@ def kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotatio
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def forces_kick(
-    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift, gathered,
+    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift, gathered, mesh,
 ):  # fmt: skip
     """Gather forces per sphere into ``force``/``torque``; then (if ``kick``) the half kick.
 
@@ -88,7 +88,7 @@ def forces_kick(
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
             f = total_force(
                 i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                part_start, inbox, force, torque, ax, ay, az,
+                part_start, inbox, force, torque, ax, ay, az, mesh,
             )  # fmt: skip
             force[i, 0] = f[0]
             force[i, 1] = f[1]
@@ -158,6 +158,7 @@ def _pairs(serial, model, p, sph, nb, n_pairs, geom, n, ax, ay, az):
 @numba.njit(**NUMBA_OPTIONS)
 def evaluate_forces(
     n, model, p, rotation, sph, nb, n_pairs, geom, t, gravity, drive, kick, next_drift, serial,
+    mesh,
 ):  # fmt: skip
     """Pair forces then per-sphere gather at time t (see :func:`forces_kick`); sum m v_x.
 
@@ -169,8 +170,9 @@ def evaluate_forces(
     ax, ay, az = body_acceleration(t, gravity, drive)
     _pairs(serial, model, p, sph, nb, n_pairs, geom, n, ax, ay, az)
     return forces_kick(
-        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial
-    )
+        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial,
+        mesh,
+    )  # fmt: skip
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -194,7 +196,7 @@ def build(n, sph, body, nb, counters, geom):
 @numba.njit(**NUMBA_OPTIONS)
 def advance(
     n_steps, step0, resume, n, model, p, rotation, sph, body, nb, counters, geom, gravity, drive,
-    out_stats, serial,
+    out_stats, serial, mesh,
 ):  # fmt: skip
     """Advance ``n_steps`` velocity-Verlet steps from step index ``step0`` (t = step dt).
 
@@ -211,6 +213,7 @@ def advance(
         drive: float64 (5,): A omega^2 (m/s^2), omega (rad/s), e_x, e_y, e_z.
         out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
         serial: True on one thread: pair forces added to the spheres directly (same bits).
+        mesh: The trough mesh (:class:`dem.kernels.layout.MeshArrays`), or None: flat walls.
 
     Returns:
         (status, steps_done, need): status DONE, or a neighbour-list overflow code with the
@@ -232,7 +235,7 @@ def advance(
         t = (step0 + s + 1) * dt
         px = evaluate_forces(
             n, model, p, rotation, sph, nb, counters[0], geom, t, gravity, drive, True,
-            s < n_steps - 1, serial,
+            s < n_steps - 1, serial, mesh,
         )  # fmt: skip
         out_stats[0] += px
         out_stats[1] += 1.0
@@ -263,7 +266,9 @@ def _add_body_force(body_force, mass, ax, ay, az):
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, drive, bod, serial):
+def evaluate_forces_clumps(
+    n, model, p, sph, nb, n_pairs, geom, t, gravity, drive, bod, serial, mesh,
+):  # fmt: skip
     """Pair forces, per-member gather (walls, no body force), reduction to the bodies + M a_body.
 
     Leaves ``sph.force``/``torque`` with the members' contact forces and the bodies'
@@ -273,7 +278,9 @@ def evaluate_forces_clumps(n, model, p, sph, nb, n_pairs, geom, t, gravity, driv
     x = sph.x
     length, width, dt = geom.length, geom.width, geom.dt
     _pairs(serial, model, p, sph, nb, n_pairs, geom, n, 0.0, 0.0, 0.0)
-    forces_kick(n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, serial)
+    forces_kick(
+        n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, serial, mesh
+    )
     reduce_to_bodies(
         sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
     )  # fmt: skip
@@ -298,6 +305,7 @@ def _bodies_half_step(dt, drift, rotation, bod, sph, length):
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def bodies_forces_kick(
     model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length, gathered,
+    mesh,
 ):  # fmt: skip
     """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
 
@@ -336,7 +344,7 @@ def bodies_forces_kick(
                 s = members[e]
                 f = total_force(
                     s, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                    part_start, inbox, force, torque, 0.0, 0.0, 0.0,
+                    part_start, inbox, force, torque, 0.0, 0.0, 0.0, mesh,
                 )  # fmt: skip
                 for c in range(3):
                     force[s, c] = f[c]
@@ -376,7 +384,7 @@ def bodies_forces_kick(
 @numba.njit(**NUMBA_OPTIONS)
 def advance_clumps(
     n_steps, step0, resume, n, model, p, rotation, sph, bod, nb, counters, geom, gravity, drive,
-    out_stats, serial,
+    out_stats, serial, mesh,
 ):  # fmt: skip
     """Advance ``n_steps`` steps of rigid clumps (arguments and return as :func:`advance`).
 
@@ -409,7 +417,7 @@ def advance_clumps(
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(
             model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, s < n_steps - 1, bod,
-            length, serial,
+            length, serial, mesh,
         )  # fmt: skip
         out_stats[1] += 1.0
     return DONE, n_steps, 0

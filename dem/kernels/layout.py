@@ -64,6 +64,18 @@ class PairArrays(NamedTuple):
     inbox: np.ndarray  # (2 cap, 6) force and torque of each pair end by CSR slot, N and N m
 
 
+class MeshArrays(NamedTuple):
+    """A trough mesh and its contact slots (:class:`dem.mesh.TriangleMesh`); None: flat walls."""
+
+    tri: np.ndarray  # (T, 3, 3) triangle corners, m
+    grid: np.ndarray  # (5,) index origin (3), cell edge, period along x (0: none), m
+    dims: np.ndarray  # (3,) int64 cells along x, y, z
+    cell_start: np.ndarray  # CSR start of each cell's triangles
+    cell_tris: np.ndarray  # triangles, cell by cell
+    slot_hist: np.ndarray  # (MESH_SLOTS n, 3) tangential springs of the mesh contacts, m
+    slot_normal: np.ndarray  # (MESH_SLOTS n, 3) normal of each slot's last contact
+
+
 class Geometry(NamedTuple):
     """The periodic section and the step (:class:`dem.simulation.Simulation`)."""
 

@@ -1,0 +1,189 @@
+"""Trough meshes: triangles read with meshio, checked, and binned for the contact kernel.
+
+A mesh trough is a surface of triangles in the trough frame (x along the trough, y across, z up
+from the floor; metres), fixed to the trough and driven with it. Any format meshio reads works
+(STL, OBJ, VTK, VTU, PLY, ...); quadrilaterals are split into two triangles. Triangle normals
+(right-hand winding a -> b -> c) should point to the grains' side: the fill places grains there.
+The contact law and the rules against double counting are in :mod:`dem.kernels.mesh`.
+
+The section stays periodic in x with period ``trough.length``: the mesh must span x from 0 to
+``trough.length`` and have the same cross-section at both ends (a profile extruded along x, as
+the shipped U and V troughs are); grains leaving at x = length come back at x = 0.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from dem.errors import InputError
+
+#: Relative tolerance on the mesh's x extent against [0, trough.length].
+EXTENT_TOLERANCE = 1e-6
+
+
+@dataclass
+class TriangleMesh:
+    """Triangles of a trough mesh with their cell index.
+
+    Attributes:
+        tri: Corners, (T, 3, 3), m, trough frame.
+        normals: Unit normals (b - a) x (c - a) / |...|, (T, 3).
+        grid: Index origin (3), cell edge and the period along x (0: none), (5,), m; ``dims``
+            (3,) int64 cells along x, y, z.
+        cell_start, cell_tris: CSR of the triangles listed in each cell, int64.
+        source: Where the triangles came from (a path, or a description).
+
+    """
+
+    tri: np.ndarray
+    period: float = 0.0
+    normals: np.ndarray = field(init=False)
+    grid: np.ndarray = field(init=False)
+    dims: np.ndarray = field(init=False)
+    cell_start: np.ndarray = field(init=False)
+    cell_tris: np.ndarray = field(init=False)
+    source: str = "triangles"
+
+    def __post_init__(self):
+        self.tri = np.ascontiguousarray(self.tri, dtype=np.float64).reshape(-1, 3, 3)
+        cross = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
+        area2 = np.linalg.norm(cross, axis=1)
+        self.normals = cross / np.where(area2 > 0.0, area2, 1.0)[:, None]
+        self.index(0.0)
+
+    @property
+    def count(self) -> int:
+        """Number of triangles."""
+        return self.tri.shape[0]
+
+    def index(self, reach: float) -> None:
+        """Bin the triangles for spheres of radius plus skin up to ``reach``, m.
+
+        Cells of edge max(2 reach, a tenth of the mesh's largest extent) over the bounding box
+        padded by ``reach``; each cell lists the triangles whose padded bounding box meets it.
+        """
+        lo = self.tri.min(axis=(0, 1)) - reach
+        hi = self.tri.max(axis=(0, 1)) + reach
+        extent = float(np.max(hi - lo))
+        cell = max(2.0 * reach, 0.1 * extent, 1e-12)
+        dims = np.maximum(1, np.ceil((hi - lo) / cell).astype(np.int64))
+        tlo = np.floor((self.tri.min(axis=1) - reach - lo) / cell).astype(np.int64)
+        thi = np.floor((self.tri.max(axis=1) + reach - lo) / cell).astype(np.int64)
+        tlo = np.clip(tlo, 0, dims - 1)
+        thi = np.clip(thi, 0, dims - 1)
+        cells, tris = [], []
+        for t in range(self.count):
+            ix = np.arange(tlo[t, 0], thi[t, 0] + 1)
+            iy = np.arange(tlo[t, 1], thi[t, 1] + 1)
+            iz = np.arange(tlo[t, 2], thi[t, 2] + 1)
+            z, y, x = np.meshgrid(iz, iy, ix, indexing="ij")
+            c = ((z * dims[1] + y) * dims[0] + x).ravel()
+            cells.append(c)
+            tris.append(np.full(c.size, t, dtype=np.int64))
+        cells = np.concatenate(cells) if cells else np.zeros(0, dtype=np.int64)
+        tris = np.concatenate(tris) if tris else np.zeros(0, dtype=np.int64)
+        order = np.lexsort((tris, cells))  # by cell, triangles in index order within a cell
+        n_cells = int(np.prod(dims))
+        self.cell_start = np.zeros(n_cells + 1, dtype=np.int64)
+        np.add.at(self.cell_start, cells + 1, 1)
+        self.cell_start = np.cumsum(self.cell_start)
+        self.cell_tris = np.ascontiguousarray(tris[order])
+        self.grid = np.array([lo[0], lo[1], lo[2], cell, self.period])
+        self.dims = dims
+
+    def gaps(self, x: np.ndarray) -> np.ndarray:
+        """Distance of points (n, 3) to the mesh, (n,), m (inf beyond the indexed reach)."""
+        from dem.kernels.mesh import mesh_gaps
+
+        x = np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3)
+        return mesh_gaps(x, self.tri, self.grid, self.dims, self.cell_start, self.cell_tris)
+
+    def sides(self, x: np.ndarray) -> np.ndarray:
+        """Signed distance along the closest triangle's normal, (n,), m (nan beyond reach)."""
+        from dem.kernels.mesh import mesh_sides
+
+        x = np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3)
+        return mesh_sides(
+            x, self.tri, self.normals, self.grid, self.dims, self.cell_start, self.cell_tris
+        )
+
+
+def extrude(profile: np.ndarray, length: float, x_segments: int = 1):
+    """A cross-section profile (m, 2) of (y, z) points extruded along x over [0, length].
+
+    Returns a ``meshio.Mesh`` of 2 (m - 1) ``x_segments`` triangles. Walking the profile from -y
+    to +y with the pan above it, every normal (b - a) x (c - a) points into the pan (the side the
+    profile curves towards): the grains' side.
+    """
+    import meshio
+
+    profile = np.asarray(profile, dtype=np.float64)
+    m = len(profile)
+    xs = np.linspace(0.0, length, x_segments + 1)
+    pts = np.vstack([np.column_stack([np.full(m, xv), profile]) for xv in xs])
+    tris = []
+    for s in range(x_segments):
+        for k in range(m - 1):
+            a, b = s * m + k, s * m + k + 1  # at xs[s]
+            c, d = a + m, b + m  # at xs[s + 1]
+            tris += [[a, c, b], [b, c, d]]
+    return meshio.Mesh(pts, [("triangle", np.array(tris, dtype=np.int64))])
+
+
+def load_mesh(path: Path, *, length: float | None = None, source: str | None = None):
+    """The triangles of a mesh file (any format meshio reads), checked; InputError names the key.
+
+    ``length``: the periodic section's length; the mesh must span x from 0 to it.
+    """
+    import meshio
+
+    where = source or str(path)
+    try:
+        with warnings.catch_warnings():  # meshio's STL reader warns while it tells ASCII files
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mesh = meshio.read(path)
+    except Exception as exc:  # meshio raises many kinds (ReadError, KeyError, ValueError...)
+        raise InputError(
+            "trough.mesh", str(path), f"a mesh file meshio can read ({exc})", where
+        ) from None
+    points = np.asarray(mesh.points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        raise InputError("trough.mesh", str(path), "points with 3 coordinates", where)
+    if points.shape[1] == 2:
+        points = np.column_stack([points, np.zeros(len(points))])
+    faces = []
+    for block in mesh.cells:
+        if block.type == "triangle":
+            faces.append(block.data)
+        elif block.type == "quad":
+            q = block.data
+            faces += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
+    if not faces:
+        kinds = sorted({b.type for b in mesh.cells}) or ["none"]
+        raise InputError(
+            "trough.mesh", str(path), f"triangles or quads (the file has {', '.join(kinds)})",
+            where,
+        )  # fmt: skip
+    tri = points[np.concatenate(faces)]
+    if not np.isfinite(tri).all():
+        raise InputError("trough.mesh", str(path), "finite coordinates (in metres)", where)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    scale = float(np.max(np.ptp(tri.reshape(-1, 3), axis=0)))
+    keep = area > 1e-12 * scale * scale
+    if not keep.any():
+        raise InputError("trough.mesh", str(path), "triangles of nonzero area", where)
+    tri = tri[keep]
+    if length is not None:
+        x0, x1 = float(tri[..., 0].min()), float(tri[..., 0].max())
+        tol = EXTENT_TOLERANCE * length
+        if abs(x0) > tol or abs(x1 - length) > tol:
+            raise InputError(
+                "trough.mesh", str(path),
+                f"a mesh spanning x from 0 to trough.length = {length:g} m (it spans {x0:.6g} "
+                f"to {x1:.6g} m; coordinates are in metres, x along the trough)", where,
+            )  # fmt: skip
+    return TriangleMesh(tri, period=float(length or 0.0), source=str(path))
