@@ -23,6 +23,8 @@ from dem.errors import InputError
 
 #: Relative tolerance on the mesh's x extent against [0, trough.length].
 EXTENT_TOLERANCE = 1e-6
+#: Most cells of the contact index (cells grow beyond 2 reach to stay below).
+MAX_CELLS = 1 << 21
 
 
 @dataclass
@@ -63,13 +65,14 @@ class TriangleMesh:
     def index(self, reach: float) -> None:
         """Bin the triangles for spheres of radius plus skin up to ``reach``, m.
 
-        Cells of edge max(2 reach, a tenth of the mesh's largest extent) over the bounding box
-        padded by ``reach``; each cell lists the triangles whose padded bounding box meets it.
+        Cells of edge 2 ``reach`` (larger if that would make more than ``MAX_CELLS`` cells) over
+        the bounding box padded by ``reach``; each cell lists the triangles whose padded bounding
+        box meets it, so a sphere far from every triangle finds an empty list at once.
         """
         lo = self.tri.min(axis=(0, 1)) - reach
         hi = self.tri.max(axis=(0, 1)) + reach
-        extent = float(np.max(hi - lo))
-        cell = max(2.0 * reach, 0.1 * extent, 1e-12)
+        volume = float(np.prod(np.maximum(hi - lo, 1e-12)))
+        cell = max(2.0 * reach, (volume / MAX_CELLS) ** (1.0 / 3.0), 1e-12)
         dims = np.maximum(1, np.ceil((hi - lo) / cell).astype(np.int64))
         tlo = np.floor((self.tri.min(axis=1) - reach - lo) / cell).astype(np.int64)
         thi = np.floor((self.tri.max(axis=1) + reach - lo) / cell).astype(np.int64)

@@ -142,7 +142,7 @@ def _counted(px, py, pz, r, tri, cell_tris, lo, hi, m, qx, qy, qz, feature):
     return True
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def mesh_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz):
     """(fx, ..., tz) plus the forces and torques of sphere i's mesh contacts, N and N m.
 
