@@ -354,6 +354,22 @@ def contact_force(
     )
 
 
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def add_wall_contact(
+    model, p, nx, ny, nz, delta, v, omega, i, m, r, hist, row, dt, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """(fx, ..., tz) plus the force and torque of sphere i's contact with a wall or triangle.
+
+    The wall is fixed in the trough frame, of infinite mass and radius: normal n (wall to
+    sphere), overlap delta, m* = m, R* = r, lever arm r - delta, spring in ``hist[row]``.
+    """
+    f = contact_force(
+        model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
+        omega[i, 2], 0.0, 0.0, 0.0, r - delta, 0.0, m, r, hist, row, dt,
+    )  # fmt: skip
+    return fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
+
+
 #: :func:`contact_force` inlined at numba's IR level, for the pair loop, where a call per pair
 #: (two arrays and twenty scalars) cost about a sixth of the loop; the walls, which call it only
 #: on contact, keep the call (inlining it everywhere doubled the compile time).

@@ -28,8 +28,8 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contacts import contact_force, contact_force_inlined
-from dem.kernels.mesh import mesh_forces
+from dem.kernels.contacts import add_wall_contact, contact_force_inlined
+from dem.kernels.mesh import mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
 N_WALLS = 3
@@ -215,15 +215,18 @@ def wall_forces(
     """(fx, ..., tz) plus the forces and torques of sphere i's wall contacts, N and N m.
 
     A mesh trough (``mesh`` not None) replaces the floor and side walls by its triangles
-    (:func:`dem.kernels.mesh.mesh_forces`). Without one, ``mesh`` is None and numba compiles the
-    kernels without the mesh code at all (a separate, cached specialisation for mesh troughs).
+    (:func:`dem.kernels.mesh.mesh_wall_forces`). Without one, ``mesh`` is None and numba
+    compiles the kernels without the mesh code at all (a separate, cached specialisation for
+    mesh troughs).
 
     Most spheres touch no wall: they only reset their wall history (r - gap <= 0 exactly when
     gap >= r, so the early exit is the loop's own test). Without it the loop, with three inlined
     contact laws in it, cost 50 ns a sphere touching nothing (validation/performance/README.md).
     """
     if mesh is not None:
-        return mesh_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz)
+        return mesh_wall_forces(
+            i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz
+        )
     r = radius[i]
     m = mass[i]
     if x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r:
@@ -251,15 +254,8 @@ def wall_forces(
             wall_hist[row, 1] = 0.0
             wall_hist[row, 2] = 0.0
             continue
-        f = contact_force(
-            model, p, 0.0, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2],
-            omega[i, 0], omega[i, 1], omega[i, 2], 0.0, 0.0, 0.0,
-            r - delta, 0.0, m, r, wall_hist, row, dt,
+        fx, fy, fz, tx, ty, tz = add_wall_contact(
+            model, p, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
+            fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
-        fx += f[0]
-        fy += f[1]
-        fz += f[2]
-        tx += f[3]
-        ty += f[4]
-        tz += f[5]
     return fx, fy, fz, tx, ty, tz

@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS
-from dem.kernels.contacts import contact_force
+from dem.kernels.contacts import add_wall_contact
 from dem.kernels.periodic import wrap
 
 #: Contact slots (tangential springs) per sphere for mesh contacts.
@@ -143,26 +143,43 @@ def _counted(px, py, pz, r, tri, cell_tris, lo, hi, m, qx, qy, qz, feature):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def mesh_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz):
+def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz):
     """(fx, ..., tz) plus the forces and torques of sphere i's mesh contacts, N and N m.
 
     ``mesh`` is a :class:`dem.kernels.layout.MeshArrays`; its slot rows ``MESH_SLOTS i + s``
     are sphere i's (module docstring), updated. The centre is taken in the section [0, length)
-    along x (``mesh.grid[4]``; the mesh is periodic there, :mod:`dem.mesh`).
+    along x (``mesh.grid[4]``; the mesh is periodic there, :mod:`dem.mesh`). A sphere whose cell
+    lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
+    not inlined: inlined into every step kernel it took two minutes to compile).
     """
-    tri, grid, dims = mesh.tri, mesh.grid, mesh.dims
+    px = x[i, 0]
+    if mesh.grid[4] > 0.0:
+        px = wrap(px, mesh.grid[4])
+    c = cell_of(px, x[i, 1], x[i, 2], mesh.grid, mesh.dims)
+    if c < 0 or mesh.cell_start[c] == mesh.cell_start[c + 1]:
+        for row in range(MESH_SLOTS * i, MESH_SLOTS * i + MESH_SLOTS):
+            for k in range(3):
+                mesh.slot_hist[row, k] = 0.0
+                mesh.slot_normal[row, k] = 0.0
+        return fx, fy, fz, tx, ty, tz
+    return mesh_forces(
+        i, model, p, v, omega, radius, mass, dt, mesh, c, px, x[i, 1], x[i, 2],
+        fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def mesh_forces(
+    i, model, p, v, omega, radius, mass, dt, mesh, c, px, py, pz, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """:func:`mesh_wall_forces` for sphere i at (px, py, pz) in the section, in index cell c."""
+    tri = mesh.tri
     cell_start, cell_tris = mesh.cell_start, mesh.cell_tris
     slot_hist, slot_normal = mesh.slot_hist, mesh.slot_normal
     r = radius[i]
     m = mass[i]
     base = MESH_SLOTS * i
     claimed = 0  # bit s: slot s continued or started this step
-    px = x[i, 0]
-    if grid[4] > 0.0:
-        px = wrap(px, grid[4])
-    py = x[i, 1]
-    pz = x[i, 2]
-    c = cell_of(px, py, pz, grid, dims)
     if c >= 0:
         lo, hi = cell_start[c], cell_start[c + 1]
         for e in range(lo, hi):
@@ -206,18 +223,10 @@ def mesh_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx
             slot_normal[row, 0] = nx
             slot_normal[row, 1] = ny
             slot_normal[row, 2] = nz
-            delta = r - d
-            f = contact_force(
-                model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2],
-                omega[i, 0], omega[i, 1], omega[i, 2], 0.0, 0.0, 0.0,
-                r - delta, 0.0, m, r, slot_hist, row, dt,
+            fx, fy, fz, tx, ty, tz = add_wall_contact(
+                model, p, nx, ny, nz, r - d, v, omega, i, m, r, slot_hist, row, dt,
+                fx, fy, fz, tx, ty, tz,
             )  # fmt: skip
-            fx += f[0]
-            fy += f[1]
-            fz += f[2]
-            tx += f[3]
-            ty += f[4]
-            tz += f[5]
     for s in range(MESH_SLOTS):
         if not claimed & (1 << s):
             row = base + s
