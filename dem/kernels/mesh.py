@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS
-from dem.kernels.contacts import add_wall_contact
+from dem.kernels.contacts import contact_force
 from dem.kernels.periodic import wrap
 
 #: Contact slots (tangential springs) per sphere for mesh contacts.
@@ -162,26 +162,29 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
                 mesh.slot_hist[row, k] = 0.0
                 mesh.slot_normal[row, k] = 0.0
         return fx, fy, fz, tx, ty, tz
-    return mesh_forces(
-        i, model, p, v, omega, radius, mass, dt, mesh, c, px, x[i, 1], x[i, 2],
+    f = mesh_forces(
+        model, p, dt, mesh.tri, mesh.cell_start[c], mesh.cell_start[c + 1], mesh.cell_tris,
+        mesh.slot_hist, mesh.slot_normal, MESH_SLOTS * i, px, x[i, 1], x[i, 2],
+        v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], radius[i], mass[i],
         fx, fy, fz, tx, ty, tz,
     )  # fmt: skip
+    return f[0], f[1], f[2], f[3], f[4], f[5]
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def mesh_forces(
-    i, model, p, v, omega, radius, mass, dt, mesh, c, px, py, pz, fx, fy, fz, tx, ty, tz,
+    model, p, dt, tri, lo, hi, cell_tris, slot_hist, slot_normal, base, px, py, pz,
+    vx, vy, vz, wx, wy, wz, r, m, fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip
-    """:func:`mesh_wall_forces` for sphere i at (px, py, pz) in the section, in index cell c."""
-    tri = mesh.tri
-    cell_start, cell_tris = mesh.cell_start, mesh.cell_tris
-    slot_hist, slot_normal = mesh.slot_hist, mesh.slot_normal
-    r = radius[i]
-    m = mass[i]
-    base = MESH_SLOTS * i
+    """(fx, ..., tz) plus the force and torque of one sphere's mesh contacts, N and N m.
+
+    The sphere: centre (px, py, pz) in the section, velocity, spin, radius r and mass m; its
+    index cell lists ``cell_tris[lo:hi]``; its slots are rows ``base`` to ``base + MESH_SLOTS``
+    (module docstring). Scalars, not the sphere arrays: a numba call passes each array as about
+    seven arguments. Each contact is added in turn (the order of the flat walls' sums).
+    """
     claimed = 0  # bit s: slot s continued or started this step
-    if c >= 0:
-        lo, hi = cell_start[c], cell_start[c + 1]
+    if hi > lo:
         for e in range(lo, hi):
             t = cell_tris[e]
             qx, qy, qz, feature = closest_point(px, py, pz, tri, t)
@@ -223,10 +226,13 @@ def mesh_forces(
             slot_normal[row, 0] = nx
             slot_normal[row, 1] = ny
             slot_normal[row, 2] = nz
-            fx, fy, fz, tx, ty, tz = add_wall_contact(
-                model, p, nx, ny, nz, r - d, v, omega, i, m, r, slot_hist, row, dt,
-                fx, fy, fz, tx, ty, tz,
+            delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - delta
+            f = contact_force(
+                model, p, nx, ny, nz, delta, vx, vy, vz, wx, wy, wz, 0.0, 0.0, 0.0,
+                r - delta, 0.0, m, r, slot_hist, row, dt,
             )  # fmt: skip
+            fx, fy, fz = fx + f[0], fy + f[1], fz + f[2]
+            tx, ty, tz = tx + f[3], ty + f[4], tz + f[5]
     for s in range(MESH_SLOTS):
         if not claimed & (1 << s):
             row = base + s
