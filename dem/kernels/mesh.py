@@ -184,55 +184,54 @@ def mesh_forces(
     seven arguments. Each contact is added in turn (the order of the flat walls' sums).
     """
     claimed = 0  # bit s: slot s continued or started this step
-    if hi > lo:
-        for e in range(lo, hi):
-            t = cell_tris[e]
-            qx, qy, qz, feature = closest_point(px, py, pz, tri, t)
-            dx, dy, dz = px - qx, py - qy, pz - qz
-            d2 = dx * dx + dy * dy + dz * dz
-            if d2 >= r * r or d2 == 0.0:
+    for e in range(lo, hi):
+        t = cell_tris[e]
+        qx, qy, qz, feature = closest_point(px, py, pz, tri, t)
+        dx, dy, dz = px - qx, py - qy, pz - qz
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 >= r * r or d2 == 0.0:
+            continue
+        if not _counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature):
+            continue
+        d = math.sqrt(d2)
+        nx, ny, nz = dx / d, dy / d, dz / d
+        # the slot whose last normal is closest, else a free one
+        best = -1
+        best_dot = MATCH_COS
+        free = -1
+        for s in range(MESH_SLOTS):
+            if claimed & (1 << s):
                 continue
-            if not _counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature):
+            row = base + s
+            ox, oy, oz = slot_normal[row, 0], slot_normal[row, 1], slot_normal[row, 2]
+            if ox == 0.0 and oy == 0.0 and oz == 0.0:
+                if free < 0:
+                    free = s
                 continue
-            d = math.sqrt(d2)
-            nx, ny, nz = dx / d, dy / d, dz / d
-            # the slot whose last normal is closest, else a free one
-            best = -1
-            best_dot = MATCH_COS
-            free = -1
-            for s in range(MESH_SLOTS):
-                if claimed & (1 << s):
-                    continue
-                row = base + s
-                ox, oy, oz = slot_normal[row, 0], slot_normal[row, 1], slot_normal[row, 2]
-                if ox == 0.0 and oy == 0.0 and oz == 0.0:
-                    if free < 0:
-                        free = s
-                    continue
-                dot = nx * ox + ny * oy + nz * oz
-                if dot >= best_dot:
-                    best_dot = dot
-                    best = s
-            if best < 0:
-                best = free
-                if best < 0:  # more contacts than slots: take the last one's spring
-                    best = MESH_SLOTS - 1
-                row = base + best
-                slot_hist[row, 0] = 0.0
-                slot_hist[row, 1] = 0.0
-                slot_hist[row, 2] = 0.0
-            claimed |= 1 << best
+            dot = nx * ox + ny * oy + nz * oz
+            if dot >= best_dot:
+                best_dot = dot
+                best = s
+        if best < 0:
+            best = free
+            if best < 0:  # more contacts than slots: take the last one's spring
+                best = MESH_SLOTS - 1
             row = base + best
-            slot_normal[row, 0] = nx
-            slot_normal[row, 1] = ny
-            slot_normal[row, 2] = nz
-            delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - delta
-            f = contact_force(
-                model, p, nx, ny, nz, delta, vx, vy, vz, wx, wy, wz, 0.0, 0.0, 0.0,
-                r - delta, 0.0, m, r, slot_hist, row, dt,
-            )  # fmt: skip
-            fx, fy, fz = fx + f[0], fy + f[1], fz + f[2]
-            tx, ty, tz = tx + f[3], ty + f[4], tz + f[5]
+            slot_hist[row, 0] = 0.0
+            slot_hist[row, 1] = 0.0
+            slot_hist[row, 2] = 0.0
+        claimed |= 1 << best
+        row = base + best
+        slot_normal[row, 0] = nx
+        slot_normal[row, 1] = ny
+        slot_normal[row, 2] = nz
+        delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - delta
+        f = contact_force(
+            model, p, nx, ny, nz, delta, vx, vy, vz, wx, wy, wz, 0.0, 0.0, 0.0,
+            r - delta, 0.0, m, r, slot_hist, row, dt,
+        )  # fmt: skip
+        fx, fy, fz = fx + f[0], fy + f[1], fz + f[2]
+        tx, ty, tz = tx + f[3], ty + f[4], tz + f[5]
     for s in range(MESH_SLOTS):
         if not claimed & (1 << s):
             row = base + s
