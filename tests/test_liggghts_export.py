@@ -12,8 +12,18 @@ from dem import shapes
 from dem.case import load_case
 from dem.config import GRAVITY
 from dem.errors import InputError
-from dem.io.liggghts import damping_ratio, write_deck
+from dem.io.liggghts import (
+    LIGGGHTS_INSTALL,
+    MESH_FILE,
+    damping_ratio,
+    find_liggghts,
+    mesh_fill_block,
+    run_liggghts,
+    strip_top,
+    write_deck,
+)
 from dem.kernels import contacts
+from dem.mesh import extrude, load_mesh
 from dem.simulation import ContactLaw
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
@@ -263,3 +273,115 @@ def test_coulomb_case_deck_says_liggghts_caps_the_spring_alone(tmp_path):
     assert "NOTE: the case caps the total tangential force" in text
     text = write_deck(case.with_tangential("liggghts"), tmp_path / "l", timestep=2e-6, steps=10)
     assert "NOTE: the case caps" not in text.read_text()
+
+
+# --- mesh troughs ---------------------------------------------------------------------------
+
+
+@pytest.fixture(params=["u-trough", "v-trough"])
+def mesh_deck(request, tmp_path):
+    case = load_case(CASES_DIR / request.param)
+    deck = write_deck(case, tmp_path / "deck", timestep=8e-6, steps=100, settle_steps=10)
+    return case, deck, parse(deck)
+
+
+def test_mesh_deck_reads_the_stl_as_a_granular_wall(mesh_deck):
+    _, deck, c = mesh_deck
+    surface = fix(c, "trough")
+    assert surface[1:5] == ["all", "mesh/surface", "file", MESH_FILE]
+    assert surface[surface.index("type") + 1] == "2"  # the walls' material type
+    walls = fix(c, "walls")
+    assert walls[1:3] == ["all", "wall/gran"]
+    i = walls.index("mesh")
+    assert walls[i : i + 5] == ["mesh", "n_meshes", "1", "meshes", "trough"]
+    # the same contact model and settings as the grain pairs
+    pair = c["pair_style"][0]
+    model = walls[walls.index("model") : i]
+    assert pair[1 : 1 + len(model)] == model
+    assert walls[i + 5 :] == pair[pair.index("limitForce") :]
+    # no primitive walls, and no move/mesh: the deck runs in the trough's frame
+    assert not any("primitive" in a for a in c["fix"])
+    assert not any("move/mesh" in a for a in c["fix"])
+    assert "no move/mesh" in deck.read_text()
+
+
+def test_mesh_stl_round_trips_to_the_case_triangles(mesh_deck):
+    case, deck, _ = mesh_deck
+    length = case.trough.length
+    written = load_mesh(deck.parent / MESH_FILE, length=length).tri
+    original = load_mesh(case.trough.mesh, length=length).tri
+    np.testing.assert_array_equal(written, original)
+    assert (deck.parent / MESH_FILE).read_text().isascii()
+
+
+def test_mesh_box_holds_the_mesh_and_the_fill_region_lies_inside_the_pan(mesh_deck):
+    case, _, c = mesh_deck
+    mesh = load_mesh(case.trough.mesh, length=case.trough.length)
+    lo, hi = mesh.tri.min(axis=(0, 1)), mesh.tri.max(axis=(0, 1))
+    domain = [float(v) for v in [a for a in c["region"] if a[0] == "domain"][0][2:8]]
+    assert domain[:2] == [0.0, case.trough.length]  # periodic over the section
+    assert domain[2] < lo[1] and hi[1] < domain[3] and domain[4] < lo[2] and hi[2] < domain[5]
+    x0, x1, y0, y1, z0, z1 = (float(v) for v in [a for a in c["region"] if a[0] == "fill"][0][2:8])
+    assert (x0, x1) == (0.0, case.trough.length)
+    assert lo[1] < y0 < y1 < hi[1] and lo[2] < z0 < hi[2] < z1 < domain[5]
+    # the block is tall enough for the grains at the loose fill fraction
+    grain = case.particles.grain
+    volume = case.particles.count * grain.volume
+    assert volume / ((x1 - x0) * (y1 - y0) * (z1 - z0)) <= 0.08 + 1e-12
+    # every point of the block's surface lies on the grains' side of the mesh, clear of it
+    # (an independent check: dem.mesh's closest-point kernels, not strip_top)
+    mesh.index(float(np.max(hi - lo)))
+    u = np.linspace(0.0, 1.0, 41)
+    xs = np.linspace(x0, x1, 7)
+    faces = np.concatenate(
+        [
+            np.stack(np.broadcast_arrays(xs[:, None], y0 + (y1 - y0) * u, z0), -1),
+            np.stack(np.broadcast_arrays(xs[:, None], y0, z0 + (z1 - z0) * u), -1),
+            np.stack(np.broadcast_arrays(xs[:, None], y1, z0 + (z1 - z0) * u), -1),
+        ]
+    ).reshape(-1, 3)
+    assert np.all(mesh.sides(faces) > 0.0)
+    assert mesh.gaps(faces).min() >= float(c["neighbor"][0][0]) * (1 - 1e-9)
+    # and the block reaches down into the pan: its floor is below the rim (both pans are 30 mm
+    # deep, with 20 mm walls above: cases/geometry/make_troughs.py)
+    assert z0 < 0.03 and hi[2] == pytest.approx(0.05)
+
+
+def test_strip_top_clips_triangles_to_the_slab():
+    # one triangle rising from z = 0 at y = 0 to z = 1 at y = 1 (and a corner at x = 1)
+    tri = np.array([[[0.0, 0.0, 0.0], [0.0, 1.0, 1.0], [1.0, 0.0, 0.0]]])
+    assert strip_top(tri, -1.0, 0.25) == pytest.approx(0.25)  # where an edge crosses y = 0.25
+    assert strip_top(tri, 0.5, 2.0) == 1.0  # a corner inside the slab
+    assert strip_top(tri, 1.5, 2.0) == -np.inf
+    # a flat floor spanning the slab with no corner inside it
+    floor = np.array([[[0.0, -1.0, 0.2], [0.0, 1.0, 0.2], [1.0, 1.0, 0.2]]])
+    assert strip_top(floor, -0.1, 0.1) == pytest.approx(0.2)
+
+
+def test_mesh_fill_block_in_a_box_pan_and_a_closed_one():
+    # a box pan 0.1 wide, floor z = 0, walls to z = 0.05: the widest block short of the walls
+    mesh = extrude(np.array([[-0.05, 0.05], [-0.05, 0.0], [0.05, 0.0], [0.05, 0.05]]), 0.1)
+    tri = mesh.points[mesh.cells[0].data]
+    y0, y1, z0 = mesh_fill_block(tri, 0.001)
+    assert z0 == pytest.approx(0.001)
+    assert -0.049 <= y0 < -0.048 and 0.048 < y1 <= 0.049
+    lid = extrude(np.array([[-0.05, 0.05], [0.05, 0.05]]), 0.1)
+    closed = np.concatenate([tri, lid.points[lid.cells[0].data]])  # no room below the lid
+    with pytest.raises(ValueError, match="no block"):
+        mesh_fill_block(closed, 0.001)
+
+
+@pytest.mark.integration
+@pytest.mark.skipif(find_liggghts() is None, reason=f"liggghts not on PATH ({LIGGGHTS_INSTALL})")
+def test_liggghts_runs_the_u_trough_deck(tmp_path):
+    case = load_case(CASES_DIR / "u-trough")
+    dt = case.run.timestep
+    # a short fill (grains inserted, falling) and 100 + 100 driven steps: LIGGGHTS reads the
+    # mesh, inserts every screw and keeps every member sphere in the box
+    deck = write_deck(case, tmp_path, timestep=dt, steps=100, settle_steps=100, fill_time=50 * dt)
+    run = run_liggghts(tmp_path, deck.name, min_loops=3)
+    assert "ERROR" not in run.stdout
+    assert "containing 100 triangle(s) successful" in run.stdout
+    members = case.particles.grain.count
+    assert [loop.atoms for loop in run.loop_times] == [case.particles.count * members] * 3
+    assert [loop.steps for loop in run.loop_times] == [50, 100, 100]

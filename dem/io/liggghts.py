@@ -1,8 +1,8 @@
 """Export a case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (DESIGN.md section 8).
 
 The deck simulates the same periodic trough section in the trough's accelerating frame: the walls
-stay still (``fix wall/gran`` primitives: floor z = 0, side walls y = +-width/2, x periodic) and
-every grain feels the effective gravity
+stay still (``fix wall/gran`` primitives: floor z = 0, side walls y = +-width/2, x periodic; or
+the case's triangle mesh, below) and every grain feels the effective gravity
 
     g_x(t) = -g sin(alpha) + A omega^2 sin(omega tau) cos(phi)
     g_y(t) = 0
@@ -10,6 +10,25 @@ every grain feels the effective gravity
 
 in m/s^2, with tau the time since the drive started. ``fix gravity`` takes a magnitude and a
 direction; both are equal-style variables, |g(t)| and (g_x, 0, g_z).
+
+Mesh troughs (``[trough] mesh``): the triangles the case reads (:func:`dem.mesh.load_mesh`) are
+written next to the deck as the ASCII STL ``trough.stl`` (exact coordinates, m, trough frame)
+and become one granular wall, ``fix trough all mesh/surface file trough.stl type 2`` and
+``fix walls all wall/gran MODEL mesh n_meshes 1 meshes trough SETTINGS``, in place of the three
+primitive walls (``curvature_tolerant yes`` is added only if a triangle has a corner angle below
+LIGGGHTS's default curvature, 0.256 deg, which it would otherwise refuse). The mesh is not
+moved: the drive is a translation, so in the trough's frame the walls stand still and the same
+effective gravity is exact (DESIGN.md section 2); no ``fix move/mesh`` is needed. The box is
+periodic over x in [0, length], which the mesh spans, and reaches
+:data:`MESH_BOX_MARGIN` grain reaches beyond the mesh across y and below it. LIGGGHTS copies
+the triangles across the periodic boundary itself (ghost elements); a sphere rolling across
+x = 0 on the U pan keeps its speed and height to all printed digits (checked by hand with
+LIGGGHTS 3.8). ``insert/pack`` checks new grains against each other (``overlapcheck``) and,
+with ``all_in``, keeps their bounding spheres inside the region, but not against a mesh, so
+the insertion block must itself clear the mesh: :func:`mesh_fill_block` takes the block over
+the pan with the largest cross-section below the mesh's top whose sides and floor stay a
+neighbour skin away from every triangle, and the column above it is as tall as the grains need
+at the loose fill fraction.
 
 Contact laws map one-to-one:
 
@@ -65,11 +84,14 @@ import time
 from pathlib import Path
 from typing import NamedTuple
 
+import numpy as np
+
 from dem import __version__
 from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
+from dem.mesh import load_mesh
 from dem.shapes import write_clump
 from dem.timestep import ContactLaw
 
@@ -92,6 +114,16 @@ FILL_VOLUME_FRACTION_CLUMPS = 0.08
 CLUMP_FILE = "grain.multisphere"
 #: Monte Carlo samples of ``particletemplate/multisphere`` (only its volume estimate uses them).
 MULTISPHERE_NTRY = 1000000
+#: File the trough mesh of a mesh case is written to, next to the deck (ASCII STL, m).
+MESH_FILE = "trough.stl"
+#: LIGGGHTS's default ``curvature`` of ``fix mesh/surface``, deg: a mesh with a smaller angle in
+#: any triangle needs ``curvature_tolerant yes``.
+MESH_DEFAULT_CURVATURE = 0.256235
+#: Margin of the box around a mesh across y and below it, in grain reaches (radius or clump
+#: bounding radius): every node lies strictly inside the box.
+MESH_BOX_MARGIN = 2.0
+#: Half-widths tried for the insertion block over a mesh pan.
+MESH_FILL_TRIES = 256
 
 
 #: ``Loop time of T on P procs for S steps with N atoms`` of a LIGGGHTS log: (T, P, S, N).
@@ -207,6 +239,98 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
     return lines, model, settings
 
 
+# --- mesh troughs -------------------------------------------------------------------------------
+
+
+def write_stl(path: str | Path, tri: np.ndarray, name: str = "trough") -> Path:
+    """Write triangles as an ASCII STL file (LIGGGHTS 3.8 reads ASCII STL only).
+
+    Args:
+        path: The file.
+        tri: Corners, (T, 3, 3), m; each triangle keeps its winding a -> b -> c, and its facet
+            normal is (b - a) x (c - a) / |...|.
+        name: The solid's name.
+
+    Coordinates are written exactly (shortest repr), so the file reads back to the same bits.
+
+    """
+    tri = np.asarray(tri, dtype=np.float64).reshape(-1, 3, 3)
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(cross, axis=1, keepdims=True)
+    normals = cross / np.where(length > 0.0, length, 1.0)
+    lines = [f"solid {name}"]
+    for corners, normal in zip(tri, normals, strict=True):
+        lines.append("facet normal " + " ".join(map(_fmt, normal)))
+        lines.append(" outer loop")
+        lines += ["  vertex " + " ".join(map(_fmt, v)) for v in corners]
+        lines += [" endloop", "endfacet"]
+    lines.append(f"endsolid {name}")
+    out = Path(path)
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+def strip_top(tri: np.ndarray, y0: float, y1: float) -> float:
+    """Highest z of the triangles' parts with y0 <= y <= y1 (any x), m; -inf where none is.
+
+    The triangles (T, 3, 3) are clipped to the slab; z is linear on a triangle, so its highest
+    point in the slab is a corner inside it or a point where an edge crosses y = y0 or y = y1.
+    """
+    y, z = tri[..., 1], tri[..., 2]
+    inside = (y >= y0) & (y <= y1)
+    top = float(np.max(np.where(inside, z, -np.inf), initial=-np.inf))
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        yi, yj, zi, zj = y[:, i], y[:, j], z[:, i], z[:, j]
+        for s in (y0, y1):
+            crosses = (yi - s) * (yj - s) < 0.0  # never where yi == yj
+            t = np.divide(s - yi, yj - yi, out=np.zeros_like(yi), where=crosses)
+            top = max(top, float(np.max(np.where(crosses, zi + t * (zj - zi), -np.inf))))
+    return top
+
+
+def mesh_fill_block(tri: np.ndarray, clearance: float) -> tuple[float, float, float]:
+    """The insertion block over a mesh pan: (y0, y1, z0), m; it runs over all x and up from z0.
+
+    The block is centred on the mesh's extent across y. For each half-width h (a fraction
+    k / :data:`MESH_FILL_TRIES` of the mesh's half-width) its bottom z0 is ``clearance`` above
+    the highest point of the mesh within ``clearance`` of the block's sides (:func:`strip_top`),
+    so no triangle comes closer than ``clearance`` to the block, anywhere along x; the walls of
+    the pan rule out wide blocks. Of these, the block with the largest cross-section below the
+    mesh's top, 2 h (z_top - z0), is taken: the widest column that still reaches down into the
+    pan. Widths are rounded down and z0 up to 1e-6 m.
+
+    Raises:
+        ValueError: No block fits (a pan closed at the top, or with a gap in its floor).
+
+    """
+    lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
+    y_mid, half = 0.5 * (lo[1] + hi[1]), 0.5 * (hi[1] - lo[1])
+    best, best_area = None, 0.0
+    for k in range(1, MESH_FILL_TRIES):
+        h = math.floor(half * k / MESH_FILL_TRIES * 1e6) / 1e6
+        below = strip_top(tri, y_mid - h - clearance, y_mid + h + clearance)
+        z0 = math.ceil((below + clearance) * 1e6) / 1e6 if math.isfinite(below) else math.nan
+        if h > 0.0 and below >= lo[2] and z0 < hi[2] and 2.0 * h * (hi[2] - z0) > best_area:
+            best, best_area = (y_mid - h, y_mid + h, z0), 2.0 * h * (hi[2] - z0)
+    if best is None:
+        raise ValueError(
+            "no block over the pan clears the mesh (is the pan open at the top, with no gap in "
+            "its floor?)"
+        )
+    return best
+
+
+def min_angle_deg(tri: np.ndarray) -> float:
+    """Smallest corner angle of any triangle (T, 3, 3), degrees (LIGGGHTS checks it)."""
+    smallest = 180.0
+    for i in range(3):
+        a = tri[:, (i + 1) % 3] - tri[:, i]
+        b = tri[:, (i + 2) % 3] - tri[:, i]
+        cos = np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+        smallest = min(smallest, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).min()))
+    return smallest
+
+
 def write_deck(
     case: Case,
     out_dir: str | Path,
@@ -222,8 +346,8 @@ def write_deck(
 
     Args:
         case: A validated case (spheres, screws or clumps).
-        out_dir: Directory for the deck (created; a clump case also gets ``grain.multisphere``);
-            LIGGGHTS is run inside it.
+        out_dir: Directory for the deck (created; a clump case also gets ``grain.multisphere``,
+            a mesh case ``trough.stl``); LIGGGHTS is run inside it.
         timestep: dt, s.
         steps: Driven steps that are measured (the last ``run``).
         settle_steps: Driven steps before measuring; default ``run.settle_cycles`` drive cycles.
@@ -237,7 +361,7 @@ def write_deck(
         Path of the deck.
 
     Raises:
-        InputError: A mesh trough (primitive walls only), a clump case without its template,
+        InputError: A clump case without its template, a mesh no insertion block fits in,
             or timestep/steps not positive.
 
     """
@@ -245,10 +369,6 @@ def write_deck(
     p, t, d = case.particles, case.trough, case.drive
     if p.shape != "sphere" and p.grain is None:
         raise InputError("particles.shape", p.shape, "a case read by dem.case.load_case", source)
-    if t.mesh is not None:
-        raise InputError(
-            "trough.mesh", str(t.mesh), "none (flat floor) for a LIGGGHTS export", source
-        )
     if not timestep > 0.0:
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:
@@ -310,23 +430,63 @@ def write_deck(
     if thermo_every is None:
         thermo_every = max(1, round(steps_per_cycle))
 
+    material_lines, model, settings = _contact_block(case, grain_mass)
+
     # loose insertion column and a box tall enough that thrown grains never leave it
     if p.shape == "sphere":
         fill_fraction, fill_min = FILL_VOLUME_FRACTION, 4.0 * r_max
     else:
         fill_fraction, fill_min = FILL_VOLUME_FRACTION_CLUMPS, 2.5 * p.grain.bounding_radius
-    fill_height = max(n * grain_volume / (fill_fraction * t.length * t.width), fill_min)
-    top = 3.0 * fill_height + 20.0 * r_max
+    if t.mesh is None:  # flat floor z = 0 and side walls y = +-width/2; the column spans the box
+        half_w = 0.5 * t.width
+        box_y, box_z0 = (-half_w, half_w), 0.0
+        fill_y, fill_z0, bottom = box_y, 0.0, 0.0
+        mesh_top, wall_note = 0.0, []
+    else:  # the column stands in the pan (mesh_fill_block); the box holds the mesh
+        tri = load_mesh(t.mesh, length=t.length, source=source).tri
+        write_stl(out / MESH_FILE, tri)
+        try:
+            fill_block = mesh_fill_block(tri, SKIN_FRACTION * r_min)
+        except ValueError as exc:
+            raise InputError(
+                "trough.mesh", str(t.mesh), f"a pan grains fit in ({exc})", source
+            ) from None
+        lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
+        margin = MESH_BOX_MARGIN * (p.radius if p.shape == "sphere" else p.grain.bounding_radius)
+        box_y, box_z0 = (float(lo[1] - margin), float(hi[1] + margin)), float(lo[2] - margin)
+        fill_y, fill_z0, bottom = fill_block[:2], fill_block[2], float(lo[2])
+        mesh_top = float(hi[2] + margin)
+        wall_note = [
+            f"# walls: {MESH_FILE}, the {len(tri)} triangles of {t.mesh.name} (m, trough frame),",
+            "#   standing still: the drive translates the trough, so in its frame the walls do",
+            "#   not move (no move/mesh; DESIGN.md section 2). The insertion block lies inside the",
+            "#   pan, clear of the mesh: insert/pack does not check grains against a mesh",
+        ]
+    fill_width = fill_y[1] - fill_y[0]
+    fill_height = max(n * grain_volume / (fill_fraction * t.length * fill_width), fill_min)
+    top = max(fill_z0 + 3.0 * fill_height + 20.0 * r_max, mesh_top)
     if fill_time is None:
-        fill_time = math.sqrt(2.0 * fill_height / GRAVITY) + 0.1
+        fill_time = math.sqrt(2.0 * (fill_z0 + fill_height - bottom) / GRAVITY) + 0.1
     fill_steps = max(1, round(fill_time / timestep))
-    half_w = 0.5 * t.width
+    if t.mesh is None:
+        wall_lines = [
+            f"fix floor all wall/gran {model} primitive type 2 zplane 0.0 {settings}",
+            f"fix side_lo all wall/gran {model} primitive type 2 yplane {_fmt(-half_w)} {settings}",
+            f"fix side_hi all wall/gran {model} primitive type 2 yplane {_fmt(half_w)} {settings}",
+        ]
+    else:
+        # LIGGGHTS refuses a triangle with a corner angle below the curvature unless told
+        tolerant = min_angle_deg(tri) < MESH_DEFAULT_CURVATURE
+        wall_lines = [
+            f"fix trough all mesh/surface file {MESH_FILE} type 2"
+            + (" curvature_tolerant yes" if tolerant else ""),
+            f"fix walls all wall/gran {model} mesh n_meshes 1 meshes trough {settings}",
+        ]
 
     alpha, phi = math.radians(t.inclination), math.radians(d.angle)
     peak = d.amplitude * d.omega**2  # m/s^2
     gx0, gz0 = -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
     g0 = math.hypot(gx0, gz0)
-    material_lines, model, settings = _contact_block(case, grain_mass)
     drive_start = fill_steps
 
     lines = [
@@ -344,6 +504,7 @@ def write_deck(
         "# frame: the trough's accelerating frame; walls still, effective gravity",
         "#   g(t) = (-g sin(alpha) + A w^2 sin(w tau) cos(phi), 0, "
         "-g cos(alpha) + A w^2 sin(w tau) sin(phi))",
+        *wall_note,
         "",
         "atom_style granular",
         "atom_modify map array" + ("" if p.shape == "sphere" else " sort 0 0"),
@@ -353,8 +514,8 @@ def write_deck(
         "processors * 1 1  # split the periodic x only: the bed is uniform along x",
         "units si",
         "",
-        f"region domain block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
-        f"{_fmt(top)} units box",
+        f"region domain block 0.0 {_fmt(t.length)} {_fmt(box_y[0])} {_fmt(box_y[1])} "
+        f"{_fmt(box_z0)} {_fmt(top)} units box",
         "create_box 2 domain",
         f"neighbor {_fmt(SKIN_FRACTION * r_min)} bin",
         "neigh_modify delay 0",
@@ -365,16 +526,14 @@ def write_deck(
         "pair_coeff * *",
         f"timestep {_fmt(timestep)}",
         "",
-        f"fix floor all wall/gran {model} primitive type 2 zplane 0.0 {settings}",
-        f"fix side_lo all wall/gran {model} primitive type 2 yplane {_fmt(-half_w)} {settings}",
-        f"fix side_hi all wall/gran {model} primitive type 2 yplane {_fmt(half_w)} {settings}",
+        *wall_lines,
         "",
         f"fix grav all gravity {_fmt(g0)} vector {_fmt(gx0 / g0)} 0.0 {_fmt(gz0 / g0)}",
         "",
         *grain_lines,
         f"fix pdd all particledistribution/discrete {s_dist} 1 pts 1.0",
-        f"region fill block 0.0 {_fmt(t.length)} {_fmt(-half_w)} {_fmt(half_w)} 0.0 "
-        f"{_fmt(fill_height)} units box",
+        f"region fill block 0.0 {_fmt(t.length)} {_fmt(fill_y[0])} {_fmt(fill_y[1])} "
+        f"{_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
         f"fix ins all insert/pack seed {s_insert} distributiontemplate pdd "
         "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once overlapcheck yes all_in yes "
         f"particles_in_region {n} region fill",
