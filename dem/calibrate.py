@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from dem.errors import InputError
-from dem.pointmass.stepped import step_point_mass
+from dem.pointmass import elliptic
+from dem.pointmass.stepped import step_motion, step_point_mass
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
 LANDING_STEPS = 4000
@@ -152,12 +153,20 @@ def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
     """
     d, m = case.drive, case.material
     out = np.zeros((cycles * 8, 2))
-    k, _ = step_point_mass(
-        d.throw_number, math.radians(d.angle), m.friction, math.radians(case.trough.inclination),
-        m.restitution_tangential, m.restitution_normal, LANDING_STEPS, transient, cycles, False,
-        out,
-    )  # fmt: skip
-    scale = d.amplitude * d.omega
+    if d.second_amplitude > 0.0:  # two components: the point mass on the same motion
+        args, length = elliptic.stepping_args(d.motion, case.trough.inclination)
+        k, _ = step_motion(
+            *args, m.friction, m.restitution_tangential, m.restitution_normal, LANDING_STEPS,
+            transient, cycles, False, out,
+        )  # fmt: skip
+        scale = length * d.omega
+    else:
+        k, _ = step_point_mass(
+            d.throw_number, math.radians(d.angle), m.friction,
+            math.radians(case.trough.inclination), m.restitution_tangential,
+            m.restitution_normal, LANDING_STEPS, transient, cycles, False, out,
+        )  # fmt: skip
+        scale = d.amplitude * d.omega
     u, w = out[:k, 0] * scale, out[:k, 1] * scale
     keep = w < 0.0
     incidence = np.degrees(np.arctan2(np.abs(u[keep]), -w[keep]))
@@ -317,7 +326,7 @@ def calibrate(
         key = np.column_stack([np.round(impacts[:, 0], 1), np.round(np.log(impacts[:, 1]), 3)])
         impacts = impacts[np.unique(key, axis=0, return_index=True)[1]]
     if impacts.shape[0] == 0 or np.max(impacts[:, 0]) < MIN_INCIDENCE:
-        speed = case.drive.amplitude * case.drive.omega
+        speed = case.drive.peak_speed
         if impacts.shape[0]:
             speed = float(np.mean(impacts[:, 1]))
         impacts = np.column_stack([np.linspace(10.0, 70.0, 7), np.full(7, speed)])

@@ -71,15 +71,24 @@ class TroughSpec:
 
 @dataclass(frozen=True)
 class DriveSpec:
-    """Straight-line sinusoidal drive s(t) = A sin(omega t) (cos phi, 0, sin phi).
+    """The trough's drive: the paper's straight line, optionally a second component and a ramp.
+
+    s(t) = r(t) [A sin(omega t) (cos phi, 0, sin phi) + A_2 sin(omega t + psi_2) (cos phi_2, 0,
+    sin phi_2)] (:class:`dem.drive.Motion`): the first component is the paper's drive, a second
+    one out of phase with it makes the drive elliptical, and r(t) rises smoothly from 0 to 1 over
+    ``ramp_cycles`` cycles (:func:`dem.drive.ramp`).
 
     Attributes:
         frequency: f, Hz.
-        angle: Vibration angle phi, deg, in (0, 90).
-        amplitude: A, m.
-        throw_number: Gamma = A omega^2 sin(phi) / (g cos(alpha)), dimensionless.
+        angle: Vibration angle phi of the first component, deg, in (0, 90).
+        amplitude: A of the first component, m.
+        throw_number: Gamma = A omega^2 sin(phi) / (g cos(alpha)) of the first component.
         given: Which of ``"amplitude"`` and ``"throw_number"`` the file gave; the other was
             computed from it.
+        second_amplitude: A_2, m (0: no second component).
+        second_angle: phi_2, deg, in [0, 180).
+        second_phase: psi_2, deg, the second component's lead over the first.
+        ramp_cycles: Drive cycles of the start-up ramp (0: none).
 
     """
 
@@ -88,11 +97,61 @@ class DriveSpec:
     amplitude: float
     throw_number: float
     given: str
+    second_amplitude: float = 0.0
+    second_angle: float = 0.0
+    second_phase: float = 0.0
+    ramp_cycles: float = 0.0
 
     @property
     def omega(self) -> float:
         """Angular frequency omega = 2 pi f, rad/s (:func:`dem.drive.omega`)."""
         return drive.omega(self.frequency)
+
+    @property
+    def motion(self) -> drive.Motion:
+        """The trough's motion s(t) (:class:`dem.drive.Motion`)."""
+        components = [drive.Component(self.amplitude, math.radians(self.angle))]
+        if self.second_amplitude > 0.0:
+            components.append(
+                drive.Component(
+                    self.second_amplitude,
+                    math.radians(self.second_angle),
+                    math.radians(self.second_phase),
+                )
+            )
+        return drive.Motion(self.omega, tuple(components), self.ramp_cycles / self.frequency)
+
+    @property
+    def elliptical(self) -> bool:
+        """Whether the trough moves on an ellipse (two components out of phase), not a line."""
+        return self.second_amplitude > 0.0 and not self.motion.is_line
+
+    @property
+    def velocity_scale(self) -> float:
+        """The normalising velocity, m/s: A omega cos(phi) for the paper's drive, else |X| omega.
+
+        |X| omega is the peak trough speed along the trough
+        (:attr:`dem.drive.Motion.velocity_scale`).
+        """
+        if self.second_amplitude == 0.0:
+            return drive.drive_velocity_from_omega(self.amplitude, self.omega, self.angle)
+        return self.motion.velocity_scale
+
+    @property
+    def peak_speed(self) -> float:
+        """Largest trough speed over a cycle, m/s (A omega for the paper's drive)."""
+        if self.second_amplitude == 0.0:
+            return self.amplitude * self.omega
+        return self.motion.peak_speed
+
+    def effective_throw_number(self, inclination: float) -> float:
+        """Peak normal trough acceleration over g cos(alpha) (``throw_number`` for a line drive).
+
+        ``inclination`` alpha in degrees (:meth:`dem.drive.Motion.throw_number`).
+        """
+        if self.second_amplitude == 0.0:
+            return self.throw_number
+        return self.motion.throw_number(inclination)
 
 
 @dataclass(frozen=True)
@@ -219,6 +278,20 @@ class OutputSpec:
 
 
 @dataclass(frozen=True)
+class FeederSpec:
+    """A finite feeder (:mod:`dem.feeder`): back wall at x = 0, discharge edge at x = length.
+
+    Attributes:
+        feed_rate: Mass fed at the back per second, kg/s (0: the initial charge is emptied).
+        feed_length: Length of the feed zone at the back, m.
+
+    """
+
+    feed_rate: float = 0.0
+    feed_length: float = 0.0
+
+
+@dataclass(frozen=True)
 class Case:
     """A validated case.
 
@@ -239,6 +312,7 @@ class Case:
     particles: ParticlesSpec
     run: RunSpec
     output: OutputSpec
+    feeder: FeederSpec | None = None
 
     def with_drive(
         self,
@@ -266,6 +340,13 @@ class Case:
             self.trough.inclination,
             amplitude=amplitude,
             throw_number=throw_number,
+        )
+        drive = replace(
+            drive,
+            second_amplitude=d.second_amplitude,
+            second_angle=d.second_angle,
+            second_phase=d.second_phase,
+            ramp_cycles=d.ramp_cycles,
         )
         return replace(self, drive=drive)
 
@@ -313,7 +394,16 @@ class Case:
 # --- one reader per table ------------------------------------------------------------------------
 
 _TROUGH_KEYS = ("length", "width", "inclination", "mesh")
-_DRIVE_KEYS = ("frequency", "angle", "amplitude", "throw_number")
+_DRIVE_KEYS = (
+    "frequency",
+    "angle",
+    "amplitude",
+    "throw_number",
+    "second_amplitude",
+    "second_angle",
+    "second_phase",
+    "ramp_cycles",
+)
 _MATERIAL_KEYS = (
     "density",
     "friction",
@@ -345,6 +435,7 @@ _PARTICLES_KEYS = (
 )
 _RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed")
 _OUTPUT_KEYS = ("frames_per_cycle",)
+_FEEDER_KEYS = ("feed_rate", "feed_length")
 
 
 def _read_trough(t: Table) -> TroughSpec:
@@ -395,9 +486,31 @@ def _read_drive(t: Table, inclination: float) -> DriveSpec:
             "exactly one of drive.amplitude (m) and drive.throw_number"
             + (" (both are given)" if both else " (neither is given)"),
         )
-    return resolve_drive(
+    second = _read_second_component(t)
+    spec = resolve_drive(
         frequency, angle, inclination, amplitude=amplitude, throw_number=throw_number
     )
+    return replace(spec, **second, ramp_cycles=t.quantity("ramp_cycles", 0.0))
+
+
+def _read_second_component(t: Table) -> dict:
+    """The second drive component's keys; its angle and phase mean nothing without amplitude."""
+    amplitude = t.quantity("second_amplitude", 0.0)
+    if amplitude == 0.0:
+        for key in ("second_angle", "second_phase"):
+            if key in t.data:
+                raise t.error(
+                    key,
+                    t.data[key],
+                    "given only with drive.second_amplitude > 0 (the second drive component "
+                    "it belongs to)",
+                )
+        return {}
+    return {
+        "second_amplitude": amplitude,
+        "second_angle": t.quantity("second_angle"),
+        "second_phase": t.quantity("second_phase", 0.0),
+    }
 
 
 def resolve_drive(
@@ -533,12 +646,39 @@ def _read_run(t: Table) -> RunSpec:
     )
 
 
+def _read_feeder(t: Table, length: float) -> FeederSpec:
+    """The [feeder] table (its presence makes the trough finite)."""
+    t.check_known(_FEEDER_KEYS)
+    rate = t.quantity("feed_rate", 0.0)
+    zone = t.quantity("feed_length", 0.25 * length, "length")
+    if zone > length:
+        raise t.error(
+            "feed_length", zone, f"<= trough.length = {length:g} m (the zone lies in the trough)"
+        )
+    return FeederSpec(feed_rate=rate, feed_length=zone)
+
+
+def _check_feeder(case: Case, table: Callable[[str], Table]) -> None:
+    """A feed zone must hold a grain; a feed rate must be one the zone can be asked for."""
+    f = case.feeder
+    if f is None:
+        return
+    diameter = _grain_diameter(case.particles) or 0.0
+    if case.particles.grain is not None:
+        diameter = 2.0 * case.particles.grain.bounding_radius
+    if f.feed_rate > 0.0 and f.feed_length < diameter:
+        raise table("feeder").error(
+            "feed_length", f.feed_length,
+            f">= one grain's extent ({diameter:.4g} m), the zone fed grains are dropped into",
+        )  # fmt: skip
+
+
 def _read_output(t: Table) -> OutputSpec:
     t.check_known(_OUTPUT_KEYS)
     return OutputSpec(frames_per_cycle=t.whole("frames_per_cycle", 4))
 
 
-_TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output")
+_TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output", "feeder")
 
 
 def _grain_diameter(particles: ParticlesSpec) -> float | None:
@@ -642,7 +782,15 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
             ) from None
     run = _read_run(table("run"))
     output = _read_output(table("output"))
+    feeder = _read_feeder(table("feeder"), trough.length) if "feeder" in data else None
 
+    if run.settle_cycles is not None and drive.ramp_cycles > run.settle_cycles:
+        raise table("drive").error(
+            "ramp_cycles",
+            drive.ramp_cycles,
+            f"<= run.settle_cycles = {run.settle_cycles}: the start-up ramp must end before the "
+            'measured cycles begin (or settle_cycles = "auto", which waits for it)',
+        )
     diameter = _grain_diameter(particles)
     if diameter is not None and trough.width < diameter:
         raise table("trough").error(
@@ -659,7 +807,9 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
         particles=particles,
         run=run,
         output=output,
+        feeder=feeder,
     )
+    _check_feeder(case, table)
     _check_engine(case, table)
     return case
 

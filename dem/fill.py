@@ -58,6 +58,10 @@ def box_height(case) -> float:
 def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     """The case's grains placed at random (seed ``run.seed``).
 
+    A finite feeder (``case.feeder``) is filled between its back wall and its discharge edge,
+    clear of both by a grain's bounding radius b: centres in b <= x <= length - b (the fill of a
+    section of length - 2 b, moved by b).
+
     Returns:
         (centres or centres of mass (N, 3) in m, quaternions (N, 4) or None for spheres,
         final box height in m).
@@ -65,18 +69,29 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     """
     pt, t = case.particles, case.trough
     rng = np.random.default_rng(case.run.seed)
+    reach = pt.radius if pt.shape == "sphere" else pt.grain.bounding_radius
+    start, span = 0.0, t.length
+    if getattr(case, "feeder", None) is not None:
+        start, span = reach, t.length - 2.0 * reach
+        if span <= 0.0:
+            raise InputError("trough.length", t.length,
+                             f"> {2.0 * reach:.4g} m, two grain extents (a finite feeder holds "
+                             "its grains between the back wall and the edge)")  # fmt: skip
     if t.mesh is not None:
-        return fill_mesh(case, rng)
+        return fill_mesh(case, rng, start, span)
     if pt.shape == "sphere":
-        positions, height = random_fill(pt.count, pt.radius, t.length, t.width, rng)
-        order = spatial_order(positions, 2.0 * pt.radius, t.width)
-        return positions[order], None, height
-    positions, quats, height = random_fill_clumps(pt.count, pt.grain, t.length, t.width, rng)
-    order = spatial_order(positions, 2.0 * pt.grain.bounding_radius, t.width)
-    return positions[order], quats[order], height
+        positions, height = random_fill(pt.count, pt.radius, span, t.width, rng)
+        quats = None
+    else:
+        positions, quats, height = random_fill_clumps(pt.count, pt.grain, span, t.width, rng)
+    positions[:, 0] += start
+    order = spatial_order(positions, 2.0 * reach, t.width)
+    return positions[order], None if quats is None else quats[order], height
 
 
-def fill_mesh(case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | None, float]:
+def fill_mesh(
+    case, rng: np.random.Generator, start: float = 0.0, span: float | None = None
+) -> tuple[np.ndarray, np.ndarray | None, float]:
     """The case's grains placed at random inside its mesh trough (returns as :func:`fill`).
 
     Grains are drawn by the box fill over the mesh's bounding box (x over the section, y across
@@ -85,6 +100,7 @@ def fill_mesh(case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | 
     (the closest triangle's normal points to it) and its bounding sphere clears the mesh. The
     first N kept, in the box fill's order, are the fill. The box grows until N fit. Cost
     O(N T) for T triangles (every triangle is within reach of the index for this test).
+    Centres are drawn in ``start`` <= x < ``start + span`` (default the whole section).
     """
     from dem.mesh import load_mesh
 
@@ -95,17 +111,18 @@ def fill_mesh(case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | 
     lo, hi = mesh.tri.min(axis=(0, 1)), mesh.tri.max(axis=(0, 1))
     mesh.index(max(reach, float(np.max(hi[1:] - lo[1:]))))
     width = float(hi[1] - lo[1])
-    shift = np.array([0.0, 0.5 * (lo[1] + hi[1]), lo[2]])
+    span = t.length if span is None else span
+    shift = np.array([start, 0.5 * (lo[1] + hi[1]), lo[2]])
     n = pt.count
-    probe = rng.uniform(size=(4096, 3)) * [t.length, width, 2.0 * (hi[2] - lo[2])]
+    probe = rng.uniform(size=(4096, 3)) * [span, width, 2.0 * (hi[2] - lo[2])]
     share = max(float(np.mean(_inside(mesh, probe + shift - [0.0, 0.5 * width, 0.0], 0.0))), 0.05)
     for _ in range(8):
         extra = int(np.ceil(1.2 * n / share)) + 8
         if sphere:
-            pos, height = random_fill(extra, pt.radius, t.length, width, rng)
+            pos, height = random_fill(extra, pt.radius, span, width, rng)
             quats = None
         else:
-            pos, quats, height = random_fill_clumps(extra, pt.grain, t.length, width, rng)
+            pos, quats, height = random_fill_clumps(extra, pt.grain, span, width, rng)
         pos = pos + shift
         keep = np.flatnonzero(_inside(mesh, pos, reach))
         if keep.size >= n:
@@ -119,6 +136,11 @@ def fill_mesh(case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | 
         "particles.count", n, f"fewer grains than fit inside the mesh trough {t.mesh} (the fill "
         "found no room for them: are the triangle normals pointing to the grains' side?)",
     )  # fmt: skip
+
+
+def inside_mesh(mesh, points: np.ndarray, clearance: float) -> np.ndarray:
+    """Points on the grains' side of the mesh and at least ``clearance`` from it, (n,) bool."""
+    return _inside(mesh, points, clearance)
 
 
 def _inside(mesh, points: np.ndarray, clearance: float) -> np.ndarray:

@@ -168,19 +168,27 @@ def running_mean_and_stderr(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def conveying_velocity(
-    per_cycle: np.ndarray, *, amplitude: float, omega: float, angle: float
+    per_cycle: np.ndarray,
+    *,
+    amplitude: float | None = None,
+    omega: float | None = None,
+    angle: float | None = None,
+    scale: float | None = None,
 ) -> VelocityStatistics:
     """Mean and standard error of per-cycle mean x-velocities, shape (cycles,), m/s.
 
     The standard error accounts for the correlation of successive cycles
-    (:func:`correlated_stderr`); the independent-cycle value is kept beside it.
+    (:func:`correlated_stderr`); the independent-cycle value is kept beside it. Velocities are
+    normalised by A omega cos(phi) (``amplitude``, ``omega``, ``angle``) or by ``scale`` (m/s;
+    an elliptical drive's :attr:`dem.case.DriveSpec.velocity_scale`).
     """
+    if scale is None:
+        scale = drive_velocity_scale(amplitude, omega, angle)
     u = np.asarray(per_cycle, dtype=np.float64)
     if u.ndim != 1 or u.size == 0:
         raise ValueError("per_cycle must be a non-empty 1-d array")
     mean, naive = mean_and_stderr(u)
     stderr, tau = correlated_stderr(u)
-    scale = drive_velocity_scale(amplitude, omega, angle)
     return VelocityStatistics(mean, stderr, mean / scale, stderr / scale, int(u.size), tau, naive)
 
 

@@ -272,7 +272,7 @@ def linear_equivalent_stiffness(case) -> float:
     mass, radius = grain_mass_radius(case)
     c = case.contact
     y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
-    speed = case.drive.amplitude * case.drive.omega
+    speed = case.drive.peak_speed
     t_c = contacts.hertz_collision_time(y_star, radius, mass, speed)
     return mass * (math.pi / t_c) ** 2
 
@@ -288,7 +288,7 @@ def equivalent_youngs_modulus(case) -> float:
     if c.model == "hertz_mindlin":
         return float(c.youngs_modulus)
     t_c = math.pi * math.sqrt(mass / c.stiffness)
-    speed = case.drive.amplitude * case.drive.omega
+    speed = case.drive.peak_speed
     # dem.kernels.contacts.hertz_collision_time inverted:
     # t_c = 2.87 (m^2 / (R Y*^2 v))^(1/5)  ->  Y* = sqrt(m^2 / (R v (t_c / 2.87)^5))
     y_star = math.sqrt(mass**2 / (radius * speed * (t_c / 2.87) ** 5))
@@ -494,6 +494,9 @@ def _advise_ladder(case, data, kind, advice) -> None:
                f"--inclination {case.trough.inclination:g} "
                f"--eps-t {m.restitution_tangential:g} "
                f"--eps-n {m.restitution_normal:g}")  # fmt: skip
+    if d.second_amplitude > 0.0:  # the event-driven command knows the line drive only
+        command = ("dem.pointmass.elliptic.velocity on the case's drive; its summary.json "
+                   "gives it as pointmass_velocity_norm")  # fmt: skip
     pm = data["ladder"]["point mass"]
     one_vs_pm = data["ladder"]["one grain vs point mass"]
     if case.particles.count == 1:

@@ -77,6 +77,51 @@ def velocity_cycles_figure(
     return _save(fig, path)
 
 
+def discharge_figure(
+    time, rate, mass_in_trough, path: str | Path, *, measured=None, steady=None, steady_err=None,
+    feed_rate=None, title: str = "",
+) -> Path:  # fmt: skip
+    """A finite feeder's discharge rate per drive cycle (kg/s) and the mass in the trough.
+
+    Args:
+        time: Drive time at the end of each cycle, (C,), s.
+        rate: Mass discharged in the cycle over its period, (C,), kg/s.
+        mass_in_trough: Grain mass in the trough at the end of each cycle, (C,), kg.
+        path: PNG file.
+        measured: Boolean mask (C,) of measured cycles; settling cycles are drawn grey.
+        steady, steady_err: The steady rate over the measured cycles and its standard error,
+            kg/s (a line and a band).
+        feed_rate: The feed, kg/s (a dashed line; None or 0: no feed).
+        title: Figure title.
+
+    """
+    import numpy as np
+
+    time, rate = np.asarray(time), np.asarray(rate)
+    measured = np.ones(time.shape, bool) if measured is None else np.asarray(measured, bool)
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(6.5, 5.5), dpi=120, sharex=True)
+    if np.any(~measured):
+        ax.step(time[~measured], rate[~measured], where="pre", color="0.6", label="settling")
+    ax.step(time[measured], rate[measured], where="pre", color="C0", label="per cycle")
+    if steady is not None and np.isfinite(steady):
+        t = time[measured] if measured.any() else time
+        ax.axhline(steady, color="C3", lw=1.2, label=f"steady {steady:.4g} kg/s")
+        if steady_err is not None and np.isfinite(steady_err):
+            ax.fill_between([t.min(), t.max()], steady - steady_err, steady + steady_err,
+                            color="C3", alpha=0.2, label="+-1 standard error")  # fmt: skip
+    if feed_rate:
+        ax.axhline(feed_rate, color="k", ls="--", lw=1.0, label=f"feed {feed_rate:.4g} kg/s")
+    ax.set_ylabel("discharge (kg/s)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    bx.plot(time, 1e3 * np.asarray(mass_in_trough), "o-", ms=3, lw=0.8, color="C2")
+    bx.set_xlabel("drive time (s)")
+    bx.set_ylabel("mass in the trough (g)")
+    bx.grid(alpha=0.3)
+    return _save(fig, path)
+
+
 def pointmass_comparison_figure(
     labels, dem_norm, dem_stderr, pointmass_norm, path: str | Path, *, xlabel: str = ""
 ) -> Path:

@@ -10,6 +10,8 @@
   the point-mass prediction for the same drive and material;
 - ``bed_snapshot.png``: the last frame of ``results.h5``, side view x-z and top view x-y,
   spheres to scale, coloured by the x-velocity relative to the trough;
+- ``discharge.png`` (a finite feeder): the discharge rate of every cycle with its steady value
+  and the feed, and the mass in the trough against time;
 - ``report.txt``: the numbers behind the figures.
 
 With several runs each gets a sub-folder named after its output folder, and the report folder
@@ -194,6 +196,25 @@ def _report_run(d: Path, dest: Path, label: str) -> tuple[list[Path], dict]:
         )
     )
 
+    feeder = summary.get("feeder")
+    cycles = results["cycles"] if results is not None else {}
+    if feeder and "discharge_rate" in cycles:
+        files.append(
+            plots.discharge_figure(
+                cycles["time"],
+                cycles["discharge_rate"],
+                cycles["mass_in_trough"],
+                dest / "discharge.png",
+                measured=cycles.get("measured", None),
+                steady=feeder.get("discharge_rate"),
+                steady_err=feeder.get("discharge_rate_stderr"),
+                feed_rate=feeder.get("feed_rate"),
+                title=f"{case}: discharge at x = {feeder.get('length', math.nan):g} m",
+            )  # fmt: skip
+        )
+    elif feeder:
+        notes.append("no per-cycle discharge in results.h5: discharge.png skipped")
+
     if results is not None and results["frame_count"] > 0:
         frame = results["frames"][-1]
         tr = results["case"].get("trough", {}) if isinstance(results["case"], dict) else {}
@@ -240,6 +261,19 @@ def _fmt(v, spec: str = ".4g") -> str:
     return str(v)
 
 
+def _feeder_lines(f: dict | None) -> list[str]:
+    if not f:
+        return []
+    return [
+        f"discharge       {_fmt(f.get('discharge_rate'))} +- "
+        f"{_fmt(f.get('discharge_rate_stderr'))} kg/s at x = {_fmt(f.get('length'))} m "
+        f"(feed {_fmt(f.get('feed_rate'))} kg/s)",
+        f"grain balance   {_fmt(f.get('grains_inserted'))} inserted = "
+        f"{_fmt(f.get('grains_in_trough'))} in the trough + {_fmt(f.get('grains_discharged'))} "
+        f"discharged; feed backlog {_fmt(f.get('feed_backlog'))}",
+    ]
+
+
 def _run_text(label, d, s, dem_err, ratio, notes) -> str:
     g = s.get
     lines = [
@@ -261,6 +295,7 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
         f"{_fmt(ratio, '.3f')})",
         f"mass flow       {_fmt(g('mass_flow_rate'))} kg/s "
         f"({_fmt(g('mass_flow_rate_per_width'))} kg/(s m))",
+        *_feeder_lines(g("feeder")),
         "",
         f"timestep        {_fmt(g('timestep'))} s (limit {_fmt(g('timestep_limit'))} s), "
         f"{_fmt(g('steps'))} steps",

@@ -22,6 +22,7 @@ the chunk boundaries are the same.
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import signal
 import sys
@@ -66,9 +67,23 @@ def _set_threads(threads: int | None) -> int:
     return n
 
 
-def _pointmass_norm(case) -> float:
+def _pointmass(case) -> tuple[float, str]:
+    """The point mass's v / (velocity scale) on the case's drive, and the method that gave it.
+
+    The paper's line drive: the event-driven model; two components: the point mass stepped in
+    time on the same motion (:mod:`dem.pointmass.elliptic`).
+    """
     from dem import pointmass
 
+    m = case.material
+    if case.drive.second_amplitude > 0.0:
+        from dem.pointmass import elliptic
+
+        r = elliptic.velocity(
+            case.drive.motion, m.friction, case.trough.inclination,
+            m.restitution_tangential, m.restitution_normal,
+        )  # fmt: skip
+        return r.velocity_norm, "stepped (two-component drive)"
     return pointmass.velocity(
         throw_number=case.drive.throw_number,
         angle=case.drive.angle,
@@ -76,7 +91,49 @@ def _pointmass_norm(case) -> float:
         inclination=case.trough.inclination,
         eps_t=case.material.restitution_tangential,
         eps_n=case.material.restitution_normal,
-    ).velocity_norm
+    ).velocity_norm, "event-driven (the paper's model)"
+
+
+def _feeder_summary(case, sim: Simulation, loop: dict) -> dict | None:
+    """A finite feeder's discharge: its rate per measured cycle, steady value and balance."""
+    f = sim.feeder
+    if f is None:
+        return None
+    rates = np.array(loop.get("discharge_per_cycle", []), dtype=np.float64)
+    hold = np.array(loop.get("hold_up_per_cycle", []), dtype=np.float64)
+    mean = stderr = math.nan
+    tau = 0.5
+    if rates.size:
+        mean = float(np.mean(rates))
+        if rates.size > 1:
+            stderr, tau = measure.correlated_stderr(rates)
+    return {
+        "length": f.discharge,
+        "feed_rate": f.feed_rate,
+        "feed_length": f.feed_length,
+        "discharge_rate": mean,
+        "discharge_rate_stderr": stderr,
+        "discharge_autocorrelation_time": tau,
+        "discharge_rate_per_cycle": [float(r) for r in rates],
+        "mean_mass_in_trough": float(np.mean(hold)) if hold.size else sim.total_mass,
+        "grains_inserted": f.inserted,
+        "grains_in_trough": sim.n_grains,
+        "grains_discharged": f.discharged,
+        "mass_inserted": f.inserted_mass,
+        "mass_discharged": f.discharged_mass,
+        "feed_backlog": f.backlog,
+        "domain_length": sim.trough.length,
+    }
+
+
+def _components(case) -> list[dict]:
+    """The drive's components as the summary lists them (angles and phase in degrees)."""
+    d = case.drive
+    out = [{"amplitude": d.amplitude, "angle": d.angle, "phase": 0.0}]
+    if d.second_amplitude > 0.0:
+        out.append({"amplitude": d.second_amplitude, "angle": d.second_angle,
+                    "phase": d.second_phase})  # fmt: skip
+    return out
 
 
 def _prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
@@ -183,12 +240,15 @@ def run_case(
                 f"the interrupted run has {loop['cycles']}: resume with the same",
             )
         checkpoint_io.load_state(sim, state)
+        if sim.feeder is not None:
+            sim.feeder.restore(loop["feeder"])
     else:
         t0 = time.perf_counter()
         settle_time = sim.settle()
         sim.start_drive()
         sim.stats[:] = 0.0
         loop = {
+            "discharged_mark": 0.0,
             "cycle": 0,
             "chunk": 0,
             "total_cycles": None if settle is None else settle + cycles,
@@ -207,8 +267,9 @@ def run_case(
     vtk = results = None
     if frames:
         vtk = VTKSeriesWriter(
-            out_dir, case.trough.length, case.trough.width, case.trough.inclination,
+            out_dir, sim.trough.extent, case.trough.width, case.trough.inclination,
             entries=[tuple(e) for e in loop["vtk_entries"]], lab_frame=lab_frame, mesh=sim.mesh,
+            period=sim.trough.length, back_wall=sim.trough.finite,
         )  # fmt: skip
     results = ResultsWriter(
         out_dir / RESULTS,
@@ -217,6 +278,7 @@ def run_case(
         seed=case.run.seed,
         timestep=sim.dt,
         resume_at=(loop["h5_cycles"], loop["h5_frames"]) if resume else None,
+        ragged=sim.feeder is not None,
     )
     if frames and not resume:
         _write_frame(sim, vtk, results)
@@ -252,10 +314,10 @@ def run_case(
                         bar.total = _planned(loop)
                         bar.update(1)
                     if loop["cycle"] % config.DEM_CHECKPOINT_EVERY == 0:
-                        checkpoint_io.write(checkpoint, sim, loop)
+                        _checkpoint(checkpoint, sim, loop)
                 unfinished = loop["settle_cycles"] is None or loop["cycle"] < loop["total_cycles"]
                 if flag.signum is not None and unfinished:
-                    checkpoint_io.write(checkpoint, sim, loop)
+                    _checkpoint(checkpoint, sim, loop)
                     raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
     finally:
         if bar is not None:
@@ -314,6 +376,13 @@ def _warn_plan(estimate) -> None:
         )
 
 
+def _checkpoint(path: Path, sim: Simulation, loop: dict) -> None:
+    """Write a checkpoint; a finite feeder's counters and generator travel in the loop JSON."""
+    if sim.feeder is not None:
+        loop["feeder"] = sim.feeder.state()
+    checkpoint_io.write(path, sim, loop)
+
+
 def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
     s = sim.spheres
     orientation = sim.bodies.q if sim.bodies is not None else None
@@ -321,13 +390,25 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     t = sim.drive_time
     shift = sim.trough.displacement(t) if sim.drive_on else np.zeros(3)
     lab_v = sim.trough.velocity(t) if sim.drive_on else np.zeros(3)
+    grain_id = sim.grain_id[s.body]
     vtk.write_frame(
-        t, s.x, s.radius, s.v, s.body, s.body, counts, orientation,
+        t, s.x, s.radius, s.v, grain_id, s.body, counts, orientation,
         drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
     )  # fmt: skip
+    balance = None
+    if sim.feeder is not None:
+        f = sim.feeder
+        balance = {
+            "grains_inserted": np.int64(f.inserted),
+            "grains_in_trough": np.int64(sim.n_grains),
+            "grains_discharged": np.int64(f.discharged),
+            "mass_inserted": np.float64(f.inserted_mass),
+            "mass_in_trough": np.float64(sim.total_mass),
+            "mass_discharged": np.float64(f.discharged_mass),
+        }
     results.append_frame(
-        t, s.x, s.v, radius=s.radius, grain_id=s.body, contact_count=counts,
-        orientation=orientation,
+        t, s.x, s.v, radius=s.radius, grain_id=grain_id, contact_count=counts,
+        orientation=orientation, grain_index=s.body, per_frame=balance,
     )  # fmt: skip
 
 
@@ -353,12 +434,13 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
     elif settle is None:
         series = loop["settle_series"]
         series.append(velocity)
-        scale = measure.drive_velocity_scale(
-            case.drive.amplitude, case.drive.omega, case.drive.angle
-        )
-        done = measure.steady(
-            series, config.DEM_AUTO_SETTLE_MIN_CYCLES, config.DEM_AUTO_SETTLE_TOLERANCE * scale
-        )
+        scale = case.drive.velocity_scale
+        done = (
+            measure.steady(
+                series, config.DEM_AUTO_SETTLE_MIN_CYCLES, config.DEM_AUTO_SETTLE_TOLERANCE * scale
+            )
+            and len(series) >= case.drive.ramp_cycles
+        )  # the start-up ramp is no steady state
         if done or len(series) >= config.DEM_AUTO_SETTLE_MAX_CYCLES:
             loop["settle_cycles"] = loop["cycle"] + 1
             loop["total_cycles"] = loop["settle_cycles"] + loop["cycles"]
@@ -369,6 +451,23 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
                     f"{len(series)} settling cycles (DEM_AUTO_SETTLE_MAX_CYCLES); measuring anyway",
                     stacklevel=2,
                 )
+    feeder = {}
+    if sim.feeder is not None:
+        f = sim.feeder
+        mass = f.discharged_mass - loop.get("discharged_mark", 0.0)
+        loop["discharged_mark"] = f.discharged_mass
+        feeder = {
+            "discharged_mass": mass,
+            "discharge_rate": mass / sim.trough.period,
+            "mass_in_trough": sim.total_mass,
+            "grains_in_trough": sim.n_grains,
+            "grains_inserted": f.inserted,
+            "grains_discharged": f.discharged,
+            "feed_backlog": f.backlog,
+        }
+        if measured:
+            loop.setdefault("discharge_per_cycle", []).append(mass / sim.trough.period)
+            loop.setdefault("hold_up_per_cycle", []).append(sim.total_mass)
     results.append_cycle(
         cycle=loop["cycle"],
         time=sim.drive_time,
@@ -376,6 +475,7 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
         kinetic_energy=sim.kinetic_energy(),
         contacts=int(sim.contact_counts().sum()),
         measured=int(measured),
+        **feeder,
     )
     loop["h5_cycles"] += 1
     sim.stats[:] = 0.0
@@ -385,11 +485,14 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
 
 def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> dict:
     per_cycle = np.array(loop["per_cycle"])
-    stat = measure.conveying_velocity(
-        per_cycle, amplitude=case.drive.amplitude, omega=case.drive.omega, angle=case.drive.angle
-    )
+    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
+    d = case.drive
+    pm_norm, pm_method = _pointmass(case)
     total_mass = sim.total_mass
     flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
+    feeder = _feeder_summary(case, sim, loop)
+    if feeder is not None:  # the mass changed: the mean mass in the trough over the cycles
+        flow = measure.mass_flow_rate(feeder["mean_mass_in_trough"], stat.mean, case.trough.length)
     wall = loop["wall_time_s"]
     provenance = record()  # versions, commit, date, host and load (the load bears on wall_time_s)
     return {
@@ -403,7 +506,10 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "mass_flow_rate": flow,
         "mass_flow_rate_per_width": flow / case.trough.width,
         "amplitude": case.drive.amplitude,
-        "throw_number": case.drive.throw_number,
+        "throw_number": d.effective_throw_number(case.trough.inclination),
+        "velocity_scale": d.velocity_scale,
+        "drive_components": _components(case),
+        "ramp_cycles": d.ramp_cycles,
         "frequency": case.drive.frequency,
         "angle": case.drive.angle,
         "inclination": case.trough.inclination,
@@ -428,7 +534,9 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "neighbour_builds": sim.pairs.builds,
         "threads": n_threads,
         "seed": case.run.seed,
-        "pointmass_velocity_norm": _pointmass_norm(case),
+        "feeder": feeder,
+        "pointmass_velocity_norm": pm_norm,
+        "pointmass_method": pm_method,
         "dem_version": provenance["versions"]["dem"],
         "git_commit": provenance["git_commit"],
         "provenance": provenance,

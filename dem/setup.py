@@ -7,10 +7,13 @@ Both take the time step from :func:`dem.timestep.timestep_for`, which depends on
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from dem import fill
 from dem.errors import InputError
+from dem.mesh import TriangleMesh
 from dem.simulation import Simulation
 from dem.state import Bodies, Spheres
 from dem.timestep import ContactLaw, impact_speed_for, timestep_for
@@ -88,11 +91,48 @@ def _build(case, positions, orientations, velocities, step, reference_speed) -> 
         if velocities is not None:
             bodies.v[:] = velocities
         bodies.place(spheres)
+    trough = Trough.from_case(case)
+    mesh = trough_mesh(case)
+    feeder = None
+    if case.feeder is not None:
+        trough, feeder = _finite(case, trough, mesh, step.dt, reference_speed)
+        if mesh is not None:
+            mesh = TriangleMesh(mesh.tri, period=trough.length, source=mesh.source)
+            lo = float(mesh.tri[..., 2].min())
+            feeder.floor = lo
+            feeder.inside = lambda p, r: fill.inside_mesh(mesh, p, float(np.max(r)))
     return Simulation(
-        spheres, Trough.from_case(case), ContactLaw.from_case(case), step.dt,
+        spheres, trough, ContactLaw.from_case(case), step.dt,
         rotation=pt.rotation, reference_speed=reference_speed, bodies=bodies,
-        timestep_limit=step.limit, mesh=trough_mesh(case),
+        timestep_limit=step.limit, mesh=mesh, feeder=feeder,
     )  # fmt: skip
+
+
+def _finite(case, trough: Trough, mesh, dt: float, reference_speed: float):
+    """The finite feeder's periodic domain (the trough and an empty gap) and its Feeder."""
+    from dem import config
+    from dem.feeder import EXCHANGE_FRACTION, Feeder, domain_gap, grain_factory, grain_mass
+
+    pt = case.particles
+    if pt.shape == "sphere":
+        bound = r_max = pt.radius
+    else:
+        bound, r_max = pt.grain.bounding_radius, float(np.max(pt.grain.radii))
+    interval = max(1, int(round(EXCHANGE_FRACTION * trough.period / dt)))
+    travel = config.DEM_MAX_SPEED_FACTOR * reference_speed * interval * dt
+    skin = config.DEM_SKIN_FRACTION * r_max
+    length = case.trough.length
+    domain = length + domain_gap(bound, r_max, skin, travel)
+    width = trough.width
+    if mesh is not None:
+        width = float(np.ptp(mesh.tri[..., 1]))
+    feeder = Feeder(
+        discharge=length, width=width, feed_rate=case.feeder.feed_rate,
+        feed_length=case.feeder.feed_length, grain_mass=grain_mass(case), bound=bound,
+        interval=interval, make=grain_factory(case),
+        random=np.random.default_rng([case.run.seed, 0xFEED]),
+    )  # fmt: skip
+    return replace(trough, length=domain, discharge=length), feeder
 
 
 def trough_mesh(case):

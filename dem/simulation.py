@@ -45,7 +45,7 @@ from dem.kernels.integrate import (
     evaluate_forces_clumps,
 )
 from dem.kernels.layout import Geometry, MeshArrays
-from dem.kernels.neighbours import OK
+from dem.kernels.neighbours import OK, OVERFLOW_PAIRS
 from dem.kernels.rigid import rotational_energy
 from dem.mesh import TriangleMesh
 from dem.state import Bodies, PairList, Spheres
@@ -73,6 +73,9 @@ class Simulation:
         timestep_limit: The stability limit dt was chosen under, s (reported; nan if unknown).
         mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`) replacing the flat floor and side
             walls, or None.
+        feeder: A finite feeder (:class:`dem.feeder.Feeder`): grains past the discharge edge are
+            removed and new ones fed at the back while the drive is on; None for a periodic
+            section.
 
     """
 
@@ -89,6 +92,7 @@ class Simulation:
         bodies: Bodies | None = None,
         timestep_limit: float = math.nan,
         mesh: TriangleMesh | None = None,
+        feeder=None,
     ):
         self.spheres = spheres
         self.bodies = bodies
@@ -109,12 +113,19 @@ class Simulation:
             mesh.index(r_max + self.skin)
             spheres.use_mesh()
         self.pairs = PairList.for_spheres(spheres.n)
-        self.geom = Geometry(trough.length, trough.width, self.skin, self.dt)
+        self.geom = Geometry(trough.length, trough.width, self.skin, self.dt, trough.back)
         self.gravity = trough.gravity
         self.drive_on = False
         self.drive_start_step = 0
         self.step_index = 0
-        self.stats = np.zeros(2)
+        #: Sums of the step loop since the last reset: sum over steps of the x-momentum, the
+        #: steps, and (finite feeders, whose mass changes) sum over steps of the grain mass.
+        self.stats = np.zeros(3)
+        #: Lasting id of each grain (frames and results.h5); fed grains get new ids.
+        self.grain_id = np.arange(self.n_grains, dtype=np.int64)
+        self.feeder = feeder
+        if feeder is not None:
+            feeder.next_id = self.n_grains
         self.reference_speed = reference_speed or (
             trough.drive_speed + math.sqrt(2 * config.GRAVITY * 10 * r_max)
         )
@@ -138,6 +149,8 @@ class Simulation:
         """Switch the drive on with phase 0 now: a = A omega^2 sin(omega (t - t_now)) e."""
         self.drive_on = True
         self.drive_start_step = self.step_index
+        if self.feeder is not None:
+            self.feeder.start(self)
         # sin(0) = 0: the stored forces are already those of drive time 0
 
     def _drive(self) -> np.ndarray:
@@ -152,15 +165,67 @@ class Simulation:
         return MeshArrays(m.tri, m.grid, m.dims, m.cell_start, m.cell_tris, s.mesh_hist,
                           s.mesh_normal)  # fmt: skip
 
+    def replace_grains(
+        self, keep: np.ndarray, new_spheres: Spheres | None = None,
+        new_bodies: Bodies | None = None, new_ids: np.ndarray | None = None,
+    ) -> None:  # fmt: skip
+        """Keep the grains where ``keep`` (bool, per grain) and append new ones at rest.
+
+        The kept grains keep their state, stored forces, wall and mesh springs, and the pairs
+        between them keep their contact history: the pair list is renumbered (the order of the
+        kept spheres is kept, so it stays sorted by key) and the next step rebuilds it from
+        there, carrying the history over as any rebuild does. New grains (``new_spheres``, and
+        ``new_bodies`` for clumps, ids ``new_ids``) touch nothing: their stored force is
+        m a_body now, exact for the first half kick. O(n) per call; a finite feeder calls it
+        only when a grain leaves or arrives.
+        """
+        s, b, p = self.spheres, self.bodies, self.pairs
+        keep = np.asarray(keep, dtype=bool)
+        t = self.drive_time if self.drive_on else 0.0
+        a_body = self.gravity + (self.trough.frame_acceleration(t) if self.drive_on else 0.0)
+        if b is None:
+            idx = np.flatnonzero(keep)
+            spheres = s.take(idx, np.arange(idx.size))
+            bodies = None
+            old = idx
+        else:
+            bodies, old = b.take(np.flatnonzero(keep))
+            spheres = s.take(old, bodies.body_of)
+        ids = self.grain_id[keep]
+        if new_spheres is not None and new_spheres.n:
+            new_spheres.force[:] = new_spheres.mass[:, None] * a_body
+            if new_bodies is None:
+                spheres = spheres.concat(new_spheres, np.arange(spheres.n + new_spheres.n))
+            else:
+                new_bodies.force[:] = new_bodies.mass[:, None] * a_body
+                bodies = bodies.concat(new_bodies)
+                spheres = spheres.concat(new_spheres, bodies.body_of)
+            ids = np.concatenate([ids, np.asarray(new_ids, dtype=np.int64)])
+        # the pairs between kept spheres, renumbered
+        where = np.full(s.n, -1, dtype=np.int64)
+        where[old] = np.arange(old.size)
+        k = p.n_pairs
+        pi, pj = where[p.pair_i[:k]], where[p.pair_j[:k]]
+        both = (pi >= 0) & (pj >= 0)
+        pairs = PairList.for_spheres(spheres.n)
+        if both.sum() > pairs.capacity:
+            pairs.grow(OVERFLOW_PAIRS, int(both.sum()))
+        kept = int(both.sum())
+        pairs.pair_i[:kept], pairs.pair_j[:kept] = pi[both], pj[both]
+        pairs.hist[:kept] = p.hist[:k][both]
+        pairs.counters[:] = (kept, p.counters[1])
+        self.spheres, self.bodies, self.pairs = spheres, bodies, pairs
+        self.grain_id = ids
+
     def wall_gaps(self, x: np.ndarray) -> np.ndarray:
         """Distance of points (n, 3) from each wall, (walls, n), m.
 
-        The flat floor and side walls (:meth:`dem.trough.Trough.wall_gaps`), or one row: the
-        distance to the mesh.
+        The flat floor, side walls and back wall (:meth:`dem.trough.Trough.wall_gaps`), or with
+        a mesh two rows: the distance to the mesh and to the back wall (inf without one).
         """
         if self.mesh is None:
             return self.trough.wall_gaps(x)
-        return self.mesh.gaps(x)[None, :]
+        return np.stack([self.mesh.gaps(x), self.trough.back_gaps(x)])
 
     def _build(self) -> None:
         while True:
@@ -245,11 +310,21 @@ class Simulation:
             resume = True
 
     def run(self, n_steps: int) -> None:
-        """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``."""
+        """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``.
+
+        A finite feeder exchanges grains (discharge, and feed once the drive is on) after every
+        chunk of at most :attr:`dem.feeder.Feeder.interval` steps.
+        """
         left = int(n_steps)
         guard = self.guard
+        feeder = self.feeder
+        limit = config.DEM_CHECK_INTERVAL
+        if feeder is not None:
+            limit = min(limit, feeder.interval)
         while left > 0:
-            chunk = min(left, config.DEM_CHECK_INTERVAL)
+            chunk = min(left, limit)
+            if feeder is not None:
+                self.stats[2] += chunk * self.total_mass
             if guard is None:
                 self._advance(chunk)
             else:
@@ -258,6 +333,8 @@ class Simulation:
                 self._advance(chunk)
                 guard.record(threads, chunk, time.perf_counter() - t0)
             left -= chunk
+            if feeder is not None:
+                feeder.exchange(self)
             self.check()
 
     # --- diagnostics -------------------------------------------------------------------------
@@ -360,6 +437,8 @@ class Simulation:
         """
         if not self.stats[1]:
             return math.nan
+        if self.feeder is not None:  # the mass changed: sum over steps of the mass present
+            return float(self.stats[0] / self.stats[2]) if self.stats[2] else math.nan
         return float(self.stats[0] / (self.stats[1] * self.total_mass))
 
     def mean_velocity_x(self) -> float:

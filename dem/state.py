@@ -97,6 +97,48 @@ class Spheres:
             self.mesh_hist = np.zeros((MESH_SLOTS * self.n, 3))
             self.mesh_normal = np.zeros((MESH_SLOTS * self.n, 3))
 
+    def take(self, index: np.ndarray, body: np.ndarray) -> Spheres:
+        """The spheres ``index`` (int, in the order given) as new arrays, owned by grains ``body``.
+
+        Per-sphere rows, wall springs (``N_WALLS`` rows each) and mesh slots follow the
+        spheres; a finite feeder drops discharged grains this way (:mod:`dem.feeder`).
+        """
+        index = np.asarray(index, dtype=np.int64)
+
+        def rows(a, k):
+            if a.shape[0] == 0:
+                return a.copy()
+            return np.ascontiguousarray(a.reshape(-1, k, 3)[index].reshape(-1, 3))
+
+        from dem.kernels.mesh import MESH_SLOTS
+
+        return Spheres(
+            x=self.x[index], v=self.v[index], omega=self.omega[index],
+            force=self.force[index], torque=self.torque[index], radius=self.radius[index],
+            mass=self.mass[index], inv_mass=self.inv_mass[index],
+            inv_inertia=self.inv_inertia[index], wall_hist=rows(self.wall_hist, N_WALLS),
+            body=np.ascontiguousarray(body, dtype=np.int64),
+            mesh_hist=rows(self.mesh_hist, MESH_SLOTS),
+            mesh_normal=rows(self.mesh_normal, MESH_SLOTS),
+        )  # fmt: skip
+
+    def concat(self, other: Spheres, body: np.ndarray) -> Spheres:
+        """These spheres followed by ``other``'s, owned by grains ``body`` (both lists)."""
+        from dem.kernels.mesh import MESH_SLOTS
+
+        mesh = self.mesh_hist.shape[0] > 0
+        if mesh:
+            other.use_mesh()
+        both = {
+            name: np.concatenate([getattr(self, name), getattr(other, name)])
+            for name in ("x", "v", "omega", "force", "torque", "radius", "mass", "inv_mass",
+                         "inv_inertia", "wall_hist", "mesh_hist", "mesh_normal")
+        }  # fmt: skip
+        out = Spheres(body=np.ascontiguousarray(body, dtype=np.int64), **both)
+        if mesh:
+            assert out.mesh_hist.shape[0] == MESH_SLOTS * out.n
+        return out
+
     def as_layout(self) -> SphereArrays:
         """The arrays as the kernels take them (:class:`dem.kernels.layout.SphereArrays`)."""
         return SphereArrays(
@@ -218,6 +260,46 @@ class Bodies:
             self.x, self.v, self.q, self.omega, self.offsets, self.body_of, spheres.x, spheres.v,
             spheres.omega,
         )  # fmt: skip
+
+    _PER_BODY = ("x", "v", "q", "ang_mom", "inv_mass", "mass", "moments", "force", "torque",
+                 "omega")  # fmt: skip
+
+    def take(self, index: np.ndarray) -> tuple[Bodies, np.ndarray]:
+        """The bodies ``index`` (int, in the order given) and their members' old sphere indices.
+
+        Members are renumbered body by body in the new order; ``body_of`` follows.
+        """
+        index = np.asarray(index, dtype=np.int64)
+        counts = self.start[index + 1] - self.start[index]
+        old = (
+            np.concatenate([self.members[self.start[b] : self.start[b + 1]] for b in index])
+            if index.size
+            else np.zeros(0, dtype=np.int64)
+        )
+        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        n = int(start[-1])
+        per_body = {name: getattr(self, name)[index] for name in self._PER_BODY}
+        out = Bodies(
+            **per_body, start=start, members=np.arange(n, dtype=np.int64),
+            offsets=np.ascontiguousarray(self.offsets[old]),
+            body_of=np.repeat(np.arange(index.size, dtype=np.int64), counts),
+        )  # fmt: skip
+        return out, old
+
+    def concat(self, other: Bodies) -> Bodies:
+        """These bodies followed by ``other``'s (its members numbered after these)."""
+        n = int(self.start[-1])
+        per_body = {
+            name: np.concatenate([getattr(self, name), getattr(other, name)])
+            for name in self._PER_BODY
+        }
+        return Bodies(
+            **per_body,
+            start=np.concatenate([self.start, other.start[1:] + n]).astype(np.int64),
+            members=np.arange(n + int(other.start[-1]), dtype=np.int64),
+            offsets=np.concatenate([self.offsets, other.offsets]),
+            body_of=np.concatenate([self.body_of, other.body_of + self.n]).astype(np.int64),
+        )
 
     def as_layout(self) -> BodyArrays:
         """The arrays as the kernels take them (:class:`dem.kernels.layout.BodyArrays`)."""

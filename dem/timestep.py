@@ -185,7 +185,7 @@ def impact_speed_for(case, height: float | None = None, fastest: float = 0.0) ->
     d = case.drive
     if height is None:
         height = fill.box_height(case)
-    peak = d.amplitude * d.omega
+    peak = d.peak_speed
     return peak + fastest + math.sqrt(2.0 * config.GRAVITY * max(height, 0.0))
 
 

@@ -6,14 +6,16 @@ period ``length``. Inclination alpha > 0 means the trough rises in +x, so gravit
 
     g_vec = g (-sin alpha, 0, -cos alpha).
 
-Drive. In the laboratory the trough moves by s(t) = A sin(omega t) e, e = (cos phi, 0, sin phi).
+Drive. In the laboratory the trough moves by s(t) = A sin(omega t) e, e = (cos phi, 0, sin phi)
+(the paper's line drive; a second component and a start-up ramp generalise s(t), see
+:class:`dem.drive.Motion`; what follows holds for any s(t)).
 A grain's laboratory position is X = s(t) + x, with x its position relative to the trough, so
 
     m X'' = F_contact + m g_vec   =>   m x'' = F_contact + m g_vec - m s''(t),
 
 and s''(t) = -A omega^2 sin(omega t) e. The frame force is therefore
 
-    -m s''(t) = +m A omega^2 sin(omega t) e,
+    -m s''(t) = +m A omega^2 sin(omega t) e   (line drive),
 
 the extra acceleration every grain gets while the walls stay still. Contact forces depend on
 relative positions and velocities only, which are the same in both frames, so nothing is lost.
@@ -46,12 +48,17 @@ WALLS = (
     ("floor", (0.0, 0.0, 1.0)),
     ("side wall y = -width/2", (0.0, 1.0, 0.0)),
     ("side wall y = +width/2", (0.0, -1.0, 0.0)),
+    ("back wall x = 0 (finite feeder)", (1.0, 0.0, 0.0)),
 )
 
 
 @dataclass(frozen=True)
 class Trough:
-    """Straight periodic trough section with a straight-line sinusoidal drive.
+    """Straight periodic trough section and its drive.
+
+    The drive is the paper's straight line A sin(omega t) (cos phi, 0, sin phi), optionally a
+    second component A_2 sin(omega t + psi_2) (cos phi_2, 0, sin phi_2) (an elliptical drive) and
+    a start-up ramp (:class:`dem.drive.Motion`).
 
     Attributes:
         length: Period along x, m.
@@ -60,6 +67,13 @@ class Trough:
         amplitude: A, m.
         omega: Angular frequency omega = 2 pi f, rad/s.
         angle: Vibration angle phi, rad.
+        second_amplitude: A_2, m (0: a straight-line drive).
+        second_angle: phi_2, rad.
+        second_phase: psi_2, rad.
+        ramp_time: Start-up ramp of the drive, s (0: none).
+        discharge: x of a finite feeder's discharge edge, m (inf: a periodic section). A finite
+            feeder has a back wall at x = 0 and ``length`` is then the period of the domain the
+            kernels wrap, longer than the trough by an empty gap (:mod:`dem.feeder`).
 
     """
 
@@ -69,18 +83,53 @@ class Trough:
     amplitude: float = 0.0
     omega: float = 0.0
     angle: float = 0.0
+    second_amplitude: float = 0.0
+    second_angle: float = 0.0
+    second_phase: float = 0.0
+    ramp_time: float = 0.0
+    discharge: float = math.inf
+
+    @property
+    def finite(self) -> bool:
+        """Whether this is a finite feeder (back wall at x = 0, discharge edge)."""
+        return math.isfinite(self.discharge)
+
+    @property
+    def back(self) -> float:
+        """The back wall's x, m: 0 for a finite feeder, -inf (none) for a periodic section."""
+        return 0.0 if self.finite else -math.inf
+
+    @property
+    def extent(self) -> float:
+        """Length of the trough itself, m: the discharge edge, or the periodic section."""
+        return self.discharge if self.finite else self.length
 
     @classmethod
     def from_case(cls, case) -> Trough:
         """Trough of a :class:`dem.case.Case` (angles converted from degrees)."""
+        d = case.drive
         return cls(
             length=case.trough.length,
             width=case.trough.width,
             inclination=math.radians(case.trough.inclination),
-            amplitude=case.drive.amplitude,
-            omega=case.drive.omega,
-            angle=math.radians(case.drive.angle),
+            amplitude=d.amplitude,
+            omega=d.omega,
+            angle=math.radians(d.angle),
+            second_amplitude=d.second_amplitude,
+            second_angle=math.radians(d.second_angle),
+            second_phase=math.radians(d.second_phase),
+            ramp_time=d.ramp_cycles / d.frequency,
         )
+
+    @property
+    def motion(self) -> drive.Motion:
+        """The trough's laboratory motion s(t) (:class:`dem.drive.Motion`)."""
+        components = [drive.Component(self.amplitude, self.angle)]
+        if self.second_amplitude > 0.0:
+            components.append(
+                drive.Component(self.second_amplitude, self.second_angle, self.second_phase)
+            )
+        return drive.Motion(self.omega, tuple(components), self.ramp_time)
 
     @property
     def gravity(self) -> np.ndarray:
@@ -90,7 +139,7 @@ class Trough:
 
     @property
     def direction(self) -> np.ndarray:
-        """Drive direction e = (cos phi, 0, sin phi), shape (3,)."""
+        """Direction e = (cos phi, 0, sin phi) of the first drive component, shape (3,)."""
         return np.array([math.cos(self.angle), 0.0, math.sin(self.angle)])
 
     @property
@@ -100,12 +149,20 @@ class Trough:
 
     @property
     def drive_speed(self) -> float:
-        """Peak trough speed A omega, m/s."""
-        return self.amplitude * self.omega
+        """Peak trough speed, m/s: A omega for a line (:attr:`dem.drive.Motion.peak_speed`)."""
+        if self.second_amplitude == 0.0:
+            return self.amplitude * self.omega
+        return self.motion.peak_speed
 
     @property
     def throw_number(self) -> float:
-        """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (:func:`dem.drive.throw_number`)."""
+        """Peak normal trough acceleration over g cos(alpha): the paper's Gamma for a line drive.
+
+        (:func:`dem.drive.throw_number`; :meth:`dem.drive.Motion.throw_number` with two
+        components.)
+        """
+        if self.second_amplitude > 0.0:
+            return self.motion.throw_number(math.degrees(self.inclination))
         return drive.throw_number(
             self.amplitude,
             self.omega / (2.0 * math.pi),
@@ -114,23 +171,22 @@ class Trough:
         )
 
     def drive_array(self, on: bool = True) -> np.ndarray:
-        """Kernel form (A omega^2, omega, e_x, e_y, e_z), shape (5,); zeros when ``on`` is off."""
+        """Kernel form of the drive (:meth:`dem.drive.Motion.kernel_array`); zeros when off."""
         if not on:
-            return np.zeros(5)
-        e = self.direction
-        return np.array([self.amplitude * self.omega**2, self.omega, e[0], e[1], e[2]])
+            return np.zeros(drive.KERNEL_DRIVE_SIZE)
+        return self.motion.kernel_array()
 
     def frame_acceleration(self, t: float) -> np.ndarray:
-        """Frame acceleration +A omega^2 sin(omega t) e at time t, shape (3,), m/s^2."""
-        return self.amplitude * self.omega**2 * math.sin(self.omega * t) * self.direction
+        """Frame acceleration -s''(t) at drive time t, shape (3,), m/s^2."""
+        return self.motion.frame_acceleration(t)
 
     def displacement(self, t: float) -> np.ndarray:
-        """Laboratory trough displacement s(t) = A sin(omega t) e, shape (3,), m."""
-        return self.amplitude * math.sin(self.omega * t) * self.direction
+        """Laboratory trough displacement s(t), shape (3,), m."""
+        return self.motion.displacement(t)
 
     def velocity(self, t: float) -> np.ndarray:
-        """Laboratory trough velocity s'(t) = A omega cos(omega t) e, shape (3,), m/s."""
-        return self.amplitude * self.omega * math.cos(self.omega * t) * self.direction
+        """Laboratory trough velocity s'(t), shape (3,), m/s."""
+        return self.motion.velocity(t)
 
     def wrap(self, x: np.ndarray) -> np.ndarray:
         """Positions (n, 3) with x wrapped into the periodic section [0, length), a new array, m."""
@@ -148,29 +204,37 @@ class Trough:
         return out
 
     def wall_gaps(self, x: np.ndarray) -> np.ndarray:
-        """Distance of points (n, 3) from each wall along its inward normal, (3, n), m.
+        """Distance of points (n, 3) from each wall along its inward normal, (4, n), m.
 
-        Rows in the kernel's wall order (:data:`WALLS`): z, y + width/2, width/2 - y. A sphere of
-        radius r touches wall w where gap[w] < r; its overlap there is r - gap[w].
+        Rows in the kernel's wall order (:data:`WALLS`): z, y + width/2, width/2 - y, and x - back
+        (inf without a back wall). A sphere of radius r touches wall w where gap[w] < r; its
+        overlap there is r - gap[w].
         """
         x = np.asarray(x, dtype=np.float64)
         half = 0.5 * self.width
-        return np.stack([x[:, 2], x[:, 1] + half, half - x[:, 1]])
+        return np.stack([x[:, 2], x[:, 1] + half, half - x[:, 1], self.back_gaps(x)])
+
+    def back_gaps(self, x: np.ndarray) -> np.ndarray:
+        """Distance of points (n, 3) from the back wall, (n,), m (inf without one)."""
+        x = np.asarray(x, dtype=np.float64)
+        return x[:, 0] - self.back
 
     def wall_corners(self, height: float) -> np.ndarray:
-        """Corners of the walls as drawn, (3, 4, 3), m, in the kernel's order (:data:`WALLS`).
+        """Corners of the walls as drawn, (3 or 4, 4, 3), m, in the kernel's order (:data:`WALLS`).
 
-        The floor z = 0 over 0 <= x <= length, |y| <= width/2; each side wall y = -+width/2 over
-        0 <= x <= length, 0 <= z <= ``height``. Corners go round each quad.
+        The floor z = 0 over 0 <= x <= extent, |y| <= width/2; each side wall y = -+width/2 over
+        0 <= x <= extent, 0 <= z <= ``height``; a finite feeder's back wall x = 0 as well.
+        Corners go round each quad.
         """
-        lo, hi, length = -0.5 * self.width, 0.5 * self.width, self.length
-        return np.array(
-            [
-                [[0.0, lo, 0.0], [length, lo, 0.0], [length, hi, 0.0], [0.0, hi, 0.0]],
-                [[0.0, lo, 0.0], [length, lo, 0.0], [length, lo, height], [0.0, lo, height]],
-                [[0.0, hi, 0.0], [length, hi, 0.0], [length, hi, height], [0.0, hi, height]],
-            ]
-        )
+        lo, hi, length = -0.5 * self.width, 0.5 * self.width, self.extent
+        quads = [
+            [[0.0, lo, 0.0], [length, lo, 0.0], [length, hi, 0.0], [0.0, hi, 0.0]],
+            [[0.0, lo, 0.0], [length, lo, 0.0], [length, lo, height], [0.0, lo, height]],
+            [[0.0, hi, 0.0], [length, hi, 0.0], [length, hi, height], [0.0, hi, height]],
+        ]
+        if self.finite:
+            quads.append([[0.0, lo, 0.0], [0.0, hi, 0.0], [0.0, hi, height], [0.0, lo, height]])
+        return np.array(quads)
 
 
 def check_section_length(

@@ -383,6 +383,43 @@ BAD = [
     ("timestep-word", {"run.timestep": "fast"}, "run.timestep", '"auto"'),
     ("timestep-negative", {"run.timestep": -1e-6}, "run.timestep", '"auto"'),
     ("cycles-zero", {"run.cycles": 0}, "run.cycles", ">= 1"),
+    (
+        "second-angle-alone",
+        {"drive.second_angle": 90.0},
+        "drive.second_angle",
+        "only with drive.second_amplitude > 0",
+    ),
+    (
+        "second-amplitude-without-angle",
+        {"drive.second_amplitude": 1e-4},
+        "drive.second_angle",
+        "required",
+    ),
+    (
+        "second-amplitude-negative",
+        {"drive.second_amplitude": -1e-4},
+        "drive.second_amplitude",
+        "[0, 1] m",
+    ),
+    (
+        "second-angle-180",
+        {"drive.second_amplitude": 1e-4, "drive.second_angle": 180.0},
+        "drive.second_angle",
+        "[0, 180)",
+    ),
+    (
+        "second-phase-huge",
+        {"drive.second_amplitude": 1e-4, "drive.second_angle": 90.0, "drive.second_phase": 1e4},
+        "drive.second_phase",
+        "[-360, 360]",
+    ),
+    ("ramp-negative", {"drive.ramp_cycles": -1.0}, "drive.ramp_cycles", "[0, 1000]"),
+    (
+        "ramp-into-measuring",
+        {"drive.ramp_cycles": 12.0, "run.settle_cycles": 10},
+        "drive.ramp_cycles",
+        "<= run.settle_cycles = 10",
+    ),
     ("frames-zero", {"output.frames_per_cycle": 0}, "output.frames_per_cycle", ">= 1"),
 ]
 
@@ -462,6 +499,28 @@ def test_with_drive_keeps_the_given_quantity_and_recomputes_the_other():
         4e-4 * w2 * math.sin(math.radians(40.0)) / GRAVITY, rel=1e-14
     )
     assert case.drive.angle == 25.0  # frozen: the original is untouched
+
+
+def test_second_component_and_ramp_are_read_and_kept_by_with_drive(tmp_path):
+    changes = {"drive.second_amplitude": 2e-4, "drive.second_angle": 90.0,
+               "drive.second_phase": 90.0, "drive.ramp_cycles": 3.5}  # fmt: skip
+    case = load_case(write_case(tmp_path, with_changes(changes)))
+    d = case.drive
+    assert (d.second_amplitude, d.second_angle, d.second_phase, d.ramp_cycles) == (
+        2e-4, 90.0, 90.0, 3.5)  # fmt: skip
+    assert d.elliptical
+    assert len(d.motion.components) == 2
+    assert d.motion.ramp_time == pytest.approx(3.5 / 60.0)
+    # |Z|^2 = (A sin phi)^2 + A_2^2 a quarter period apart; |X| = A cos phi
+    a, phi = d.amplitude, math.radians(d.angle)
+    z = math.hypot(a * math.sin(phi), 2e-4)
+    assert d.effective_throw_number(0.0) == pytest.approx(z * d.omega**2 / GRAVITY, rel=1e-12)
+    assert d.velocity_scale == pytest.approx(a * math.cos(phi) * d.omega, rel=1e-12)
+    turned = case.with_drive(angle=40.0)
+    assert (turned.drive.second_amplitude, turned.drive.ramp_cycles) == (2e-4, 3.5)
+    plain = load_case(write_case(tmp_path, BASE)).drive
+    assert not plain.elliptical and plain.ramp_cycles == 0.0
+    assert plain.velocity_scale == plain.amplitude * plain.omega * math.cos(math.radians(25.0))
 
 
 def test_with_tangential_gives_the_deck_equivalent_case():

@@ -240,7 +240,7 @@ def test_clump_orientations_round_trip(tmp_path):
         )
 
 
-def test_format_versions_one_and_two_are_read_and_others_refused(tmp_path):
+def test_format_versions_one_to_three_are_read_and_others_refused(tmp_path):
     from dem.errors import InputError
     from dem.provenance import git_commit
 
@@ -252,14 +252,60 @@ def test_format_versions_one_and_two_are_read_and_others_refused(tmp_path):
     assert res["format_version"] == 1 and res["frames"][0]["orientation"] is None
     commit = git_commit()  # None outside a git checkout; "+" marks edits to dem/ (may change)
     assert (res["git_commit"] or "").rstrip("+") == (commit or "").rstrip("+")
-    for version in (0, 3):
+    for version in (0, 4):
         path = tmp_path / f"v{version}.h5"
         _writer(path, format_version=version).close()
         with pytest.raises(InputError) as info:
             read_results(path)
         message = str(info.value)
         assert str(path) in message and f"format_version = {version}" in message
-        assert "versions 1, 2" in message
+        assert "versions 1, 2, 3" in message
     # a run is never continued into a file of another version
     with pytest.raises(InputError, match="format_version = 1"):
         _writer(old, resume_at=(0, 1))
+
+
+def test_ragged_frames_of_a_changing_grain_count_round_trip_and_resume(tmp_path):
+    """Format 3: each frame its own count; a reopened file is trimmed to the frames it keeps."""
+    rng = np.random.default_rng(5)
+    path = tmp_path / "r.h5"
+    w = _writer(path, ragged=True)
+    written = []
+    for k, n in enumerate((5, 7, 3, 6)):
+        pos, vel, cc = _frame(rng, n)
+        gid = np.arange(10 * k, 10 * k + n)
+        q = rng.normal(size=(n, 4))
+        balance = {"grains_in_trough": np.int64(n), "mass_in_trough": np.float64(0.1 * n)}
+        w.append_frame(0.01 * k, pos, vel, radius=np.full(n, 1e-3 * (k + 1)), grain_id=gid,
+                       contact_count=cc, orientation=q, grain_index=np.arange(n),
+                       per_frame=balance)  # fmt: skip
+        written.append((pos, vel, cc, gid, q))
+    w.append_cycle(cycle=0, mean_velocity=0.1)
+    w.close()
+    r = read_results(path)
+    assert r["format_version"] == 3 and r["frame_count"] == 4
+    for k, (pos, vel, cc, gid, q) in enumerate(written):
+        f = r["frames"][k]
+        np.testing.assert_array_equal(f["positions"], pos)
+        np.testing.assert_array_equal(f["velocity"], vel)
+        np.testing.assert_array_equal(f["contact_count"], cc)
+        np.testing.assert_array_equal(f["grain_id"], gid)
+        np.testing.assert_array_equal(f["orientation"], q)
+        assert f["radius"].shape == (len(pos),) and f["radius"][0] == 1e-3 * (k + 1)
+        assert f["grains_in_trough"] == len(pos) and f["time"] == 0.01 * k
+    # an interrupted run resumes after frame 2: frames 2 and 3 are dropped, then rewritten
+    w = _writer(path, ragged=True, resume_at=(1, 2))
+    pos, vel, cc = _frame(rng, 4)
+    w.append_frame(0.5, pos, vel, radius=np.full(4, 1e-3), grain_id=np.arange(4),
+                   contact_count=cc, orientation=rng.normal(size=(4, 4)),
+                   per_frame={"grains_in_trough": np.int64(4),
+                              "mass_in_trough": np.float64(0.4)})  # fmt: skip
+    w.close()
+    r = read_results(path)
+    assert r["frame_count"] == 3
+    np.testing.assert_array_equal(r["frames"][1]["positions"], written[1][0])
+    np.testing.assert_array_equal(r["frames"][2]["positions"], pos)
+    assert r["frames"][2]["grains_in_trough"] == 4 and r["frames"][2]["orientation"].shape == (4, 4)
+    # a fixed-count writer cannot resume a ragged file
+    with pytest.raises(Exception, match="format version 2"):
+        _writer(path, resume_at=(1, 2))

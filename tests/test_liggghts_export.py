@@ -385,3 +385,23 @@ def test_liggghts_runs_the_u_trough_deck(tmp_path):
     members = case.particles.grain.count
     assert [loop.atoms for loop in run.loop_times] == [case.particles.count * members] * 3
     assert [loop.steps for loop in run.loop_times] == [50, 100, 100]
+
+
+@pytest.mark.parametrize(
+    "overrides, key",
+    [
+        ({"feeder.feed_rate": 0.01}, "feeder"),
+        ({"drive.second_amplitude": 1e-4, "drive.second_angle": 90.0}, "drive.second_amplitude"),
+        ({"drive.ramp_cycles": 2.0}, "drive.ramp_cycles"),
+    ],
+)
+def test_what_the_deck_cannot_write_is_refused_by_name(tmp_path, overrides, key):
+    from dem.case import load_case
+    from dem.errors import InputError
+    from dem.io.liggghts import write_deck
+
+    case = load_case("cases/sphere-bed", overrides=overrides)
+    with pytest.raises(InputError) as info:
+        write_deck(case, tmp_path / "deck", timestep=1e-5, steps=10)
+    assert info.value.key == key
+    assert not (tmp_path / "deck" / "in.dem").exists()

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import SimulationError
+from dem.kernels.forces import N_WALLS
 from dem.state import PairList
 
 LOOP_KEY = "loop.json"
@@ -44,19 +45,32 @@ def state_dict(sim) -> dict[str, np.ndarray]:
     )
     state["sim.stats"] = sim.stats
     state["sim.dt"] = np.array(sim.dt)
+    state["sim.grain_id"] = sim.grain_id
     return state
 
 
 def load_state(sim, state: dict[str, np.ndarray]) -> None:
     """Restore :func:`state_dict` output into ``sim`` (built from the same case).
 
-    Raises SimulationError if the checkpoint holds another sphere count or time step.
+    Raises SimulationError if the checkpoint holds another sphere count (a finite feeder's
+    count changes: any) or time step, or was written by a dem with other arrays.
     """
     n, capacity, cell_capacity, slots = (int(v) for v in state["nb.sizes"])
-    if n != sim.spheres.n or float(state["sim.dt"]) != sim.dt:
+    same_n = n == sim.spheres.n or sim.feeder is not None
+    if not same_n or float(state["sim.dt"]) != sim.dt:
         raise SimulationError(
             f"checkpoint holds {n} spheres at dt = {float(state['sim.dt'])} s, the case "
             f"{sim.spheres.n} at dt = {sim.dt} s: it belongs to another case"
+        )
+    rows = state["sph.wall_hist"].shape[0]
+    if (
+        rows != N_WALLS * n
+        or state["sim.stats"].shape != sim.stats.shape
+        or ("sim.grain_id" not in state)
+    ):
+        raise SimulationError(
+            "checkpoint was written by another version of dem (its wall springs, measurement "
+            "sums or grain ids differ from this one's); start the run again without --resume"
         )
     for key in vars(sim.spheres):
         setattr(sim.spheres, key, np.ascontiguousarray(state[f"sph.{key}"]).copy())
@@ -82,6 +96,7 @@ def load_state(sim, state: dict[str, np.ndarray]) -> None:
     sim.step_index, sim.drive_start_step = step, drive_start
     sim.drive_on, sim.forces_valid = bool(drive_on), bool(forces_valid)
     sim.stats[:] = state["sim.stats"]
+    sim.grain_id = np.ascontiguousarray(state["sim.grain_id"]).copy()
 
 
 def write(path: Path, sim, loop: dict) -> None:

@@ -28,8 +28,19 @@ Layout (format version 2; SI units)::
     /frames/radius          (N,) float64, m (written once)
     /frames/grain_id        (N,) int64 (written once)
 
-Versions: 1 has no ``orientation`` and no ``git_commit``; 2 adds them. :func:`read_results`
-reads both (``orientation`` is None for version 1 and for plain spheres) and refuses any other.
+A run whose grain count changes (a finite feeder: grains leave at the discharge and are fed at
+the back) writes format version 3, the frames ragged: one row per sphere and frame, stacked::
+
+    /frames/start           (F + 1,) int64: frame k holds rows start[k] .. start[k + 1]
+    /frames/positions       (S, 3), /frames/velocity (S, 3), /frames/contact_count (S,),
+    /frames/radius (S,), /frames/grain_id (S,): the grain's lasting id (fed grains get new ones)
+    /frames/grain_index     (S,) int64: the grain's index within its frame (orientation rows)
+    /frames/body_start      (F + 1,) int64, clump runs: frame k's clumps are rows
+                            body_start[k] .. body_start[k + 1] of /frames/orientation (Bsum, 4)
+
+Versions: 1 has no ``orientation`` and no ``git_commit``; 2 adds them; 3 is 2 with ragged
+frames. :func:`read_results` reads all three (``orientation`` is None for version 1 and for
+plain spheres) and refuses any other; :class:`Frames` gives every frame the same dict.
 
 Frame datasets are chunked one frame per chunk and gzip-compressed (with the shuffle filter);
 cycle datasets are chunked by 256 rows. Both grow along their first axis.
@@ -60,8 +71,10 @@ from dem.errors import InputError
 from dem.provenance import git_commit, package_versions  # package_versions: re-exported too
 
 FORMAT_VERSION = 2
+#: The layout of runs whose grain count changes (ragged frames).
+RAGGED_VERSION = 3
 #: Layout versions :func:`read_results` understands.
-READABLE_VERSIONS = (1, 2)
+READABLE_VERSIONS = (1, 2, 3)
 CYCLE_CHUNK = 256
 _FRAME_VECTORS = ("positions", "velocity")
 
@@ -82,6 +95,8 @@ class ResultsWriter:
         format_version: Layout version written to the file.
         resume_at: (cycles, frames) already in an interrupted file at ``path``: reopen it,
             trimmed to that many rows, instead of starting a new file.
+        ragged: The grain count may change from frame to frame: ragged frames (format version
+            3, see the module docstring).
 
     """
 
@@ -95,8 +110,12 @@ class ResultsWriter:
         timestep: float,
         format_version: int = FORMAT_VERSION,
         resume_at: tuple[int, int] | None = None,
+        ragged: bool = False,
     ):
         self.path = Path(path)
+        self.ragged = bool(ragged)
+        if self.ragged:
+            format_version = RAGGED_VERSION
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._cycle_keys: tuple[str, ...] | None = None
         self._n_cycles = 0
@@ -170,6 +189,8 @@ class ResultsWriter:
         grain_id: np.ndarray | None = None,
         contact_count: np.ndarray | None = None,
         orientation: np.ndarray | None = None,
+        grain_index: np.ndarray | None = None,
+        per_frame: Mapping[str, np.ndarray] | None = None,
     ) -> None:
         """Append one frame to ``/frames``.
 
@@ -185,9 +206,17 @@ class ResultsWriter:
                 (B, 4), indexed by ``grain_id``; None for plain spheres. The first frame decides
                 whether a file holds orientations: every later frame must then give them too (or
                 none).
+            grain_index: Ragged files: each sphere's grain within this frame, (N,), indexing
+                ``orientation``; ``grain_id`` is then the grain's lasting id, given every frame.
+            per_frame: Ragged files: more per-frame records, name -> array of a fixed shape,
+                stored as ``/frames/<name>`` (F, ...) (a feeder's grain balance).
 
         """
         self._check_open()
+        if self.ragged:
+            self._append_ragged(time, positions, velocity, radius, grain_id, contact_count,
+                                orientation, grain_index, per_frame or {})  # fmt: skip
+            return
         pos = np.asarray(positions, dtype=np.float64)
         if pos.ndim != 2 or pos.shape[1] != 3:
             raise ValueError(f"positions must have shape (N, 3), got {pos.shape}")
@@ -257,15 +286,83 @@ class ResultsWriter:
             g["time"][k] = float(time)
         self._n_frames += 1
 
+    def _append_ragged(self, time, positions, velocity, radius, grain_id, contact_count,
+                       orientation, grain_index, per_frame) -> None:  # fmt: skip
+        """Append one frame of a ragged file (format version 3)."""
+        pos = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+        n = pos.shape[0]
+        rows = {
+            "positions": pos,
+            "velocity": np.asarray(velocity, dtype=np.float64).reshape(n, 3),
+            "contact_count": (np.zeros(n, np.int32) if contact_count is None
+                              else np.asarray(contact_count, dtype=np.int32).reshape(n)),
+            "radius": np.asarray(radius, dtype=np.float64).reshape(n),
+            "grain_id": np.asarray(grain_id, dtype=np.int64).reshape(n),
+            "grain_index": (np.arange(n) if grain_index is None
+                            else np.asarray(grain_index)).astype(np.int64).reshape(n),
+        }  # fmt: skip
+        q = None if orientation is None else np.asarray(orientation, dtype=np.float64)
+        k = self._n_frames
+        opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+        with h5py.File(self.path, "a", locking=False) as f:
+            g = f["frames"]
+            if "start" not in g:
+                for name, data in rows.items():
+                    shape = data.shape[1:]
+                    g.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
+                                     dtype=data.dtype, chunks=(4096, *shape), **opts)  # fmt: skip
+                g.create_dataset("start", data=np.zeros(1, np.int64), maxshape=(None,),
+                                 chunks=(CYCLE_CHUNK,))  # fmt: skip
+                if q is not None:
+                    g.create_dataset("orientation", shape=(0, 4), maxshape=(None, 4),
+                                     dtype=np.float64, chunks=(4096, 4), **opts)  # fmt: skip
+                    g.create_dataset("body_start", data=np.zeros(1, np.int64),
+                                     maxshape=(None,), chunks=(CYCLE_CHUNK,))  # fmt: skip
+                g.create_dataset(
+                    "time", shape=(0,), maxshape=(None,), dtype=np.float64, chunks=(CYCLE_CHUNK,)
+                )
+                for name, value in per_frame.items():
+                    value = np.asarray(value)
+                    shape = value.shape
+                    g.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
+                                     dtype=value.dtype, chunks=(CYCLE_CHUNK, *shape))  # fmt: skip
+                g.attrs["per_frame"] = json.dumps(sorted(per_frame))
+            if sorted(per_frame) != json.loads(g.attrs["per_frame"]):
+                raise ValueError(
+                    f"per_frame keys {sorted(per_frame)} differ from the first frame's"
+                )
+            for name, value in per_frame.items():
+                g[name].resize(k + 1, axis=0)
+                g[name][k] = value
+            if ("orientation" in g) != (q is not None):
+                raise ValueError("every frame of a clump run gives orientation, or none does")
+            s0 = int(g["start"][k])
+            for name, data in rows.items():
+                d = g[name]
+                d.resize(s0 + n, axis=0)
+                d[s0:] = data
+            g["start"].resize((k + 2,))
+            g["start"][k + 1] = s0 + n
+            if q is not None:
+                b0 = int(g["body_start"][k])
+                g["orientation"].resize(b0 + q.shape[0], axis=0)
+                g["orientation"][b0:] = q
+                g["body_start"].resize((k + 2,))
+                g["body_start"][k + 1] = b0 + q.shape[0]
+            g["time"].resize((k + 1,))
+            g["time"][k] = float(time)
+        self._n_frames += 1
+
     def _resume(self, n_cycles: int, n_frames: int) -> None:
         """Reopen an interrupted file, trimmed back to its first n_cycles rows and n_frames."""
         with h5py.File(self.path, "a", locking=False) as f:
             version = int(f.attrs.get("format_version", -1))
-            if version != FORMAT_VERSION:
+            expected = RAGGED_VERSION if self.ragged else FORMAT_VERSION
+            if version != expected:
                 raise InputError(
                     "format_version",
                     version,
-                    f"a run continues only in a results.h5 of format version {FORMAT_VERSION} "
+                    f"a run continues only in a results.h5 of format version {expected} "
                     "(an older dem began it): run it again with --overwrite",
                     source=str(self.path),
                 )
@@ -273,7 +370,20 @@ class ResultsWriter:
             keys = tuple(cycles.keys())
             for key in keys:
                 cycles[key].resize((n_cycles,))
-            if "time" in frames:
+            if "start" in frames:  # ragged
+                rows = int(frames["start"][n_frames])
+                for name in ("positions", "velocity", "contact_count", "radius", "grain_id",
+                             "grain_index"):  # fmt: skip
+                    frames[name].resize(rows, axis=0)
+                frames["start"].resize((n_frames + 1,))
+                frames["time"].resize((n_frames,))
+                for name in json.loads(frames.attrs.get("per_frame", "[]")):
+                    frames[name].resize(n_frames, axis=0)
+                if "orientation" in frames:
+                    bodies = int(frames["body_start"][n_frames])
+                    frames["orientation"].resize(bodies, axis=0)
+                    frames["body_start"].resize((n_frames + 1,))
+            elif "time" in frames:
                 for name in (*_FRAME_VECTORS, "contact_count", "time"):
                     frames[name].resize(n_frames, axis=0)
                 self._n_spheres = int(frames["radius"].shape[0])
@@ -313,8 +423,10 @@ class Frames:
 
     ``len(frames)`` is the number of complete frames; ``frames[i]`` (negative i allowed) returns
     a dict with ``time`` (s), ``positions`` (N, 3) m, ``velocity`` (N, 3) m/s, ``contact_count``
-    (N,), ``radius`` (N,) m, ``grain_id`` (N,) and ``orientation`` (B, 4) (unit quaternions
-    w, x, y, z of the clumps, indexed by ``grain_id``; None for plain spheres and version 1).
+    (N,), ``radius`` (N,) m, ``grain_id`` (N,), ``grain_index`` (N,) and ``orientation`` (B, 4)
+    (unit quaternions w, x, y, z of the clumps, indexed by ``grain_index``; None for plain
+    spheres and version 1). N and B may change from frame to frame in a ragged file (version
+    3), where ``grain_id`` is the grain's lasting id; elsewhere the two are the same.
     """
 
     def __init__(self, path: Path, count: int, time: np.ndarray):
@@ -333,6 +445,24 @@ class Frames:
             raise IndexError(f"frame {i} out of range ({self.count} frames)")
         with h5py.File(self.path, "r", locking=False) as f:
             g = f["frames"]
+            if "start" in g:  # ragged (format version 3)
+                a, b = int(g["start"][i]), int(g["start"][i + 1])
+                orientation = None
+                if "orientation" in g:
+                    c, d = int(g["body_start"][i]), int(g["body_start"][i + 1])
+                    orientation = g["orientation"][c:d]
+                extra = {k: g[k][i] for k in json.loads(g.attrs.get("per_frame", "[]"))}
+                return {
+                    **extra,
+                    "time": float(g["time"][i]),
+                    "positions": g["positions"][a:b],
+                    "velocity": g["velocity"][a:b],
+                    "contact_count": g["contact_count"][a:b],
+                    "radius": g["radius"][a:b],
+                    "grain_id": g["grain_id"][a:b],
+                    "grain_index": g["grain_index"][a:b],
+                    "orientation": orientation,
+                }
             return {
                 "time": float(g["time"][i]),
                 "positions": g["positions"][i],
@@ -340,6 +470,7 @@ class Frames:
                 "contact_count": g["contact_count"][i],
                 "radius": g["radius"][()],
                 "grain_id": g["grain_id"][()],
+                "grain_index": g["grain_id"][()],
                 "orientation": g["orientation"][i] if "orientation" in g else None,
             }
 
@@ -377,7 +508,10 @@ def read_results(path: Path) -> dict:
             rows = min(len(v) for v in cycles.values())
             cycles = {k: v[:rows] for k, v in cycles.items()}
         g = f["frames"]
-        if "time" in g:
+        if "start" in g:  # ragged: a frame counts once its start row is written
+            count = min(g["time"].shape[0], g["start"].shape[0] - 1)
+            time = g["time"][:count]
+        elif "time" in g:
             names = ("time", "contact_count", *_FRAME_VECTORS)
             names += ("orientation",) if "orientation" in g else ()
             count = min(g[k].shape[0] for k in names)

@@ -369,6 +369,16 @@ def write_deck(
     p, t, d = case.particles, case.trough, case.drive
     if p.shape != "sphere" and p.grain is None:
         raise InputError("particles.shape", p.shape, "a case read by dem.case.load_case", source)
+    if case.feeder is not None:
+        raise InputError("feeder", "[feeder]", "no [feeder] table for a LIGGGHTS export: the "
+                         "deck writes the periodic section only (a finite feeder's back wall, "
+                         "discharge and feed are not exported yet)", source)  # fmt: skip
+    if d.second_amplitude > 0.0:
+        raise InputError("drive.second_amplitude", d.second_amplitude, "0 for a LIGGGHTS "
+                         "export: the deck writes the paper's line drive only", source)  # fmt: skip
+    if d.ramp_cycles > 0.0:
+        raise InputError("drive.ramp_cycles", d.ramp_cycles, "0 for a LIGGGHTS export: the "
+                         "deck starts the drive at full amplitude", source)  # fmt: skip
     if not timestep > 0.0:
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:

@@ -41,6 +41,7 @@ Scale Array ``radius`` and Scale Factor 2 (the unit glyph has radius 0.5), or
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -58,16 +59,22 @@ PARTICLE_ARRAYS = ("radius", "velocity", "grain_id", "clump_id", "contact_count"
 
 
 def trough_polydata(
-    length: float, width: float, wall_height: float, shift: np.ndarray | None = None
+    length: float,
+    width: float,
+    wall_height: float,
+    shift: np.ndarray | None = None,
+    back_wall: bool = False,
 ) -> pv.PolyData:
     """Floor and side walls of the trough section as three quads, coordinates in m.
 
     The kernel's walls as :meth:`dem.trough.Trough.wall_corners` gives them. Floor: z = 0,
-    0 <= x <= length, |y| <= width/2; side walls: y = +-width/2, 0 <= z <= wall_height. Cell data
-    ``part``: the kernel's wall index, 0 floor, 1 wall y = -width/2, 2 wall y = +width/2.
+    0 <= x <= length, |y| <= width/2; side walls: y = +-width/2, 0 <= z <= wall_height; with
+    ``back_wall`` a finite feeder's back wall x = 0 as a fourth quad. Cell data ``part``: the
+    kernel's wall index, 0 floor, 1 wall y = -width/2, 2 wall y = +width/2, 3 the back wall.
     ``shift`` (3,) is added to every point (the lab-frame drive displacement).
     """
-    corners = Trough(length, width).wall_corners(wall_height)  # (3 walls, 4 corners, 3)
+    discharge = length if back_wall else math.inf
+    corners = Trough(length, width, discharge=discharge).wall_corners(wall_height)
     pts = corners.reshape(-1, 3)
     if shift is not None:
         pts = pts + np.asarray(shift, dtype=np.float64).reshape(1, 3)
@@ -87,6 +94,23 @@ def mesh_polydata(tri: np.ndarray) -> pv.PolyData:
     return mesh
 
 
+def _with_back_wall(tri: np.ndarray) -> pv.PolyData:
+    """The mesh's triangles (``part`` 0) and a quad x = 0 over its y-z extent (``part`` 3)."""
+    tri = np.asarray(tri, dtype=np.float64).reshape(-1, 3, 3)
+    lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
+    quad = np.array([[0.0, lo[1], lo[2]], [0.0, hi[1], lo[2]], [0.0, hi[1], hi[2]],
+                     [0.0, lo[1], hi[2]]])  # fmt: skip
+    pts = np.concatenate([tri.reshape(-1, 3), quad])
+    t = len(tri)
+    faces = np.concatenate([
+        np.column_stack([np.full(t, 3), np.arange(3 * t).reshape(-1, 3)]).ravel(),
+        [4, 3 * t, 3 * t + 1, 3 * t + 2, 3 * t + 3],
+    ])  # fmt: skip
+    mesh = pv.PolyData(pts, faces=faces)
+    mesh.cell_data["part"] = np.concatenate([np.zeros(t, np.int32), [3]]).astype(np.int32)
+    return mesh
+
+
 class VTKSeriesWriter:
     """Write sphere frames and the trough as a ParaView time series (see the module docstring).
 
@@ -100,6 +124,9 @@ class VTKSeriesWriter:
             by the drive displacement given to :meth:`write_frame`.
         wall_height: Height of the drawn side walls, m (default: half the width).
         mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`): drawn instead of the flat walls.
+        period: Period along x that positions are wrapped into, m (default ``trough_length``;
+            a finite feeder's domain is longer than its trough).
+        back_wall: Draw a finite feeder's back wall x = 0 (cell ``part`` 3).
 
     """
 
@@ -114,6 +141,8 @@ class VTKSeriesWriter:
         wall_height: float | None = None,
         entries: list[tuple[float, str, str]] | None = None,
         mesh=None,
+        period: float | None = None,
+        back_wall: bool = False,
     ):
         if trough_length <= 0 or trough_width <= 0:
             raise ValueError(
@@ -130,11 +159,15 @@ class VTKSeriesWriter:
         self.pvd_path = self.out_dir / PVD_NAME
         # (time, particles file, trough file); a resumed run passes the entries it had
         self._entries: list[tuple[float, str, str]] = [tuple(e) for e in entries or []]
-        self._section = Trough(self.length, self.width)
+        self._section = Trough(self.length if period is None else float(period), self.width)
         if mesh is None:
-            self._trough_mesh = trough_polydata(self.length, self.width, self.wall_height)
+            self._trough_mesh = trough_polydata(
+                self.length, self.width, self.wall_height, back_wall=back_wall
+            )
         else:
             self._trough_mesh = mesh_polydata(mesh.tri)
+            if back_wall:
+                self._trough_mesh = _with_back_wall(mesh.tri)
         self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
 
     @property

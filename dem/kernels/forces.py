@@ -32,7 +32,7 @@ from dem.kernels.contacts import add_wall_contact, contact_force_inlined
 from dem.kernels.mesh import mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
-N_WALLS = 3
+N_WALLS = 4
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -157,7 +157,7 @@ def pair_forces_serial(
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def sphere_force(
-    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, part_start, inbox,
     ax, ay, az, mesh,
 ):  # fmt: skip
     """Total force and torque on sphere i: its pairs' slots, its walls and m (ax, ay, az).
@@ -181,14 +181,14 @@ def sphere_force(
         ty += inbox[e, 4]
         tz += inbox[e, 5]
     return wall_forces(
-        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
+        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, mesh,
         fx, fy, fz, tx, ty, tz,
     )  # fmt: skip
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def total_force(
-    i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start,
+    i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, part_start,
     inbox, force, torque, ax, ay, az, mesh,
 ):  # fmt: skip
     """Force and torque on sphere i, N and N m, by either path.
@@ -198,18 +198,18 @@ def total_force(
     """
     if gathered:
         return wall_forces(
-            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
+            i, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, mesh,
             force[i, 0], force[i, 1], force[i, 2], torque[i, 0], torque[i, 1], torque[i, 2],
         )  # fmt: skip
     return sphere_force(
-        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, part_start, inbox,
+        i, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, part_start, inbox,
         ax, ay, az, mesh,
     )  # fmt: skip
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def wall_forces(
-    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt, mesh,
+    i, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt, mesh,
     fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip
     """(fx, ..., tz) plus the forces and torques of sphere i's wall contacts, N and N m.
@@ -223,19 +223,23 @@ def wall_forces(
     gap >= r, so the early exit is the loop's own test). Without it the loop, with three inlined
     contact laws in it, cost 50 ns a sphere touching nothing (validation/performance/README.md).
     """
-    if mesh is not None:
-        return mesh_wall_forces(
-            i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz
-        )
     r = radius[i]
     m = mass[i]
-    if x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r:
+    if mesh is not None:
+        fx, fy, fz, tx, ty, tz = mesh_wall_forces(
+            i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz
+        )
+        return _back_wall(
+            i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz
+        )  # fmt: skip
+    if (x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r
+            and x[i, 0] - back >= r):  # fmt: skip
         for row in range(N_WALLS * i, N_WALLS * i + N_WALLS):
             wall_hist[row, 0] = 0.0
             wall_hist[row, 1] = 0.0
             wall_hist[row, 2] = 0.0
         return fx, fy, fz, tx, ty, tz
-    for w in range(N_WALLS):
+    for w in range(N_WALLS - 1):
         nz = 0.0
         ny = 0.0
         if w == 0:
@@ -258,4 +262,24 @@ def wall_forces(
             model, p, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
             fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
+    return _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz)
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz):
+    """Add the back wall x = ``back`` (inward normal +x) of a finite feeder; -inf: none.
+
+    Its spring is row ``N_WALLS i + 3`` of ``wall_hist``, for flat walls and meshes alike.
+    """
+    row = N_WALLS * i + N_WALLS - 1
+    delta = r - (x[i, 0] - back)
+    if delta <= 0.0:
+        wall_hist[row, 0] = 0.0
+        wall_hist[row, 1] = 0.0
+        wall_hist[row, 2] = 0.0
+        return fx, fy, fz, tx, ty, tz
+    return add_wall_contact(
+        model, p, 1.0, 0.0, 0.0, delta, v, omega, i, m, r, wall_hist, row, dt,
+        fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
     return fx, fy, fz, tx, ty, tz

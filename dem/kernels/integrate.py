@@ -9,7 +9,8 @@ One step n -> n + 1 (t_n = n dt), as in LAMMPS ``fix nve/sphere``:
    (:func:`dem.kernels.neighbours.rebuild`, history carried over by pair key);
 3. pair forces (parallel over pairs, :func:`dem.kernels.forces.pair_forces`) with the positions
    x_{n+1} and the half-step velocities v_{n+1/2} (damping and friction see these);
-4. gather, walls, body force m (g + A omega^2 sin(omega t_{n+1}) e) and the second half kick
+4. gather, walls, body force m (g - s''(t_{n+1})) (the drive, :func:`body_acceleration`) and
+   the second half kick
    v += dt/2 F/m, omega += dt/2 T/I (parallel over spheres), summing the x-momentum
    sum_i m_i v_x,i for the measurement.
 
@@ -61,7 +62,8 @@ def kick_drift(n, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotatio
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def forces_kick(
-    n, model, p, sph, nb, half_width, dt, ax, ay, az, rotation, kick, next_drift, gathered, mesh,
+    n, model, p, sph, nb, half_width, back, dt, ax, ay, az, rotation, kick, next_drift,
+    gathered, mesh,
 ):  # fmt: skip
     """Gather forces per sphere into ``force``/``torque``; then (if ``kick``) the half kick.
 
@@ -87,7 +89,7 @@ def forces_kick(
         px = 0.0
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
             f = total_force(
-                i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
+                i, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, back, dt,
                 part_start, inbox, force, torque, ax, ay, az, mesh,
             )  # fmt: skip
             force[i, 0] = f[0]
@@ -131,9 +133,40 @@ def _ordered_sum(values):
 
 @numba.njit(**NUMBA_OPTIONS)
 def body_acceleration(t, gravity, drive):
-    """a_body = g + A omega^2 sin(omega t) e; drive = (A omega^2, omega, e_x, e_y, e_z)."""
-    s = drive[0] * math.sin(drive[1] * t)
-    return gravity[0] + s * drive[2], gravity[1] + s * drive[3], gravity[2] + s * drive[4]
+    """a_body = g - s''(t), the trough's motion s(t) of :class:`dem.drive.Motion`.
+
+    drive = (omega, T_ramp, A_1 omega^2, psi_1, e_1 (3), A_2 omega^2, psi_2, e_2 (3)), all zeros
+    with the drive off. Past the ramp (or without one) -s'' = sum_k A_k omega^2 sin(omega t +
+    psi_k) e_k; within it the smootherstep r(t) of :func:`dem.drive.ramp` scales it and adds
+    its derivatives: sum_k A_k omega^2 e_k [(r - r''/omega^2) sin - (2 r'/omega) cos].
+    """
+    w = drive[0]
+    ramp_time = drive[1]
+    c_sin = 1.0
+    c_cos = 0.0
+    if ramp_time > 0.0 and t < ramp_time:
+        c_sin = 0.0
+        if t > 0.0:
+            u = t / ramp_time
+            r = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
+            r1 = 30.0 * u * u * (1.0 - u) * (1.0 - u) / ramp_time
+            r2 = 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / (ramp_time * ramp_time)
+            c_sin = r - r2 / (w * w)
+            c_cos = -2.0 * r1 / w
+    ax, ay, az = gravity[0], gravity[1], gravity[2]
+    for k in range(2):
+        a_w2 = drive[2 + 5 * k]
+        if a_w2 == 0.0:
+            continue
+        ph = w * t + drive[3 + 5 * k]
+        if c_cos == 0.0 and c_sin == 1.0:
+            s = a_w2 * math.sin(ph)  # past the ramp
+        else:
+            s = a_w2 * (c_sin * math.sin(ph) + c_cos * math.cos(ph))
+        ax += s * drive[4 + 5 * k]
+        ay += s * drive[5 + 5 * k]
+        az += s * drive[6 + 5 * k]
+    return ax, ay, az
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -170,8 +203,8 @@ def evaluate_forces(
     ax, ay, az = body_acceleration(t, gravity, drive)
     _pairs(serial, model, p, sph, nb, n_pairs, geom, n, ax, ay, az)
     return forces_kick(
-        n, model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, kick, next_drift, serial,
-        mesh,
+        n, model, p, sph, nb, 0.5 * width, geom.back, dt, ax, ay, az, rotation, kick,
+        next_drift, serial, mesh,
     )  # fmt: skip
 
 
@@ -210,7 +243,7 @@ def advance(
         counters: int64 (2,): number of pairs, number of builds; updated.
         geom: Geometry (length, width, skin, dt).
         gravity: float64 (3,), m/s^2, trough frame.
-        drive: float64 (5,): A omega^2 (m/s^2), omega (rad/s), e_x, e_y, e_z.
+        drive: float64 (12,): :meth:`dem.drive.Motion.kernel_array` (zeros: drive off).
         out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
         serial: True on one thread: pair forces added to the spheres directly (same bits).
         mesh: The trough mesh (:class:`dem.kernels.layout.MeshArrays`), or None: flat walls.
@@ -279,8 +312,9 @@ def evaluate_forces_clumps(
     length, width, dt = geom.length, geom.width, geom.dt
     _pairs(serial, model, p, sph, nb, n_pairs, geom, n, 0.0, 0.0, 0.0)
     forces_kick(
-        n, model, p, sph, nb, 0.5 * width, dt, 0.0, 0.0, 0.0, False, False, False, serial, mesh
-    )
+        n, model, p, sph, nb, 0.5 * width, geom.back, dt, 0.0, 0.0, 0.0, False, False, False,
+        serial, mesh,
+    )  # fmt: skip
     reduce_to_bodies(
         sph.force, sph.torque, x, bod.x, bod.start, bod.members, length, bod.force, bod.torque,
     )  # fmt: skip
@@ -304,8 +338,8 @@ def _bodies_half_step(dt, drift, rotation, bod, sph, length):
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
 def bodies_forces_kick(
-    model, p, sph, nb, half_width, dt, ax, ay, az, rotation, next_drift, bod, length, gathered,
-    mesh,
+    model, p, sph, nb, half_width, back, dt, ax, ay, az, rotation, next_drift, bod, length,
+    gathered, mesh,
 ):  # fmt: skip
     """Per body, in one parallel loop: gather, reduce, M a_body, closing kick, next drift, place.
 
@@ -343,8 +377,8 @@ def bodies_forces_kick(
             for e in range(start[b], start[b + 1]):
                 s = members[e]
                 f = total_force(
-                    s, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width, dt,
-                    part_start, inbox, force, torque, 0.0, 0.0, 0.0, mesh,
+                    s, gathered, model, p, x, v, omega, radius, mass, wall_hist, half_width,
+                    back, dt, part_start, inbox, force, torque, 0.0, 0.0, 0.0, mesh,
                 )  # fmt: skip
                 for c in range(3):
                     force[s, c] = f[c]
@@ -416,8 +450,8 @@ def advance_clumps(
         _pairs(serial, model, p, sph, nb, counters[0], geom, n, 0.0, 0.0, 0.0)
         ax, ay, az = body_acceleration(t, gravity, drive)
         out_stats[0] += bodies_forces_kick(
-            model, p, sph, nb, 0.5 * width, dt, ax, ay, az, rotation, s < n_steps - 1, bod,
-            length, serial, mesh,
+            model, p, sph, nb, 0.5 * width, geom.back, dt, ax, ay, az, rotation,
+            s < n_steps - 1, bod, length, serial, mesh,
         )  # fmt: skip
         out_stats[1] += 1.0
     return DONE, n_steps, 0

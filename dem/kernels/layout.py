@@ -6,6 +6,7 @@ by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.state` builds them from 
 capacity.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -83,3 +84,4 @@ class Geometry(NamedTuple):
     width: float  # distance between the side walls, m
     skin: float  # Verlet skin, m
     dt: float  # time step, s
+    back: float = -math.inf  # x of a finite feeder's back wall (inward normal +x), m; -inf: none

@@ -1,9 +1,11 @@
 """The point mass stepped in time (Moreau-Jean), for what the event-driven kernel does not give.
 
-:mod:`dem.pointmass.model` integrates the paper's model event by event. Two questions need the
+:mod:`dem.pointmass.model` integrates the paper's model event by event. Three questions need the
 motion step by step instead: the landings it makes (their incidence and speed, which
-:mod:`dem.calibrate` throws a DEM grain at) and the variant whose landings never take more than
-Coulomb allows (:mod:`dem.pointmass.bounded`). Both are this one kernel.
+:mod:`dem.calibrate` throws a DEM grain at), the variant whose landings never take more than
+Coulomb allows (:mod:`dem.pointmass.bounded`) and a trough moving on an ellipse, whose along-
+and normal accelerations are out of phase (:mod:`dem.pointmass.elliptic`). All are one kernel,
+:func:`step_motion`.
 
 Units: phase omega t; velocities relative to the trough in A omega, u along the trough, w
 normal to it. Per step of h = 2 pi / ``steps``: the free update by the frame acceleration
@@ -40,11 +42,26 @@ def step_point_mass(
         (landings recorded, mean u over the measured periods in units of A omega).
 
     """
-    s_phi = math.sin(phi)
-    c_phi = math.cos(phi)
     g_scale = math.sin(phi) / (gamma * math.cos(alpha))  # g / (A omega^2)
-    gx = -g_scale * math.sin(alpha)
-    gz = -g_scale * math.cos(alpha)
+    return step_motion(
+        math.cos(phi), 0.0, math.sin(phi), 0.0, -g_scale * math.sin(alpha),
+        -g_scale * math.cos(alpha), mu, eps_t, eps_n, steps, transient, measured, coulomb_bound,
+        out,
+    )  # fmt: skip
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def step_motion(
+    x_amp, x_phase, z_amp, z_phase, gx, gz, mu, eps_t, eps_n, steps, transient, measured,
+    coulomb_bound, out,
+):  # fmt: skip
+    """Step the point mass on any sinusoidal trough motion (an elliptical drive).
+
+    Units: phase omega t, lengths L, so accelerations in L omega^2 and velocities in L omega.
+    The frame acceleration is (x_amp sin(t + x_phase), z_amp sin(t + z_phase)) along and
+    normal to the floor, gravity (gx, gz); :func:`step_point_mass` is the line drive
+    (cos phi, sin phi) sin(t) with L = A. Arguments and returns otherwise as there.
+    """
     h = 2.0 * math.pi / steps
     u = 0.0
     w = 0.0
@@ -55,9 +72,9 @@ def step_point_mass(
     for n in range((transient + measured) * steps):
         if n == transient * steps:
             x = 0.0
-        s = math.sin((n % steps + 0.5) * h)
-        u_free = u + h * (s * c_phi + gx)
-        w_free = w + h * (s * s_phi + gz)
+        th = (n % steps + 0.5) * h
+        u_free = u + h * (x_amp * math.sin(th + x_phase) + gx)
+        w_free = w + h * (z_amp * math.sin(th + z_phase) + gz)
         if z + h * w_free > 0.0:
             u, w = u_free, w_free
             z += h * w
