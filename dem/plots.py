@@ -102,7 +102,12 @@ def discharge_figure(
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(6.5, 5.5), dpi=120, sharex=True)
     if np.any(~measured):
         ax.step(time[~measured], rate[~measured], where="pre", color="0.6", label="settling")
-    ax.step(time[measured], rate[measured], where="pre", color="C0", label="per cycle")
+    ax.step(time[measured], rate[measured], where="pre", color="C0", lw=0.6, alpha=0.5,
+            label="per cycle")  # fmt: skip
+    window = min(10, max(1, rate.size // 5))
+    if window > 1:  # a few grains a cycle: the moving mean shows the trend
+        smooth = np.convolve(rate, np.ones(window) / window, mode="valid")
+        ax.plot(time[window - 1 :], smooth, color="C1", lw=1.4, label=f"mean of {window} cycles")
     if steady is not None and np.isfinite(steady):
         t = time[measured] if measured.any() else time
         ax.axhline(steady, color="C3", lw=1.2, label=f"steady {steady:.4g} kg/s")
