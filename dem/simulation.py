@@ -427,6 +427,12 @@ class Simulation:
             f"the fill did not come to rest within {max_time} s of simulated time (rms speed "
             f"{self.rms_speed():.3g} m/s > {threshold:.3g} m/s); raise "
             "material.restitution_normal damping (lower eps_n) or check the contact stiffness"
+            + (
+                "; in a finite feeder, spheres that roll freely keep running out over the "
+                "discharge edge: give material.rolling_friction (e.g. 0.05)"
+                if self.feeder is not None
+                else ""
+            )
         )
 
     def cycle_velocity(self) -> float:
