@@ -331,6 +331,57 @@ def min_angle_deg(tri: np.ndarray) -> float:
     return smallest
 
 
+def _drive_variables(d, gx0: float, gz0: float) -> list[str]:
+    """Equal-style variables gx, gz: gravity minus the trough's acceleration s''(tau).
+
+    The paper's drive: drive = A w^2 sin(w tau), gx = gx0 + drive cos(phi), gz likewise (as
+    before). A second component and a start-up ramp follow :class:`dem.drive.Motion` term for
+    term: each component k adds A_k w^2 [c_s sin(w tau + psi_k) + c_c cos(w tau + psi_k)] e_k
+    with c_s = r - r''/w^2, c_c = -2 r'/w of the smootherstep r(u), u = min(tau / T, 1)
+    (written with comparisons: LIGGGHTS's min() is a special function of computes)
+    (r' = r'' = 0 once u = 1, so the same expressions hold after the ramp).
+    """
+    w = d.omega
+    phi = math.radians(d.angle)
+    if d.second_amplitude == 0.0 and d.ramp_cycles == 0.0:
+        peak = d.amplitude * w**2
+        return [
+            f"variable drive equal {_fmt(peak)}*sin({_fmt(w)}*v_tau)",
+            f"variable gx equal {_fmt(gx0)}+v_drive*{_fmt(math.cos(phi))}",
+            f"variable gz equal {_fmt(gz0)}+v_drive*{_fmt(math.sin(phi))}",
+        ]
+    lines = []
+    if d.ramp_cycles > 0.0:
+        ramp = d.ramp_cycles / d.frequency
+        lines += [
+            f"variable u equal (v_tau<{_fmt(ramp)})*v_tau/{_fmt(ramp)}+(v_tau>={_fmt(ramp)})",
+            "variable r0 equal v_u*v_u*v_u*(10.0-15.0*v_u+6.0*v_u*v_u)",
+            f"variable r1 equal 30.0*v_u*v_u*(1.0-v_u)*(1.0-v_u)/{_fmt(ramp)}",
+            f"variable r2 equal 60.0*v_u*(1.0-v_u)*(1.0-2.0*v_u)/{_fmt(ramp * ramp)}",
+            f"variable cs equal v_r0-v_r2/{_fmt(w * w)}",
+            f"variable cc equal -2.0*v_r1/{_fmt(w)}",
+        ]
+        cs, cc = "v_cs", "v_cc"
+    else:
+        cs, cc = "1.0", "0.0"
+    comps = [(d.amplitude, phi, 0.0)]
+    if d.second_amplitude > 0.0:
+        comps.append(
+            (d.second_amplitude, math.radians(d.second_angle), math.radians(d.second_phase))
+        )
+    names = []
+    for k, (a, ang, psi) in enumerate(comps, start=1):
+        arg = f"{_fmt(w)}*v_tau+{_fmt(psi)}"
+        lines.append(f"variable drive{k} equal {_fmt(a * w**2)}*({cs}*sin({arg})+{cc}*cos({arg}))")
+        names.append((f"v_drive{k}", ang))
+    gx = "+".join(f"{n}*{_fmt(math.cos(ang))}" for n, ang in names)
+    gz = "+".join(f"{n}*{_fmt(math.sin(ang))}" for n, ang in names)
+    return lines + [
+        f"variable gx equal {_fmt(gx0)}+{gx}",
+        f"variable gz equal {_fmt(gz0)}+{gz}",
+    ]
+
+
 def write_deck(
     case: Case,
     out_dir: str | Path,
@@ -373,12 +424,6 @@ def write_deck(
         raise InputError("feeder", "[feeder]", "no [feeder] table for a LIGGGHTS export: the "
                          "deck writes the periodic section only (a finite feeder's back wall, "
                          "discharge and feed are not exported yet)", source)  # fmt: skip
-    if d.second_amplitude > 0.0:
-        raise InputError("drive.second_amplitude", d.second_amplitude, "0 for a LIGGGHTS "
-                         "export: the deck writes the paper's line drive only", source)  # fmt: skip
-    if d.ramp_cycles > 0.0:
-        raise InputError("drive.ramp_cycles", d.ramp_cycles, "0 for a LIGGGHTS export: the "
-                         "deck starts the drive at full amplitude", source)  # fmt: skip
     if not timestep > 0.0:
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:
@@ -493,8 +538,7 @@ def write_deck(
             f"fix walls all wall/gran {model} mesh n_meshes 1 meshes trough {settings}",
         ]
 
-    alpha, phi = math.radians(t.inclination), math.radians(d.angle)
-    peak = d.amplitude * d.omega**2  # m/s^2
+    alpha = math.radians(t.inclination)
     gx0, gz0 = -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
     g0 = math.hypot(gx0, gz0)
     drive_start = fill_steps
@@ -564,9 +608,7 @@ def write_deck(
         "",
         "# --- drive: effective gravity in the accelerating frame",
         f"variable tau equal (step-{drive_start})*{_fmt(timestep)}",
-        f"variable drive equal {_fmt(peak)}*sin({_fmt(d.omega)}*v_tau)",
-        f"variable gx equal {_fmt(gx0)}+v_drive*{_fmt(math.cos(phi))}",
-        f"variable gz equal {_fmt(gz0)}+v_drive*{_fmt(math.sin(phi))}",
+        *_drive_variables(d, gx0, gz0),
         "variable gmag equal sqrt(v_gx*v_gx+v_gz*v_gz)",
         "unfix grav",
         "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
