@@ -84,30 +84,25 @@ def trough_polydata(
     return mesh
 
 
-def mesh_polydata(tri: np.ndarray) -> pv.PolyData:
-    """Triangles (T, 3, 3) of a trough mesh as polydata, m; cell data ``part`` = 0 (the mesh)."""
-    tri = np.asarray(tri, dtype=np.float64).reshape(-1, 3, 3)
-    pts = tri.reshape(-1, 3)
-    faces = np.column_stack([np.full(len(tri), 3), np.arange(pts.shape[0]).reshape(-1, 3)])
-    mesh = pv.PolyData(pts, faces=faces.ravel())
-    mesh.cell_data["part"] = np.zeros(len(tri), dtype=np.int32)
-    return mesh
+def mesh_polydata(tri: np.ndarray, back_wall: bool = False) -> pv.PolyData:
+    """Triangles (T, 3, 3) of a trough mesh as polydata, m; cell data ``part`` = 0 (the mesh).
 
-
-def _with_back_wall(tri: np.ndarray) -> pv.PolyData:
-    """The mesh's triangles (``part`` 0) and a quad x = 0 over its y-z extent (``part`` 3)."""
+    With ``back_wall`` a finite feeder's back wall x = 0 is added as a quad over the mesh's y-z
+    extent (``part`` 3, as for the flat walls).
+    """
     tri = np.asarray(tri, dtype=np.float64).reshape(-1, 3, 3)
-    lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
-    quad = np.array([[0.0, lo[1], lo[2]], [0.0, hi[1], lo[2]], [0.0, hi[1], hi[2]],
-                     [0.0, lo[1], hi[2]]])  # fmt: skip
-    pts = np.concatenate([tri.reshape(-1, 3), quad])
     t = len(tri)
-    faces = np.concatenate([
-        np.column_stack([np.full(t, 3), np.arange(3 * t).reshape(-1, 3)]).ravel(),
-        [4, 3 * t, 3 * t + 1, 3 * t + 2, 3 * t + 3],
-    ])  # fmt: skip
+    pts = tri.reshape(-1, 3)
+    faces = np.column_stack([np.full(t, 3), np.arange(3 * t).reshape(-1, 3)]).ravel()
+    part = np.zeros(t, dtype=np.int32)
+    if back_wall:
+        lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
+        quad = [[0.0, lo[1], lo[2]], [0.0, hi[1], lo[2]], [0.0, hi[1], hi[2]], [0.0, lo[1], hi[2]]]
+        pts = np.concatenate([pts, quad])
+        faces = np.concatenate([faces, [4, 3 * t, 3 * t + 1, 3 * t + 2, 3 * t + 3]])
+        part = np.append(part, np.int32(3))
     mesh = pv.PolyData(pts, faces=faces)
-    mesh.cell_data["part"] = np.concatenate([np.zeros(t, np.int32), [3]]).astype(np.int32)
+    mesh.cell_data["part"] = part
     return mesh
 
 
@@ -165,9 +160,7 @@ class VTKSeriesWriter:
                 self.length, self.width, self.wall_height, back_wall=back_wall
             )
         else:
-            self._trough_mesh = mesh_polydata(mesh.tri)
-            if back_wall:
-                self._trough_mesh = _with_back_wall(mesh.tri)
+            self._trough_mesh = mesh_polydata(mesh.tri, back_wall=back_wall)
         self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
 
     @property
