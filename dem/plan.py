@@ -344,6 +344,12 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     else:
         expected, parts = math.nan, {}
         error_source = "no study data: dem/data/speed_accuracy.json is missing"
+    if getattr(case, "feeder", None) is not None:
+        text = (
+            "a finite feeder's grain count changes as grains are fed and discharged: cost "
+            "and memory here are those of the initial charge (particles.count)"
+        )
+        advice.append(Advice("note", "feeder", text))
     mem = memory_bytes(case, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:

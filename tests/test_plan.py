@@ -17,7 +17,7 @@ from dem.timestep import timestep_for
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
-TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output")
+TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output", "feeder")
 
 
 def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
