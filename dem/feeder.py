@@ -165,11 +165,11 @@ class Feeder:
                 self.owed -= k
         if gone or new_spheres is not None:
             sim.replace_grains(~leaving, new_spheres, new_bodies, ids)
-            if sim.mesh is not None:
-                sim.spheres.use_mesh()
 
     def _place(self, sim, count: int, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """Up to ``count`` free poses in the feed zone, just above the grains there."""
+        """Up to ``count`` free poses in the feed zone, at the height of the grains there."""
+        from dem.fill import random_orientations
+
         s = sim.spheres
         b = self.bound
         member_kept = kept if sim.bodies is None else kept[s.body]
@@ -193,8 +193,6 @@ class Feeder:
                 ])  # fmt: skip
                 q = None
                 if clumps:
-                    from dem.fill import random_orientations
-
                     q = random_orientations(1, self.random)
                     trial_s, _ = self.make(centre[None, :], q)
                     px, pr = trial_s.x, trial_s.radius

@@ -124,8 +124,6 @@ class Spheres:
 
     def concat(self, other: Spheres, body: np.ndarray) -> Spheres:
         """These spheres followed by ``other``'s, owned by grains ``body`` (both lists)."""
-        from dem.kernels.mesh import MESH_SLOTS
-
         mesh = self.mesh_hist.shape[0] > 0
         if mesh:
             other.use_mesh()
@@ -134,10 +132,7 @@ class Spheres:
             for name in ("x", "v", "omega", "force", "torque", "radius", "mass", "inv_mass",
                          "inv_inertia", "wall_hist", "mesh_hist", "mesh_normal")
         }  # fmt: skip
-        out = Spheres(body=np.ascontiguousarray(body, dtype=np.int64), **both)
-        if mesh:
-            assert out.mesh_hist.shape[0] == MESH_SLOTS * out.n
-        return out
+        return Spheres(body=np.ascontiguousarray(body, dtype=np.int64), **both)
 
     def as_layout(self) -> SphereArrays:
         """The arrays as the kernels take them (:class:`dem.kernels.layout.SphereArrays`)."""
