@@ -243,8 +243,9 @@ def test_screw_deck_is_a_multisphere_deck(screw_deck):
     computes = {a[0]: a[1:] for a in c["compute"]}
     assert computes["vcm"] == ["all", "multisphere", "property", "vcm"]
     assert computes["vxm"] == ["all", "reduce", "ave", "c_vcm[1]"]
-    # the fill check counts member spheres
-    assert f"< {case.particles.count * 8}" in deck.read_text()
+    # the fill check counts the grains insert/pack placed (its f_ins[1]), not member spheres
+    assert f'"${{ninserted}} < {case.particles.count}"' in deck.read_text()
+    assert ["ninserted", "equal", "f_ins[1]"] in c["variable"]
     insert = fix(c, "ins")
     assert int(insert[insert.index("particles_in_region") + 1]) == case.particles.count
 
@@ -387,22 +388,70 @@ def test_liggghts_runs_the_u_trough_deck(tmp_path):
     assert [loop.steps for loop in run.loop_times] == [50, 100, 100]
 
 
-@pytest.mark.parametrize(
-    "overrides, key",
-    [
-        ({"feeder.feed_rate": 0.01}, "feeder"),
-    ],
-)
-def test_what_the_deck_cannot_write_is_refused_by_name(tmp_path, overrides, key):
-    from dem.case import load_case
-    from dem.errors import InputError
-    from dem.io.liggghts import write_deck
+def test_feeder_deck_has_the_back_wall_open_edge_and_one_grain_per_feed(tmp_path):
+    """cases/feeder: x is open at the discharge edge L (lost spheres deleted and ignored), the
+    back wall is the plane x = 0, the fill stands clear of both, and the feed inserts one grain
+    every m / feed_rate into the zone at the back (LIGGGHTS rounds fractions of a grain down)."""
+    from dem.feeder import grain_mass
 
-    case = load_case("cases/sphere-bed", overrides=overrides)
-    with pytest.raises(InputError) as info:
-        write_deck(case, tmp_path / "deck", timestep=1e-5, steps=10)
-    assert info.value.key == key
-    assert not (tmp_path / "deck" / "in.dem").exists()
+    case = load_case(CASES_DIR / "feeder")
+    dt = case.run.timestep
+    deck = write_deck(case, tmp_path / "deck", timestep=dt, steps=100, settle_steps=100)
+    c = parse(deck)
+    assert c["boundary"] == [["f", "f", "f"]]
+    [domain] = [a for a in c["region"] if a[0] == "domain"]
+    length = case.trough.length
+    assert float(domain[3]) == length and float(domain[2]) < 0.0
+    assert "lost" in c["thermo_modify"][0] and "ignore" in c["thermo_modify"][0]
+    back = fix(c, "back")
+    assert back[back.index("primitive") :][:4] == ["primitive", "type", "2", "xplane"]
+    assert float(back[back.index("xplane") + 1]) == 0.0
+    [fill] = [a for a in c["region"] if a[0] == "fill"]
+    reach = case.particles.grain.bounding_radius
+    assert float(fill[2]) == pytest.approx(reach) and float(fill[3]) == pytest.approx(
+        length - reach
+    )
+    feed = fix(c, "feed")
+    assert feed[2] == "insert/rate/region"
+    rate = float(feed[feed.index("massrate") + 1])
+    every = int(feed[feed.index("insert_every") + 1])
+    assert rate == case.feeder.feed_rate
+    assert rate * every * dt == pytest.approx(grain_mass(case), rel=1e-3)
+    [zone] = [a for a in c["region"] if a[0] == "feedzone"]
+    assert float(zone[2]) == 0.0 and float(zone[3]) == case.feeder.feed_length
+    assert feed[feed.index("region") + 1] == "feedzone"
+    assert fix(c, "balance")[2] == "print"
+
+
+@pytest.mark.integration
+@pytest.mark.skipif(find_liggghts() is None, reason=f"liggghts not on PATH ({LIGGGHTS_INSTALL})")
+def test_liggghts_runs_a_feeder_deck_and_its_balance_closes(tmp_path):
+    """A sphere feeder tilted 15 deg down to its edge: LIGGGHTS feeds grains, deletes those
+    past x = L, and read_balance's discharged = charge + fed - in the box counts them."""
+    from dem.io.liggghts import BALANCE_FILE, discharge_per_cycle, read_balance
+
+    ov = {"feeder.feed_rate": 0.02, "feeder.feed_length": 0.02, "particles.count": 60,
+          "trough.length": 0.05, "trough.inclination": -15.0, "run.settle_cycles": 0}  # fmt: skip
+    case = load_case(CASES_DIR / "sphere-bed", overrides=ov)
+    dt = 1e-5
+    deck = write_deck(case, tmp_path / "deck", timestep=dt, steps=30000, settle_steps=0,
+                      fill_time=0.05, sample_steps=500)  # fmt: skip
+    run = run_liggghts(deck.parent, min_loops=2)
+    assert "ERROR" not in run.stdout
+    bal = read_balance(deck.parent / BALANCE_FILE, members=1)
+    assert bal.charge == 60.0
+    assert np.all(bal.in_trough == np.round(bal.in_trough))  # spheres: whole grains
+    mass = case.material.density * 4.0 / 3.0 * math.pi * case.particles.radius**3
+    want_fed = 0.02 * bal.tau[-1] / mass  # one grain every m / rate, from the drive start
+    assert abs(bal.fed[-1] - want_fed) <= 1.0
+    assert np.all(np.diff(bal.discharged) >= 0.0) and bal.discharged[-1] > 10
+    assert bal.discharged[-1] == bal.charge + bal.fed[-1] - run.loop_times[-1].atoms
+    rates, held = discharge_per_cycle(bal, 1.0 / case.drive.frequency, 0.0, mass)
+    assert rates.size == int(bal.tau[-1] * case.drive.frequency + 1e-9)
+    assert np.sum(rates) / case.drive.frequency == pytest.approx(
+        np.interp(rates.size / case.drive.frequency, bal.tau, bal.discharged) * mass
+    )
+    assert 0.0 < held <= bal.charge + bal.fed[-1]
 
 
 def test_elliptical_drive_and_ramp_variables_are_the_kernels_acceleration(tmp_path):

@@ -30,6 +30,19 @@ the pan with the largest cross-section below the mesh's top whose sides and floo
 neighbour skin away from every triangle, and the column above it is as tall as the grains need
 at the loose fill fraction.
 
+Finite feeders (``[feeder]``, :mod:`dem.feeder`): the box is closed across y and z and open
+along x (``boundary f f f``) from a margin behind the back wall to the discharge edge x = L; a
+sphere whose centre passes L leaves the box and LIGGGHTS deletes it (``thermo_modify lost
+ignore``), as dem removes a grain whose centre of mass passes L (a clump's members leave one by
+one in LIGGGHTS; its discharge lags dem's by the time the clump takes to cross the edge). The
+back wall is ``wall/gran primitive xplane 0.0``, with a mesh too, as dem's fourth flat wall. The
+fill is insert/pack in [reach, L - reach], as dem's. The feed is ``insert/rate/region``
+(:func:`_feeder_lines`): one grain every m / feed_rate into the zone 0 < x < ``feed_length``,
+at rest in the trough's frame (dem drops fed grains at rest in the laboratory, -s'(t) in the
+trough's frame: at most A omega apart). ``balance.txt`` records the spheres in the box, the
+grains fed and the initial charge; :func:`read_balance` and :func:`discharge_per_cycle` turn
+them into grains discharged and the discharge rate per drive cycle.
+
 Contact laws map one-to-one:
 
 - ``hertz_mindlin`` -> ``model hertz tangential history`` with the same Young's modulus Y and
@@ -90,6 +103,7 @@ from dem import __version__
 from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.feeder import grain_mass as grain_mass_of
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
 from dem.mesh import load_mesh
 from dem.shapes import write_clump
@@ -103,6 +117,8 @@ MIN_HERTZ_RESTITUTION = 0.06
 DECK_NAME = "in.dem"
 #: File the deck writes the windowed mean x-velocity to (columns: step, mean vx in m/s).
 VX_FILE = "vx_mean.txt"
+#: File a finite feeder's deck writes its balance to (:func:`read_balance`).
+BALANCE_FILE = "balance.txt"
 #: Neighbour skin as a fraction of the sphere radius.
 SKIN_FRACTION = 0.5
 #: Solid volume fraction of the loose column the spheres are inserted into.
@@ -110,6 +126,8 @@ FILL_VOLUME_FRACTION = 0.2
 #: The same for clumps: ``insert/pack`` (random orientations, ``all_in``) placed only 174 of
 #: 200 screws of ``cases/screw-trough`` at 0.14 and all of them at 0.10.
 FILL_VOLUME_FRACTION_CLUMPS = 0.08
+#: A feeder's fill column is shorter (fill in [reach, L - reach]); its loose fraction is scaled.
+FEEDER_FILL_SCALE = 0.6
 #: File the clump template's members are written to, next to the deck.
 CLUMP_FILE = "grain.multisphere"
 #: Monte Carlo samples of ``particletemplate/multisphere`` (only its volume estimate uses them).
@@ -382,6 +400,67 @@ def _drive_variables(d, gx0: float, gz0: float) -> list[str]:
     ]
 
 
+def _feeder_lines(
+    case: Case,
+    timestep: float,
+    fill_y: tuple[float, float],
+    fill_z0: float,
+    fill_height: float,
+    members: int,
+    *,
+    s_feed: int,
+    sample_steps: int,
+) -> tuple[list[str], list[str]]:
+    """The feed and the balance output of a finite feeder's deck, and the header lines on them.
+
+    The feed is ``insert/rate/region`` of ``feed_rate`` kg/s into the zone 0 < x <
+    ``feed_length`` over the fill block's y range, from the fill block's bottom up as high as
+    the loose fill column, one grain every m / feed_rate (at least every
+    :data:`dem.feeder.EXCHANGE_FRACTION` of a drive period, as dem exchanges), at rest in the
+    trough's frame. :data:`BALANCE_FILE` gets, every
+    ``sample_steps``, the drive time tau (s), the spheres in the box (a grain of k members
+    counts k), the grains fed so far and the initial charge in spheres: grains discharged =
+    charge + fed - in the box, per :func:`read_balance`.
+    """
+    from dem.feeder import EXCHANGE_FRACTION
+
+    f, d = case.feeder, case.drive
+    # one grain per insertion, as dem feeds a grain whenever a whole one is owed (checked
+    # every EXCHANGE_FRACTION of a period): LIGGGHTS's massrate rounds a fraction of a grain
+    # per insertion down and feeds 10 % short (measured on cases/feeder, every 1/16 cycle)
+    exchange = max(1, round(EXCHANGE_FRACTION / (d.frequency * timestep)))
+    grain = grain_mass_of(case)
+    every = max(exchange, round(grain / (f.feed_rate * timestep))) if f.feed_rate > 0 else 0
+    lines = [
+        "# finite feeder: grains fed at the back; a sphere past x = L is deleted (lost)",
+        "variable charge equal ${natoms0}",
+    ]
+    fed = "0"
+    if f.feed_rate > 0.0:
+        lines += [
+            f"region feedzone block 0.0 {_fmt(f.feed_length)} {_fmt(fill_y[0])} "
+            f"{_fmt(fill_y[1])} {_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
+            f"fix feed all insert/rate/region seed {s_feed} distributiontemplate pdd "
+            f"nparticles INF massrate {_fmt(f.feed_rate)} insert_every {every} "
+            "overlapcheck yes all_in yes vel constant 0.0 0.0 0.0 region feedzone",
+        ]
+        fed = "$(f_feed[1])"
+    lines += [
+        f'fix balance all print {sample_steps} "$(v_tau) $(atoms) {fed} ${{charge}}" '
+        f'file {BALANCE_FILE} screen no title "# tau (s), spheres in the box, grains fed, '
+        f'initial charge (spheres); {members} spheres a grain"',
+    ]
+    note = [
+        "# finite feeder: back wall x = 0 (primitive, also with a mesh), open discharge edge",
+        f"#   x = L (a sphere past it leaves the box and is deleted); feed {f.feed_rate} kg/s "
+        f"into 0 < x < {f.feed_length} m at rest in the trough frame (dem: at rest in the lab);",
+        f"#   {BALANCE_FILE}: tau, spheres in the box, grains fed, initial charge. A clump's",
+        "#   members leave one by one as they pass the edge (dem removes the grain when its",
+        "#   centre of mass passes it)",
+    ]
+    return lines, note
+
+
 def write_deck(
     case: Case,
     out_dir: str | Path,
@@ -420,10 +499,6 @@ def write_deck(
     p, t, d = case.particles, case.trough, case.drive
     if p.shape != "sphere" and p.grain is None:
         raise InputError("particles.shape", p.shape, "a case read by dem.case.load_case", source)
-    if case.feeder is not None:
-        raise InputError("feeder", "[feeder]", "no [feeder] table for a LIGGGHTS export: the "
-                         "deck writes the periodic section only (a finite feeder's back wall, "
-                         "discharge and feed are not exported yet)", source)  # fmt: skip
     if not timestep > 0.0:
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:
@@ -517,8 +592,15 @@ def write_deck(
             "#   not move (no move/mesh; DESIGN.md section 2). The insertion block lies inside the",
             "#   pan, clear of the mesh: insert/pack does not check grains against a mesh",
         ]
+    feeder = case.feeder
+    reach = p.radius if p.shape == "sphere" else p.grain.bounding_radius
+    # a feeder fills [reach, L - reach] as dem does (dem.setup), clear of the back wall and edge
+    fill_x = (0.0, t.length) if feeder is None else (reach, t.length - reach)
     fill_width = fill_y[1] - fill_y[0]
-    fill_height = max(n * grain_volume / (fill_fraction * t.length * fill_width), fill_min)
+    fill_length = fill_x[1] - fill_x[0]
+    if feeder is not None:  # insert/pack placed 43 of cases/feeder's 50 screws at 0.08
+        fill_fraction *= FEEDER_FILL_SCALE
+    fill_height = max(n * grain_volume / (fill_fraction * fill_length * fill_width), fill_min)
     top = max(fill_z0 + 3.0 * fill_height + 20.0 * r_max, mesh_top)
     if fill_time is None:
         fill_time = math.sqrt(2.0 * (fill_z0 + fill_height - bottom) / GRAVITY) + 0.1
@@ -538,6 +620,22 @@ def write_deck(
             f"fix walls all wall/gran {model} mesh n_meshes 1 meshes trough {settings}",
         ]
 
+    if feeder is None:
+        box_x, boundary = (0.0, t.length), "boundary p f f"
+        feeder_lines, feed_lines, lost, balance_note = [], [], "", []
+    else:
+        # open x: a sphere whose centre passes x = L leaves the box and is deleted (lost atoms
+        # ignored); the back wall is the plane x = 0, as dem's
+        box_x, boundary = (-MESH_BOX_MARGIN * reach, t.length), "boundary f f f"
+        lost = " lost ignore"
+        feeder_lines = [
+            f"fix back all wall/gran {model} primitive type 2 xplane 0.0 {settings}",
+        ]
+        feed_lines, balance_note = _feeder_lines(
+            case, timestep, fill_y, fill_z0, fill_height, members, s_feed=_prime_at_least(
+                67867967 + 1000 * seed), sample_steps=sample_steps,
+        )  # fmt: skip
+        wall_lines += feeder_lines
     alpha = math.radians(t.inclination)
     gx0, gz0 = -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
     g0 = math.hypot(gx0, gz0)
@@ -559,16 +657,17 @@ def write_deck(
         "#   g(t) = (-g sin(alpha) + A w^2 sin(w tau) cos(phi), 0, "
         "-g cos(alpha) + A w^2 sin(w tau) sin(phi))",
         *wall_note,
+        *balance_note,
         "",
         "atom_style granular",
         "atom_modify map array" + ("" if p.shape == "sphere" else " sort 0 0"),
-        "boundary p f f",
+        boundary,
         "newton off",
         "communicate single vel yes",
-        "processors * 1 1  # split the periodic x only: the bed is uniform along x",
+        "processors * 1 1  # split x only: the bed is uniform across y and z",
         "units si",
         "",
-        f"region domain block 0.0 {_fmt(t.length)} {_fmt(box_y[0])} {_fmt(box_y[1])} "
+        f"region domain block {_fmt(box_x[0])} {_fmt(box_x[1])} {_fmt(box_y[0])} {_fmt(box_y[1])} "
         f"{_fmt(box_z0)} {_fmt(top)} units box",
         "create_box 2 domain",
         f"neighbor {_fmt(SKIN_FRACTION * r_min)} bin",
@@ -586,7 +685,8 @@ def write_deck(
         "",
         *grain_lines,
         f"fix pdd all particledistribution/discrete {s_dist} 1 pts 1.0",
-        f"region fill block 0.0 {_fmt(t.length)} {_fmt(fill_y[0])} {_fmt(fill_y[1])} "
+        f"region fill block {_fmt(fill_x[0])} {_fmt(fill_x[1])} "
+        f"{_fmt(fill_y[0])} {_fmt(fill_y[1])} "
         f"{_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
         f"fix ins all insert/pack seed {s_insert} distributiontemplate pdd "
         "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once overlapcheck yes all_in yes "
@@ -596,15 +696,15 @@ def write_deck(
         *velocity,
         "thermo_style custom step atoms ke c_vxm",
         f"thermo {thermo_every}",
-        "thermo_modify norm no",
+        "thermo_modify norm no" + lost,
         "",
         "# --- fill: insert and let the grains come to rest under static gravity",
         f"run {fill_steps}",
+        "variable ninserted equal f_ins[1]",
+        f'if "${{ninserted}} < {n}" then '
+        f'"print \'ERROR: only ${{ninserted}} of {n} grains inserted\'" "quit"',
         "unfix ins",
-        "variable natoms equal atoms",
-        f'if "${{natoms}} < {n * members}" then '
-        f'"print \'ERROR: only ${{natoms}} of {n * members} spheres inserted\'" "quit"',
-        "variable natoms delete",
+        "variable natoms0 equal atoms",
         "",
         "# --- drive: effective gravity in the accelerating frame",
         f"variable tau equal (step-{drive_start})*{_fmt(timestep)}",
@@ -613,6 +713,7 @@ def write_deck(
         "unfix grav",
         "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
         f"fix vxout all ave/time 1 {sample_steps} {sample_steps} c_vxm file {VX_FILE}",
+        *feed_lines,
         "",
         "# --- settle: driven, not measured",
         f"run {settle_steps}" if settle_steps > 0 else "# (no settle steps)",
@@ -624,6 +725,52 @@ def write_deck(
     deck = out / DECK_NAME
     deck.write_text("\n".join(lines))
     return deck
+
+
+class Balance(NamedTuple):
+    """A finite feeder's balance from a LIGGGHTS run (:func:`read_balance`).
+
+    Attributes:
+        tau: Drive time of each line, s.
+        in_trough: Grains in the box (spheres / members; a clump half past the edge counts
+            by the fraction of its members left).
+        fed: Grains fed so far.
+        discharged: Grains discharged so far, charge + fed - in_trough.
+        charge: The initial charge, grains.
+
+    """
+
+    tau: np.ndarray
+    in_trough: np.ndarray
+    fed: np.ndarray
+    discharged: np.ndarray
+    charge: float
+
+
+def read_balance(path: str | Path, members: int) -> Balance:
+    """Read :data:`BALANCE_FILE` of a feeder deck; ``members`` spheres make a grain."""
+    data = np.loadtxt(path, comments="#", ndmin=2)
+    if data.shape[0] == 0 or data.shape[1] != 4:
+        raise ValueError(f"{path}: no balance lines (tau, spheres, fed, charge)")
+    tau, spheres, fed, charge = data.T
+    in_trough = spheres / members
+    c = float(charge[0]) / members
+    return Balance(tau, in_trough, fed, c + fed - in_trough, c)
+
+
+def discharge_per_cycle(balance: Balance, period: float, start: float, grain_mass: float):
+    """Discharge rate per whole drive cycle from ``start`` (s), kg/s, and mean grains held.
+
+    Cycle k covers [start + k T, start + (k+1) T); the discharged count is interpolated
+    linearly to the cycle bounds (lines come every sample window).
+    """
+    end = float(balance.tau[-1])
+    cycles = int(math.floor((end - start) / period + 1e-9))
+    bounds = start + period * np.arange(cycles + 1)
+    out = np.interp(bounds, balance.tau, balance.discharged)
+    rates = np.diff(out) * grain_mass / period
+    held = np.interp(bounds, balance.tau, balance.in_trough)
+    return rates, float(np.mean(held))
 
 
 # --- running LIGGGHTS -------------------------------------------------------------------------
