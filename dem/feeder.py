@@ -41,6 +41,11 @@ from dem.state import Bodies, Spheres
 EXCHANGE_FRACTION = 1.0 / 16.0
 #: Tries to place one fed grain before it waits for the next exchange.
 FEED_TRIES = 40
+#: Fed grains start at rest in the laboratory (velocity -s'(t) in the trough's frame), as a
+#: hopper drops them. False starts them at rest in the trough's frame, as LIGGGHTS's
+#: ``insert/rate/region ... vel constant 0 0 0`` does in the accelerating frame of an exported
+#: deck: validation/liggghts-feeder sets it to measure what the convention changes.
+FEED_AT_LAB_REST = True
 
 
 def domain_gap(bound: float, r_max: float, skin: float, travel: float) -> float:
@@ -152,7 +157,7 @@ class Feeder:
             k = positions.shape[0]
             if k:
                 new_spheres, new_bodies = self.make(positions, quats)
-                lab_rest = -sim.trough.velocity(t)
+                lab_rest = -sim.trough.velocity(t) if FEED_AT_LAB_REST else np.zeros(3)
                 if new_bodies is None:
                     new_spheres.v[:] = lab_rest
                 else:

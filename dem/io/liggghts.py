@@ -410,17 +410,19 @@ def _feeder_lines(
     *,
     s_feed: int,
     sample_steps: int,
+    drive_start: int,
 ) -> tuple[list[str], list[str]]:
     """The feed and the balance output of a finite feeder's deck, and the header lines on them.
 
     The feed is ``insert/rate/region`` of ``feed_rate`` kg/s into the zone 0 < x <
     ``feed_length`` over the fill block's y range, from the fill block's bottom up as high as
     the loose fill column, one grain every m / feed_rate (at least every
-    :data:`dem.feeder.EXCHANGE_FRACTION` of a drive period, as dem exchanges), at rest in the
-    trough's frame. :data:`BALANCE_FILE` gets, every
-    ``sample_steps``, the drive time tau (s), the spheres in the box (a grain of k members
-    counts k), the grains fed so far and the initial charge in spheres: grains discharged =
-    charge + fed - in the box, per :func:`read_balance`.
+    :data:`dem.feeder.EXCHANGE_FRACTION` of a drive period, as dem exchanges), the first one
+    m / feed_rate after the drive starts (as dem, which feeds a grain once a whole one is owed;
+    LIGGGHTS would insert one at once), at rest in the trough's frame. :data:`BALANCE_FILE`
+    gets, every ``sample_steps``, the drive time tau (s), the spheres in the box (a grain of k
+    members counts k), the grains fed so far and the initial charge in spheres: grains
+    discharged = charge + fed - in the box, per :func:`read_balance`.
     """
     from dem.feeder import EXCHANGE_FRACTION
 
@@ -442,6 +444,7 @@ def _feeder_lines(
             f"{_fmt(fill_y[1])} {_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
             f"fix feed all insert/rate/region seed {s_feed} distributiontemplate pdd "
             f"nparticles INF massrate {_fmt(f.feed_rate)} insert_every {every} "
+            f"start {drive_start + every} "
             "overlapcheck yes all_in yes vel constant 0.0 0.0 0.0 region feedzone",
         ]
         fed = "$(f_feed[1])"
@@ -633,7 +636,7 @@ def write_deck(
         ]
         feed_lines, balance_note = _feeder_lines(
             case, timestep, fill_y, fill_z0, fill_height, members, s_feed=_prime_at_least(
-                67867967 + 1000 * seed), sample_steps=sample_steps,
+                67867967 + 1000 * seed), sample_steps=sample_steps, drive_start=fill_steps,
         )  # fmt: skip
         wall_lines += feeder_lines
     alpha = math.radians(t.inclination)
