@@ -44,6 +44,8 @@ MESH_TROUGHS = True
 CONTACT_MODELS = ("hertz_mindlin", "linear")
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
 TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts")
+#: Where a wall contact's tangential force acts (:data:`dem.kernels.contacts.WALL_LEVER_ARMS`).
+WALL_LEVER_ARMS = ("surface", "midpoint")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
@@ -195,6 +197,9 @@ class ContactSpec:
             ``"liggghts"`` (spring capped, dashpot on top), see :mod:`dem.kernels.contacts`.
         tangential_damping_ratio: zeta_t of "coulomb" (None: the default,
             :data:`dem.config.DEM_TANGENTIAL_DAMPING_RATIO`); "liggghts" refuses it.
+        wall_lever_arm: Where a wall contact's tangential force acts: ``"surface"`` (default,
+            r - delta from the centre: the point on the wall) or ``"midpoint"`` (r - delta / 2,
+            as LIGGGHTS 3.8's walls), :data:`dem.kernels.contacts.WALL_LEVER_ARMS`.
 
     """
 
@@ -206,6 +211,7 @@ class ContactSpec:
     limit_force: bool = False
     tangential: str = "coulomb"
     tangential_damping_ratio: float | None = None
+    wall_lever_arm: str = "surface"
 
 
 @dataclass(frozen=True)
@@ -420,6 +426,7 @@ _CONTACT_KEYS = (
     "tangential_damping_ratio",
     "tangential",
     "limit_force",
+    "wall_lever_arm",
 )
 _PARTICLES_KEYS = (
     "shape",
@@ -587,6 +594,7 @@ def _read_contact(t: Table) -> ContactSpec:
         limit_force=t.boolean("limit_force", False),
         tangential=tangential,
         tangential_damping_ratio=damping,
+        wall_lever_arm=t.choice("wall_lever_arm", WALL_LEVER_ARMS, "surface"),
     )
 
 

@@ -60,6 +60,7 @@ class ContactLaw:
                 tangential=c.tangential,
                 tangential_damping_ratio=zeta_t,
                 tangential_mass_factor=factor,
+                wall_lever_arm=c.wall_lever_arm,
             ),
         )
 
@@ -78,6 +79,8 @@ class ContactLaw:
         if self.tangential == "coulomb":
             out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
             out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+        f_w = float(p[contacts.P_WALL_ARM])
+        out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
         return out
 
     @property

@@ -121,7 +121,8 @@ def all_forces(model, c, x, v, w, r, m, length, width, gravity, dt, history):
                 history.pop((i, -1 - k), None)
                 continue
             fi, ti, _, s = one_contact(
-                model, c, normal, delta, v[i], w[i], np.zeros(3), r[i] - delta, 0.0, m[i], r[i],
+                model, c, normal, delta, v[i], w[i], np.zeros(3),
+                r[i] - c.get("f_w", 1.0) * delta, 0.0, m[i], r[i],
                 history.get((i, -1 - k), np.zeros(3)), dt,
             )  # fmt: skip
             history[(i, -1 - k)] = s

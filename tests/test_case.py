@@ -184,6 +184,22 @@ def test_tangential_keys(tmp_path):
     assert contact.tangential_damping_ratio == 0.2
 
 
+def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_path):
+    from dem.kernels.contacts import P_WALL_ARM
+    from dem.timestep import ContactLaw
+
+    case = load_case(write_case(tmp_path, with_changes({})))
+    assert case.contact.wall_lever_arm == "surface"
+    assert ContactLaw.from_case(case).params[P_WALL_ARM] == 1.0
+    case = load_case(write_case(tmp_path, with_changes({"contact.wall_lever_arm": "midpoint"})))
+    law = ContactLaw.from_case(case)
+    assert law.params[P_WALL_ARM] == 0.5
+    assert law.tangential_coefficients()["wall_lever_arm"] == "midpoint"
+    with pytest.raises(InputError, match="contact.wall_lever_arm") as info:
+        load_case(write_case(tmp_path, with_changes({"contact.wall_lever_arm": "middle"})))
+    assert "'surface', 'midpoint'" in str(info.value)
+
+
 def test_explicit_timestep_and_mesh(tmp_path):
     import meshio
 

@@ -26,11 +26,11 @@ def _packing(rng, n=40, length=LENGTH, width=WIDTH, zmax=0.006):
     return x, r
 
 
-def _coefficients(model, e, mu, mu_roll, limit, tangential="liggghts"):
+def _coefficients(model, e, mu, mu_roll, limit, tangential="liggghts", arm="surface"):
     return {
         "kn": 2.0e3, "kt_ratio": 0.4, "E": 1.0e7, "nu": 0.25, "e": e, "mu": mu,
         "mu_roll": mu_roll, "limit": limit, "tangential": tangential, "zeta_t": 0.7,
-        "f_t": 2 / 7,
+        "f_t": 2 / 7, "arm": arm, "f_w": {"surface": 1.0, "midpoint": 0.5}[arm],
     }  # fmt: skip
 
 
@@ -42,10 +42,12 @@ def _law(model, c):
             poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
             rolling_friction=c["mu_roll"], limit_force=c["limit"], tangential=c["tangential"],
             tangential_damping_ratio=c["zeta_t"], tangential_mass_factor=c["f_t"],
+            wall_lever_arm=c.get("arm", "surface"),
         ),
     )  # fmt: skip
 
 
+@pytest.mark.parametrize("arm", ["surface", "midpoint"])
 @pytest.mark.parametrize("tangential", ["liggghts", "coulomb"])
 @pytest.mark.parametrize(
     ("model", "e", "mu", "mu_roll", "limit", "dt"),
@@ -56,12 +58,13 @@ def _law(model, c):
         ("hertz_mindlin", 0.9, 0.2, 0.0, True, 1e-3),
     ],
 )
-def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt, tangential):
+def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt, tangential, arm):
     """Forces and torques equal an O(N^2) NumPy twin, over periodic images and walls, twice:
-    the second evaluation after a move and a rebuild uses the carried-over tangential history."""
+    the second evaluation after a move and a rebuild uses the carried-over tangential history.
+    Both wall lever arms (r - delta and LIGGGHTS's r - delta / 2)."""
     rng = np.random.default_rng(7)
     x, r = _packing(rng)
-    c = _coefficients(model, e, mu, mu_roll, limit, tangential)
+    c = _coefficients(model, e, mu, mu_roll, limit, tangential, arm)
     spheres = Spheres.create(x, r, 2500.0)
     sim = Simulation(spheres, Trough(LENGTH, WIDTH, inclination=0.1), _law(model, c), dt)
     history = {}
@@ -205,3 +208,27 @@ def test_coulomb_convention_never_exceeds_the_friction_limit(model):
         worst[tangential] = ratio
     assert worst["coulomb"] <= 1.0 + 1e-12
     assert worst["liggghts"] > 1.05
+
+
+def test_wall_lever_arm_moves_the_contact_point_into_the_overlap():
+    """A spinning sphere pressed into the floor: the wall torque is -c n x F_t with c = r - delta
+    ("surface") or r - delta / 2 ("midpoint"), and the slip velocity is the spin times the same
+    c: the two settings differ exactly by the lever arm."""
+    r, delta, spin = 1.0e-3, 2.0e-5, 50.0
+    out = {}
+    for arm in ("surface", "midpoint"):
+        c = _coefficients("linear", 0.5, 0.3, 0.0, False, "liggghts", arm)
+        spheres = Spheres.create(np.array([[0.006, 0.0, r - delta]]), np.array([r]), 2500.0)
+        spheres.omega[0] = (0.0, spin, 0.0)
+        sim = Simulation(spheres, Trough(LENGTH, WIDTH), _law("linear", c), 1e-6)
+        sim.compute_forces()
+        out[arm] = (spheres.force[0].copy(), spheres.torque[0].copy())
+    for arm, f_w in (("surface", 1.0), ("midpoint", 0.5)):
+        force, torque = out[arm]
+        ft = np.array([force[0], force[1], 0.0])
+        lever = r - f_w * delta
+        np.testing.assert_allclose(torque, -lever * np.cross([0.0, 0.0, 1.0], ft), rtol=1e-12)
+        # the slip at the contact is -(c omega) x n and F_t is linear in it (first step)
+        assert ft[0] == pytest.approx(out["surface"][0][0] * lever / (r - delta), rel=1e-12)
+        assert ft[0] != 0.0
+    assert out["surface"][1][1] != out["midpoint"][1][1]

@@ -495,3 +495,15 @@ def test_an_elliptical_ramped_deck_runs_in_liggghts(tmp_path):
     assert "ERROR" not in run.stdout
     assert [lt.steps for lt in run.loop_times][-2:] == [100, 100]
     assert run.loop_times[-1].atoms == 100
+
+
+def test_deck_notes_the_wall_lever_arm_only_where_it_differs_from_liggghts(tmp_path):
+    """LIGGGHTS's walls act at r - delta/2: a case with dem's default r - delta says so in its
+    deck, one with wall_lever_arm = "midpoint" (the same as LIGGGHTS) does not."""
+    note = "LIGGGHTS's walls at r - delta/2"
+    case = load_case(CASES_DIR / "sphere-bed")
+    deck = write_deck(case, tmp_path / "a", timestep=5e-6, steps=10, settle_steps=0)
+    assert note in deck.read_text()
+    mid = load_case(CASES_DIR / "sphere-bed", overrides={"contact.wall_lever_arm": "midpoint"})
+    deck = write_deck(mid, tmp_path / "b", timestep=5e-6, steps=10, settle_steps=0)
+    assert note not in deck.read_text()

@@ -203,6 +203,11 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
             "dem's tangential = 'liggghts'"
             + ("" if contact.model == "linear" else ", with Mindlin's k_t = 8 G* sqrt(R* d)")
         )
+    if contact.wall_lever_arm == "surface":
+        lines.append(
+            "# NOTE: the case's wall contacts act at r - delta (contact.wall_lever_arm = "
+            "'surface'); LIGGGHTS's walls at r - delta/2, as dem's wall_lever_arm = 'midpoint'"
+        )
     lines += [
         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu} {mu} {mu} {mu}",
     ]

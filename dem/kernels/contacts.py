@@ -4,7 +4,9 @@ A contact between sphere i and sphere j (or a wall, j = wall) is described by
 
 - the unit normal n pointing from j to i and the overlap delta = r_i + r_j - |x_i - x_j| > 0,
 - the relative velocity of the centres v_r = v_i - v_j and the spins omega_i, omega_j,
-- the lever arms c_i = r_i - delta / 2, c_j = r_j - delta / 2 (a wall: c_i = r_i - delta, c_j = 0),
+- the lever arms c_i = r_i - delta / 2, c_j = r_j - delta / 2 (a wall: c_i = r_i - f_w delta,
+  c_j = 0, with f_w = 1, the contact point on the wall's surface, or f_w = 1/2, LIGGGHTS's
+  midpoint of the overlap: ``[contact] wall_lever_arm``, :data:`WALL_LEVER_ARMS`),
 - the effective mass m* = m_i m_j / (m_i + m_j) and radius R* = r_i r_j / (r_i + r_j) (a wall has
   infinite mass and radius: m* = m_i, R* = r_i),
 - the tangential spring elongation s (3 floats of contact history, per contact pair).
@@ -88,10 +90,15 @@ P_TANGENTIAL = 10  #: tangential convention: 0.0 "coulomb", 1.0 "liggghts" (:dat
 P_ZETA_T = 11  #: "coulomb": tangential damping ratio zeta_t
 P_MASS_T = 12  #: "coulomb": tangential mass factor f_t (tangential effective mass f_t m*)
 P_COULOMB_DAMP_T = 13  #: "coulomb", Hertz: 2 zeta_t sqrt(2 kappa Y* f_t): gamma_t = this q
-N_PARAMS = 14
+P_WALL_ARM = 14  #: f_w: a wall contact's lever arm is r - f_w delta (:data:`WALL_LEVER_ARMS`)
+N_PARAMS = 15
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0}
+#: f_w of each ``wall_lever_arm``: "surface" puts a wall contact's point on the wall's surface
+#: (r - delta from the centre), "midpoint" halfway into the overlap (r - delta / 2), as
+#: LIGGGHTS 3.8 does for its walls (surface_model_default.h: ``cr = radi - 0.5 * deltan``).
+WALL_LEVER_ARMS = {"surface": 1.0, "midpoint": 0.5}
 
 _SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
@@ -125,14 +132,20 @@ def make_params(
     tangential: str = "coulomb",
     tangential_damping_ratio: float = DEM_TANGENTIAL_DAMPING_RATIO,
     tangential_mass_factor: float = 1.0,
+    wall_lever_arm: str = "surface",
 ) -> np.ndarray:
     """Pack contact coefficients into the ``params`` array of the kernels, shape (N_PARAMS,).
 
     Both laws' entries are filled; the law id chosen separately selects which are used.
     ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
     ``tangential_damping_ratio`` zeta_t and ``tangential_mass_factor`` f_t are used by
-    ``tangential = "coulomb"`` only (module docstring).
+    ``tangential = "coulomb"`` only (module docstring). ``wall_lever_arm`` is a key of
+    :data:`WALL_LEVER_ARMS`.
     """
+    if wall_lever_arm not in WALL_LEVER_ARMS:
+        raise ValueError(
+            f"wall_lever_arm must be one of {sorted(WALL_LEVER_ARMS)}, got {wall_lever_arm!r}"
+        )
     if tangential not in TANGENTIAL:
         raise ValueError(f"tangential must be one of {sorted(TANGENTIAL)}, got {tangential!r}")
     p = np.zeros(N_PARAMS)
@@ -151,6 +164,7 @@ def make_params(
     p[P_TANGENTIAL] = TANGENTIAL[tangential]
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
+    p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
     p[P_COULOMB_DAMP_T] = (
         2.0
         * tangential_damping_ratio
@@ -361,11 +375,12 @@ def add_wall_contact(
     """(fx, ..., tz) plus the force and torque of sphere i's contact with a wall or triangle.
 
     The wall is fixed in the trough frame, of infinite mass and radius: normal n (wall to
-    sphere), overlap delta, m* = m, R* = r, lever arm r - delta, spring in ``hist[row]``.
+    sphere), overlap delta, m* = m, R* = r, lever arm r - f_w delta (``p[P_WALL_ARM]``),
+    spring in ``hist[row]``.
     """
     f = contact_force(
         model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-        omega[i, 2], 0.0, 0.0, 0.0, r - delta, 0.0, m, r, hist, row, dt,
+        omega[i, 2], 0.0, 0.0, 0.0, r - p[P_WALL_ARM] * delta, 0.0, m, r, hist, row, dt,
     )  # fmt: skip
     return fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
 

@@ -18,7 +18,8 @@ order both ways, so one thread and several give the same bits (tested).
 
 Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
 wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
-infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - delta.
+infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_w delta
+(``[contact] wall_lever_arm``: f_w = 1 or 1/2, :data:`dem.kernels.contacts.WALL_LEVER_ARMS`).
 
 Every contact law goes through :func:`dem.kernels.contacts.contact_force`.
 """

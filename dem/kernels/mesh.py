@@ -4,7 +4,7 @@ A mesh trough (``trough.mesh``) is a set of triangles fixed in the trough frame.
 radius r at x touches triangle t where the point q of t closest to x lies within r: the contact
 normal is n = (x - q) / |x - q|, the overlap delta = r - |x - q|, and the contact law is that of
 the flat walls (:func:`dem.kernels.contacts.contact_force` with the wall's infinite mass and
-radius: m* = m, R* = r, lever arm r - delta).
+radius: m* = m, R* = r, lever arm r - f_w delta, ``[contact] wall_lever_arm``).
 
 Closest points (:func:`closest_point`) follow the Voronoi regions of the triangle (Ericson,
 Real-Time Collision Detection, 2005, section 5.1.5) and say which feature q lies on: the face,
@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS
-from dem.kernels.contacts import contact_force
+from dem.kernels.contacts import P_WALL_ARM, contact_force
 from dem.kernels.periodic import wrap
 
 #: Contact slots (tangential springs) per sphere for mesh contacts.
@@ -225,10 +225,10 @@ def mesh_forces(
         slot_normal[row, 0] = nx
         slot_normal[row, 1] = ny
         slot_normal[row, 2] = nz
-        delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - delta
+        delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - f_w delta
         f = contact_force(
             model, p, nx, ny, nz, delta, vx, vy, vz, wx, wy, wz, 0.0, 0.0, 0.0,
-            r - delta, 0.0, m, r, slot_hist, row, dt,
+            r - p[P_WALL_ARM] * delta, 0.0, m, r, slot_hist, row, dt,
         )  # fmt: skip
         fx, fy, fz = fx + f[0], fy + f[1], fz + f[2]
         tx, ty, tz = tx + f[3], ty + f[4], tz + f[5]
