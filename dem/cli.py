@@ -404,7 +404,7 @@ def _cmd_report(args) -> int:
 
 def _cmd_export_liggghts(args) -> int:
     from dem.case import load_case
-    from dem.io.liggghts import write_deck
+    from dem.io.liggghts import CLUMP_FILE, DECK_NAME, MESH_FILE, write_deck
     from dem.timestep import timestep_for
 
     case = load_case(args.case_dir)
@@ -421,6 +421,15 @@ def _cmd_export_liggghts(args) -> int:
             "deck cannot detect (a dem run of the case reports its number in summary.json)",
         )
     settle_steps = round(settle / (case.drive.frequency * timestep))
+    out = Path(args.out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("OUT_DIR", str(out), "a folder for the deck (this is a file)")
+    written = [n for n in (DECK_NAME, CLUMP_FILE, MESH_FILE) if (out / n).exists()]
+    if written and not args.overwrite:
+        raise InputError(
+            "OUT_DIR", str(out), f"a folder without a deck: it holds {', '.join(written)}, "
+            "which the export would replace (pass --overwrite to replace them)",
+        )  # fmt: skip
     path = write_deck(
         case, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps
     )
@@ -586,6 +595,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--settle-cycles", type=_whole0,
         help="driven cycles before measuring (default: the case's; required for \"auto\")",
     )  # fmt: skip
+    e.add_argument(
+        "--overwrite", action="store_true",
+        help="replace a deck already in OUT_DIR (in.dem, grain.multisphere, trough.stl)",
+    )  # fmt: skip
     e.set_defaults(func=_cmd_export_liggghts)
     return parser
 
@@ -599,7 +612,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except InputError as err:
         where = f"{err.source}: " if err.source else ""
-        key = err.key if err.source or err.key.startswith("--") else _option_name(err.key)
+        # a positional argument (its metavar, upper case) is named as it is, not as an option
+        plain = err.source or err.key.startswith("--") or err.key.isupper()
+        key = err.key if plain else _option_name(err.key)
         if err.value is None:
             print(f"dem: error: {where}missing {key}: {err.allowed}", file=sys.stderr)
         else:

@@ -210,6 +210,26 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
     assert code == 2 and "timestep" in err
 
 
+def test_export_refuses_to_replace_a_deck_without_overwrite(capsys, tmp_path):
+    """A user's edited deck is not lost: a second export into the folder exits 2 and leaves it;
+    --overwrite replaces it; a file as OUT_DIR is refused by name."""
+    case_dir = tmp_path / "case"
+    case_dir.mkdir()
+    (case_dir / "case.toml").write_text(SMALL_CASE)
+    deck_dir = tmp_path / "deck"
+    assert run(capsys, "export", "liggghts", str(case_dir), str(deck_dir))[0] == 0
+    deck = deck_dir / "in.dem"
+    deck.write_text("# my edits\n")
+    code, _, err = run(capsys, "export", "liggghts", str(case_dir), str(deck_dir))
+    assert code == 2 and "OUT_DIR" in err and "--overwrite" in err and "in.dem" in err
+    assert deck.read_text() == "# my edits\n"
+    code, _, err = run(capsys, "export", "liggghts", str(case_dir), str(deck_dir), "--overwrite")
+    assert code == 0, err
+    assert deck.read_text().startswith("# LIGGGHTS deck exported by dem")
+    code, _, err = run(capsys, "export", "liggghts", str(case_dir), str(deck))
+    assert code == 2 and "OUT_DIR" in err and "this is a file" in err
+
+
 def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
     import shutil
 
