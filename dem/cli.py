@@ -7,6 +7,7 @@ key), the value and what is allowed; nothing is computed before the inputs are c
 import argparse
 import json
 import math
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -87,6 +88,37 @@ _whole0 = _whole_from(0)
 
 def _option_name(key: str) -> str:
     return "--" + key.replace("_", "-")
+
+
+#: Longest file name and path the guards accept (Linux NAME_MAX and PATH_MAX).
+NAME_MAX, PATH_MAX = 255, 4096
+
+
+def _writable_path(key: str, path: str | Path, *, folder: bool) -> Path:
+    """``path`` as an output file (``folder`` False) or folder, refused before any work.
+
+    Refused with the key and the cause: a file where a folder is wanted or the reverse, a name
+    or path longer than the system allows, or a nearest existing folder that is not writable.
+    A file's parent folder must exist (dem does not create it); a folder is created later.
+    """
+    path = Path(path)
+    if len(str(path.absolute())) >= PATH_MAX or any(len(part) > NAME_MAX for part in path.parts):
+        raise InputError(key, str(path), f"a path the system allows (names <= {NAME_MAX} "
+                         f"characters, paths < {PATH_MAX})")  # fmt: skip
+    if path.exists() and path.is_dir() != folder:
+        what = "a folder (this is a file)" if folder else "a file name (this is a folder)"
+        raise InputError(key, str(path), what)
+    parent = path if folder else path.parent
+    if not folder and not parent.absolute().is_dir():
+        raise InputError(key, str(path), f"a file in an existing folder ({parent} does not exist)")
+    base = parent.absolute()
+    while not base.exists():
+        base = base.parent
+    if not base.is_dir():
+        raise InputError(key, str(path), f"a path under a folder ({base} is a file)")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise InputError(key, str(path), f"a writable place ({base} is not writable)")
+    return path
 
 
 def _print_json(obj) -> None:
@@ -179,6 +211,8 @@ def _cmd_sweep(args) -> int:
         key: parse_values(getattr(args, key), _option_name(key))
         for key in ("throw_number", "angle", "friction", "inclination", "eps_t", "eps_n")
     }
+    if args.out:
+        _writable_path("--out", args.out, folder=False)
     result = sweep(**values)
     if args.out:
         with open(args.out, "w", encoding="utf-8") as stream:
@@ -198,6 +232,8 @@ def _cmd_optimum(args) -> int:
         if len(parts) != 2:
             raise InputError("--bounds", args.bounds, "LOW:HIGH")
         bounds = tuple(parse_values(p, "--bounds")[0] for p in parts)
+    if args.plot:
+        _writable_path("--plot", args.plot, folder=False)
     o = optimum(
         args.over,
         args.hold,
@@ -301,7 +337,7 @@ def _cmd_run(args) -> int:
     from dem.runner import RunInterrupted, run_case
 
     case = load_case(args.case_dir)
-    out = Path(args.out) if args.out else case.directory / "output"
+    out = _writable_path("--out", args.out or case.directory / "output", folder=True)
     try:
         summary = run_case(
             case, out, cycles=args.cycles, threads=args.threads, progress=True,
@@ -344,7 +380,7 @@ def _cmd_dem_sweep(args) -> int:
     from dem.sweep import parse_set, run_sweep
 
     sets = [parse_set(text) for text in args.set]
-    out = Path(args.out) if args.out else Path(args.case_dir) / "sweep"
+    out = _writable_path("--out", args.out or Path(args.case_dir) / "sweep", folder=True)
     result = run_sweep(
         args.case_dir, sets, out, scheduler=args.scheduler, workers=args.workers,
         threads=args.threads or 1, cycles=args.cycles, frames=args.frames,
@@ -371,7 +407,7 @@ def _cmd_dem_optimum(args) -> int:
         except ValueError:
             raise InputError("--bounds", args.bounds, "LO:HI, two numbers") from None
         bounds = (lo, hi)
-    out = Path(args.out) if args.out else Path(args.case_dir) / "optimum"
+    out = _writable_path("--out", args.out or Path(args.case_dir) / "optimum", folder=True)
     result = bulk_optimum(
         args.case_dir, args.over, args.hold, out, bounds=bounds, tolerance=args.tolerance,
         max_runs=args.max_runs, scheduler=args.scheduler, workers=args.workers,
@@ -396,7 +432,8 @@ def _cmd_report(args) -> int:
     for out in args.out_dirs:
         if not (Path(out) / "summary.json").is_file():
             raise InputError("OUT", out, "a run output folder holding summary.json")
-    paths = make_report([Path(p) for p in args.out_dirs], Path(args.dest) if args.dest else None)
+    dest = _writable_path("--dest", args.dest, folder=True) if args.dest else None
+    paths = make_report([Path(p) for p in args.out_dirs], dest)
     for path in paths:
         print(f"wrote {path}")
     return 0
@@ -421,9 +458,7 @@ def _cmd_export_liggghts(args) -> int:
             "deck cannot detect (a dem run of the case reports its number in summary.json)",
         )
     settle_steps = round(settle / (case.drive.frequency * timestep))
-    out = Path(args.out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("OUT_DIR", str(out), "a folder for the deck (this is a file)")
+    out = _writable_path("OUT_DIR", args.out_dir, folder=True)
     written = [n for n in (DECK_NAME, CLUMP_FILE, MESH_FILE) if (out / n).exists()]
     if written and not args.overwrite:
         raise InputError(

@@ -273,3 +273,49 @@ def test_export_of_an_auto_settle_case_asks_for_the_settle_cycles(capsys, tmp_pa
     )  # fmt: skip
     assert code == 0, err
     assert (tmp_path / "b" / "in.dem").is_file()
+
+
+@pytest.mark.parametrize(
+    "argv, key, cause",
+    [
+        (["pointmass", "sweep", "--throw-number", "1", "--angle", "20", "--friction", "0.3",
+          "--out", "{tmp}"], "--out", "this is a folder"),
+        (["pointmass", "optimum", "--over", "angle", "--hold", "throw_number",
+          "--throw-number", "1.5", "--friction", "0.3", "--plot", "{tmp}/missing/o.png"],
+         "--plot", "does not exist"),
+        (["report", "{case}/output", "--dest", "{file}"], "--dest", "this is a file"),
+        (["run", "{case}", "--out", "{file}"], "--out", "this is a file"),
+        (["run", "{case}", "--out", "{tmp}/" + "x" * 300], "--out", "a path the system allows"),
+        (["run", "{case}", "--out", "{file}/sub"], "--out", "is a file"),
+    ],
+)  # fmt: skip
+def test_bad_output_paths_are_refused_by_key_before_any_work(capsys, tmp_path, argv, key, cause):
+    """Output paths that cannot be written end in exit 2 and one line naming the option and
+    the cause, before anything is computed or written (no traceback)."""
+    case_dir = tmp_path / "case"
+    case_dir.mkdir()
+    (case_dir / "case.toml").write_text(SMALL_CASE)
+    (case_dir / "output").mkdir()
+    (case_dir / "output" / "summary.json").write_text("{}")
+    user_file = tmp_path / "notes.txt"
+    user_file.write_text("mine\n")
+    args = [a.format(tmp=tmp_path, case=case_dir, file=user_file) for a in argv]
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    code, out, err = run(capsys, *args)
+    assert code == 2, err
+    assert err.count("\n") == 1 and key in err and cause in err, err
+    assert "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+    assert user_file.read_text() == "mine\n"
+
+
+def test_a_read_only_output_folder_is_refused_by_key(capsys, tmp_path):
+    import os
+
+    if os.geteuid() == 0:
+        pytest.skip("root writes into read-only folders")
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    code, _, err = run(capsys, "pointmass", "sweep", "--throw-number", "1", "--angle", "20",
+                       "--friction", "0.3", "--out", str(locked / "s.csv"))  # fmt: skip
+    assert code == 2 and "--out" in err and "not writable" in err
