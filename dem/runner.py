@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
+import re
 import signal
 import sys
 import time
@@ -152,10 +152,32 @@ def _prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
             f"holds an earlier run ({', '.join(earlier)}): choose another --out, pass "
             "--overwrite to replace it, or --resume an interrupted run",
         )
+    for name in earlier:  # all checked before anything is removed
+        if (out_dir / name).is_dir() != (name == FRAMES_DIR):
+            raise InputError(
+                "--out", str(out_dir), f"a run folder ({name} here is not what dem writes "
+                "under that name: move it away)",
+            )  # fmt: skip
     for name in earlier:
         path = out_dir / name
-        shutil.rmtree(path) if path.is_dir() else path.unlink()
+        _remove_frames(path) if name == FRAMES_DIR else path.unlink()
     out_dir.mkdir(parents=True, exist_ok=True)
+
+
+#: The files dem writes into ``frames/`` (:mod:`dem.io.vtk`); nothing else there is removed.
+FRAME_FILE_RE = re.compile(r"(particles_\d{6}|trough_\d{6}|trough)\.vtp")
+
+
+def _remove_frames(frames: Path) -> None:
+    """Remove the VTK files dem wrote into ``frames``, by name.
+
+    Anything else stays, and so does the folder if anything is left in it.
+    """
+    for path in frames.iterdir():
+        if path.is_file() and FRAME_FILE_RE.fullmatch(path.name):
+            path.unlink()
+    if not any(frames.iterdir()):
+        frames.rmdir()
 
 
 class _SignalFlag:

@@ -31,7 +31,14 @@ def test_refuses_to_overwrite_an_earlier_run(tmp_path):
         run_case(case, out, progress=False)
     assert "--overwrite" in str(info.value) and "summary.json" in str(info.value)
     assert (out / "summary.json").read_bytes() == before  # nothing lost
+    # --overwrite removes what dem wrote, by name: a user's file in frames/ stays
+    (out / "frames" / "my_notes.txt").write_text("mine\n")
+    stale = out / "frames" / "particles_000999.vtp"
+    stale.write_bytes(b"old frame")
     run_case(case, out, progress=False, overwrite=True)
+    assert (out / "frames" / "my_notes.txt").read_text() == "mine\n"
+    assert not stale.exists()
+    assert (out / "frames" / "particles_000000.vtp").is_file()
     with pytest.raises(InputError, match="--resume"):
         run_case(case, tmp_path / "empty", progress=False, resume=True)
 
