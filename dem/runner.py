@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import signal
 import sys
@@ -203,7 +204,59 @@ class _SignalFlag:
             signal.signal(sig, handler)
 
 
-def run_case(
+#: Lock file a run holds in its output folder while it writes there (``fcntl.flock``).
+LOCK_FILE = ".dem-run.lock"
+
+
+def _lock_output(out_dir: Path):
+    """Hold an exclusive lock on ``out_dir``: a second run into the same folder is refused.
+
+    Returns the open lock file (closing it releases the lock; the kernel releases it too if the
+    process dies, so a killed run leaves no stale lock).
+    """
+    import fcntl
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / LOCK_FILE
+    while True:
+        stream = open(path, "a+")  # noqa: SIM115 - held until the run ends
+        try:
+            fcntl.flock(stream, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            stream.seek(0)
+            holder = stream.read().strip() or "another process"
+            stream.close()
+            raise InputError(
+                "--out", str(out_dir), f"a folder no other run is writing ({holder} is writing "
+                "it now: wait for it, or choose another --out)",
+            ) from None  # fmt: skip
+        try:  # the run before may have removed the file between our open and our lock
+            if os.stat(path).st_ino == os.fstat(stream.fileno()).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        stream.close()
+    stream.seek(0)
+    stream.truncate()
+    stream.write(f"dem run pid {os.getpid()}\n")
+    stream.flush()
+    return stream
+
+
+def run_case(case, out_dir: Path, **kwargs) -> dict:
+    """Run ``case`` into ``out_dir`` holding the folder's lock; see :func:`_run_case`."""
+    out_dir = Path(out_dir)
+    if kwargs.get("resume"):  # checked before the folder is touched
+        _prepare_output(out_dir, overwrite=False, resume=True)
+    lock = _lock_output(out_dir)
+    try:
+        return _run_case(case, out_dir, **kwargs)
+    finally:
+        (out_dir / LOCK_FILE).unlink(missing_ok=True)  # still held: no one else has it
+        lock.close()
+
+
+def _run_case(
     case,
     out_dir: Path,
     *,

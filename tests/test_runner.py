@@ -104,6 +104,11 @@ def test_results_of_a_killed_run_are_readable(tmp_path):
     out = tmp_path / "killed"
     proc = _start(case_dir, out)
     _wait_for_frames(out, 5, proc)
+    # the folder is locked while the run writes it: a second run is refused, nothing touched
+    with pytest.raises(InputError, match="is writing it now") as info:
+        run_case(load_case(case_dir), out, progress=False, overwrite=True)
+    assert f"pid {proc.pid}" in str(info.value)
+    assert (out / "results.h5").exists()
     proc.kill()  # SIGKILL: no handler runs
     proc.communicate(timeout=60)
     r = read_results(out / "results.h5")
@@ -112,6 +117,10 @@ def test_results_of_a_killed_run_are_readable(tmp_path):
     last = r["frames"][r["frame_count"] - 1]
     assert np.all(np.isfinite(last["positions"])) and last["positions"].shape == (120, 3)
     assert json.loads(json.dumps(r["case"]))["particles"]["count"] == 120
+    # a killed run leaves no stale lock (the kernel drops it with the process)
+    from dem.runner import _lock_output
+
+    _lock_output(out).close()
 
 
 @pytest.mark.parametrize("lab_frame", [False, True])
