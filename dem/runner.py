@@ -35,7 +35,7 @@ import numba
 import numpy as np
 
 from dem import config, measure, plan, setup
-from dem.errors import InputError
+from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
@@ -304,8 +304,22 @@ def _run_case(
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
 
+    fingerprint = _fingerprint(case)
     if resume:
-        state, loop = checkpoint_io.read(checkpoint)
+        try:
+            state, loop = checkpoint_io.read(checkpoint)
+        except Exception as exc:  # a truncated or foreign file: zip, npy, JSON or key errors
+            raise InputError(
+                "--resume", str(checkpoint), f"a readable checkpoint of an interrupted run "
+                f"({type(exc).__name__}: {exc}); start the run again without --resume",
+            ) from None  # fmt: skip
+        changed = _changes(loop.get("case"), fingerprint)
+        if changed:
+            raise InputError(
+                "--resume", str(checkpoint), "a checkpoint of the same case: it was made with "
+                + "; ".join(changed) + ". Resume with the case it was made with, or start "
+                "again with --overwrite",
+            )  # fmt: skip
         loop.setdefault("cycles", loop["total_cycles"] - (settle or 0))  # older checkpoints
         loop.setdefault("settle_cycles", settle)
         if loop["cycles"] != cycles:
@@ -314,7 +328,12 @@ def _run_case(
                 cycles,
                 f"the interrupted run has {loop['cycles']}: resume with the same",
             )
-        checkpoint_io.load_state(sim, state)
+        try:
+            checkpoint_io.load_state(sim, state)
+        except SimulationError as exc:
+            raise InputError(
+                "--resume", str(checkpoint), f"a checkpoint of this case: {exc}"
+            ) from None
         if sim.feeder is not None:
             sim.feeder.restore(loop["feeder"])
     else:
@@ -323,6 +342,7 @@ def _run_case(
         sim.start_drive()
         sim.stats[:] = 0.0
         loop = {
+            "case": fingerprint,
             "discharged_mark": 0.0,
             "cycle": 0,
             "chunk": 0,
@@ -449,6 +469,37 @@ def _warn_plan(estimate) -> None:
             plan.PlanWarning,
             stacklevel=3,
         )
+
+
+#: Case keys a resumed run may change: how long it runs and where its name comes from.
+RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
+
+
+def _fingerprint(case) -> dict:
+    """The resolved case as flat JSON data, {"table.key": value}: what a checkpoint records."""
+    flat: dict = {}
+
+    def walk(prefix: str, value) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(f"{prefix}.{k}" if prefix else k, v)
+        else:
+            flat[prefix] = value
+
+    walk("", json.loads(json.dumps(case.as_dict(), default=str)))
+    for key in RESUMABLE_KEYS:
+        flat.pop(key, None)
+    return flat
+
+
+def _changes(before: dict | None, now: dict) -> list[str]:
+    """Each key that differs, as "key = old (now new)"; none for a checkpoint without a record."""
+    if before is None:
+        return []
+    keys = sorted(set(before) | set(now))
+    return [
+        f"{k} = {before.get(k)!r} (now {now.get(k)!r})" for k in keys if before.get(k) != now.get(k)
+    ]
 
 
 def _checkpoint(path: Path, sim: Simulation, loop: dict) -> None:

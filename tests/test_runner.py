@@ -86,6 +86,19 @@ def test_interrupt_and_resume_is_bit_identical(tmp_path):
     assert "Traceback" not in err
     assert (out / "checkpoint.npz").exists() and not (out / "summary.json").exists()
 
+    # other physics is refused by name, before anything in the folder changes
+    saved = (out / "checkpoint.npz").read_bytes()
+    h5 = (out / "results.h5").read_bytes()
+    other = load_case(case_dir, overrides={"material.friction": 0.5})
+    with pytest.raises(InputError, match=r"material.friction = 0.35 \(now 0.5\)"):
+        run_case(other, out, progress=False, threads=1, resume=True)
+    # a truncated checkpoint is refused with its cause, and kept
+    (out / "checkpoint.npz").write_bytes(saved[: len(saved) // 2])
+    with pytest.raises(InputError, match="a readable checkpoint"):
+        run_case(case, out, progress=False, threads=1, resume=True)
+    (out / "checkpoint.npz").write_bytes(saved)
+    assert (out / "results.h5").read_bytes() == h5
+
     resumed = run_case(case, out, progress=False, threads=1, resume=True)
     assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
     assert resumed["steps"] == reference["steps"]
