@@ -346,7 +346,8 @@ def _cmd_run(args) -> int:
         )  # fmt: skip
     except RunInterrupted as stop:
         print(f"dem: stopped by {stop}", file=sys.stderr)
-        print(f"dem: continue with: dem run {args.case_dir} --resume", file=sys.stderr)
+        if stop.checkpoint is not None:
+            print(f"dem: continue with: dem run {args.case_dir} --resume", file=sys.stderr)
         return 128 + stop.signum
     keys = (
         "mean_velocity",

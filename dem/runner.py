@@ -53,12 +53,48 @@ RUN_OUTPUTS = (SUMMARY, RESULTS, CHECKPOINT, PVD_NAME, FRAMES_DIR)
 class RunInterrupted(Exception):
     """SIGINT/SIGTERM arrived; a checkpoint was written. ``signum`` says which."""
 
-    def __init__(self, signum: int, checkpoint: Path, cycle: int):
+    def __init__(self, signum: int, checkpoint: Path | None, cycle: int, phase: str = ""):
         self.signum = signum
         self.checkpoint = checkpoint
         self.cycle = cycle
         name = signal.Signals(signum).name
-        super().__init__(f"{name} at cycle {cycle}; checkpoint written to {checkpoint}")
+        if checkpoint is None:
+            super().__init__(
+                f"{name} while {phase}, before the drive started: no checkpoint (nothing worth "
+                "resuming: a new run fills again)"
+            )
+        else:
+            super().__init__(f"{name} at cycle {cycle}; checkpoint written to {checkpoint}")
+
+
+class _StopNow:
+    """SIGINT/SIGTERM before the drive starts: stop at once, no checkpoint.
+
+    While compiling, filling and settling a signal raises :class:`RunInterrupted` without a
+    checkpoint; ``phase`` names what was going on.
+
+    Python runs the handler between bytecodes, so a signal that arrives inside one compiled
+    kernel call is honoured when the call returns (settling calls them in 5 ms chunks).
+    """
+
+    def __init__(self):
+        self.phase = "compiling"
+        self._old: dict[int, object] = {}
+
+    def __enter__(self) -> _StopNow:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._old[sig] = signal.signal(sig, self._handle)
+            except ValueError:  # not the main thread: signals stay as they are
+                pass
+        return self
+
+    def _handle(self, signum, frame) -> None:
+        raise RunInterrupted(signum, None, 0, self.phase)
+
+    def __exit__(self, *exc) -> None:
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
 
 
 def _set_threads(threads: int | None) -> int:
@@ -296,8 +332,13 @@ def _run_case(
     estimate = plan.plan(case, threads=n_threads, cycles=cycles)
     if not resume:
         _warn_plan(estimate)
-    _compile_first(case, progress)
-    sim = setup.from_case(case)
+    with _StopNow() as stop:
+        _compile_first(case, progress)
+        stop.phase = "filling"
+        if progress:
+            print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
+                  flush=True)  # fmt: skip
+        sim = setup.from_case(case)
     if config.DEM_THREAD_GUARD and n_threads > 1:
         sim.guard = ThreadGuard(n_threads)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
@@ -338,8 +379,13 @@ def _run_case(
             sim.feeder.restore(loop["feeder"])
     else:
         t0 = time.perf_counter()
-        settle_time = sim.settle()
-        sim.start_drive()
+        with _StopNow() as stop:
+            stop.phase = "settling"
+            if progress:
+                print("dem: settling the fill (drive off, until at rest)", file=sys.stderr,
+                      flush=True)  # fmt: skip
+            settle_time = sim.settle()
+            sim.start_drive()
         sim.stats[:] = 0.0
         loop = {
             "case": fingerprint,

@@ -252,3 +252,23 @@ def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, 
     err = capsys.readouterr().err
     assert "compiling the DEM kernels" in err and "kernels compiled in" in err
     assert first["per_cycle_velocity"] == plain["per_cycle_velocity"]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_while_settling_stops_at_once_with_a_message(tmp_path, sig):
+    """Before the drive starts there is nothing worth a checkpoint: the run stops within about
+    a second, says so in one line, and exits 128 + signal, without a traceback or a checkpoint."""
+    bouncy = SMALL_CASE.replace("friction = 0.35", "friction = 0.35\nrestitution_normal = 0.9")
+    case_dir = write_case(tmp_path / "case", bouncy.replace("count = 120", "count = 400"))
+    out = tmp_path / "out"
+    proc = _start(case_dir, out)
+    while "settling" not in (line := proc.stderr.readline()):
+        assert line, "the run ended before it settled"
+    t0 = time.monotonic()
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - t0 < 5.0
+    assert proc.returncode == 128 + sig, err
+    assert "before the drive started" in err and "settling" in err
+    assert "Traceback" not in err and "--resume" not in err
+    assert not (out / "checkpoint.npz").exists()
