@@ -842,7 +842,8 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
 
     The periodic section must hold a grain and its skin twice over (the minimum image must be
     unique) and more than twice a clump's reach; a given ``run.timestep`` must lie within the
-    stability limit of the contact (:func:`dem.timestep.timestep_for`, no fill needed).
+    stability limit of the contact (:func:`dem.timestep.timestep_for`, no fill needed); and
+    ``output.frames_per_cycle`` must not exceed the time steps per cycle.
     """
     from dem import config
     from dem.timestep import timestep_for
@@ -857,8 +858,15 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
     if r_max is not None:
         skin = config.DEM_SKIN_FRACTION * r_max  # the Simulation's default skin
         check_section_length(length, r_max, skin, reach, source=str(case.source))
-    if case.run.timestep is not None:
-        timestep_for(case)
+    step = timestep_for(case)  # checks a given run.timestep against the limit
+    steps_per_cycle = 1.0 / (case.drive.frequency * step.dt)
+    if case.output.frames_per_cycle > steps_per_cycle:
+        raise table("output").error(
+            "frames_per_cycle",
+            case.output.frames_per_cycle,
+            f"<= the time steps per drive cycle, {math.floor(steps_per_cycle)} at dt = "
+            f"{step.dt:.4g} s (at most one frame a step)",
+        )
 
 
 def set_contact_keys(path: Path, values: dict[str, float], comment: str) -> str:

@@ -649,7 +649,8 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as err:
         where = f"{err.source}: " if err.source else ""
         # a positional argument (its metavar, upper case) is named as it is, not as an option
-        plain = err.source or err.key.startswith("--") or err.key.isupper()
+        # and a case key (table.key) as itself, not as an option that does not exist
+        plain = err.source or err.key.startswith("--") or err.key.isupper() or "." in err.key
         key = err.key if plain else _option_name(err.key)
         if err.value is None:
             print(f"dem: error: {where}missing {key}: {err.allowed}", file=sys.stderr)
