@@ -189,11 +189,29 @@ def _interpolate(series: list[list[float]], x: float, cheap: str = "low") -> tup
 # --- the pieces ---------------------------------------------------------------------------------
 
 
+#: Above twice this many grains the memory is extrapolated from this many and twice as many
+#: (every array is proportional to the count): a plan of 1e9 grains allocates nothing large.
+MEMORY_SAMPLE_GRAINS = 2000
+
+
 def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
     """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start).
 
     Several threads add the parallel pair loop's inbox (:meth:`dem.state.PairList.ensure_inbox`).
+    Measured by allocating the arrays (zeros: no page is touched) up to
+    2 :data:`MEMORY_SAMPLE_GRAINS` grains, and extrapolated linearly beyond.
     """
+    g1 = MEMORY_SAMPLE_GRAINS
+    if grains <= 2 * g1:
+        return _allocated_bytes(case, spheres, grains, threads)
+    per = spheres // grains
+    m1 = _allocated_bytes(case, g1 * per, g1, threads)
+    m2 = _allocated_bytes(case, 2 * g1 * per, 2 * g1, threads)
+    return int(m1 + (m2 - m1) * (grains - g1) / g1)
+
+
+def _allocated_bytes(case, spheres: int, grains: int, threads: int) -> int:
+    """The bytes of the state's arrays, allocated for ``grains`` grains of ``spheres``."""
     from dem.state import Bodies, PairList, Spheres
 
     total = 0

@@ -284,6 +284,8 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
     out_dir = Path(out_dir)
     if kwargs.get("resume"):  # checked before the folder is touched
         _prepare_output(out_dir, overwrite=False, resume=True)
+    n_threads = _set_threads(kwargs.get("threads"))
+    _check_memory(case, plan.plan(case, threads=n_threads, cycles=kwargs.get("cycles")))
     lock = _lock_output(out_dir)
     try:
         return _run_case(case, out_dir, **kwargs)
@@ -327,9 +329,9 @@ def _run_case(
     if cycles < 1:
         raise InputError("--cycles", cycles, "a whole number >= 1")
     out_dir = Path(out_dir)
-    _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     n_threads = _set_threads(threads)
     estimate = plan.plan(case, threads=n_threads, cycles=cycles)
+    _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     if not resume:
         _warn_plan(estimate)
     with _StopNow() as stop:
@@ -503,6 +505,18 @@ def _compile_first(case, progress: bool) -> None:
     if progress:
         print(f"dem: kernels compiled in {time.perf_counter() - t0:.0f} s", file=sys.stderr,
               flush=True)  # fmt: skip
+
+
+def _check_memory(case, estimate) -> None:
+    """Refuse a case whose state (the estimate ``dem plan`` prints) exceeds this machine."""
+    total = plan._physical_memory()
+    if total and estimate.memory_bytes > total:
+        raise InputError(
+            "particles.count", case.particles.count, f"a count whose state fits this machine: "
+            f"it needs {plan._size(estimate.memory_bytes)}, the machine has "
+            f"{plan._size(total)} (dem plan {case.name} says more)",
+            source=str(case.source),
+        )  # fmt: skip
 
 
 def _warn_plan(estimate) -> None:

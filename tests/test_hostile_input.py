@@ -97,3 +97,19 @@ def test_hostile_value_is_refused_with_one_line_and_nothing_written(
     assert "Traceback" not in err
     assert key in err, err
     assert not out.exists()
+
+
+def test_a_count_whose_state_exceeds_the_machine_is_refused_before_anything(tmp_path, capsys):
+    """count = 1e9 used to reserve 23 GB and start a fill that never ended: now the memory
+    estimate (dem plan's, extrapolated without allocating) refuses it at once."""
+    import time
+
+    case_dir = write_case(tmp_path / "case", _set(SMALL_CASE, "particles.count", "1000000000"))
+    out = tmp_path / "out"
+    t0 = time.monotonic()
+    code = main(["run", str(case_dir), "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.count("\n") == 1, err
+    assert "particles.count" in err and "fits this machine" in err
+    assert time.monotonic() - t0 < 30.0
+    assert not out.exists()
