@@ -717,6 +717,11 @@ def _build_grain(particles: ParticlesSpec, density: float, t: Table) -> Particle
         else:
             grain = shapes.clump_from_file(particles.template, mass=mass, density=rho)
     except InputError as exc:
+        if exc.source:  # inside the template file: name it, and the key that points to it
+            raise InputError(
+                exc.key, exc.value, f"{exc.allowed} (the clump template of particles.template "
+                f"in {t.source})", source=exc.source,
+            ) from exc  # fmt: skip
         raise t.error(exc.key, exc.value, exc.allowed) from exc
     return replace(particles, grain=grain)
 

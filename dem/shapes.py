@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dem import quantities
 from dem.config import DEM_CONTACT_MASS_MARGIN
 from dem.errors import InputError
 
@@ -319,6 +320,14 @@ def clump(
         raise InputError("radii", radii.tolist(), "finite centres and radii > 0 (m)")
     if (mass is None) == (density is None):
         raise InputError("mass, density", (mass, density), "exactly one of the two given")
+    gaps = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
+    same = np.argwhere(np.triu(gaps <= 1e-9 * radii.max(), k=1))
+    if len(same):
+        i, j = (int(k) for k in same[0])
+        raise InputError(
+            f"spheres {i + 1} and {j + 1}", centres[i].tolist(),
+            "distinct member spheres (these two have the same centre: a sphere listed twice)",
+        )  # fmt: skip
     props = union_properties(centres, radii, rtol=rtol)
     if mass is not None:
         _check_positive("mass", mass, "kg")
@@ -389,13 +398,21 @@ def clump_from_file(
             raise InputError(
                 f"line {number}", content, "four finite numbers 'x y z r' (m)", source=str(path)
             )
-        if values[3] <= 0.0:
-            raise InputError(f"line {number}: r", values[3], "> 0 (m)", source=str(path))
+        if not quantities.QUANTITIES["radius"].accepts(values[3] * scale):
+            raise InputError(
+                f"line {number}: r", values[3], quantities.QUANTITIES["radius"].allowed,
+                source=str(path),
+            )  # fmt: skip
         rows.append(values)
     if not rows:
         raise InputError("spheres", 0, "at least one line 'x y z r' (m)", source=str(path))
     data = scale * np.array(rows)
-    return clump(data[:, :3], data[:, 3], mass=mass, density=density, name=path.stem)
+    try:
+        return clump(data[:, :3], data[:, 3], mass=mass, density=density, name=path.stem)
+    except InputError as exc:
+        if exc.key in ("mass", "density", "mass, density"):  # the caller's, not the file's
+            raise
+        raise InputError(exc.key, exc.value, exc.allowed, source=str(path)) from None
 
 
 def write_clump(path: str | Path, template: Template, *, frame: str = "body") -> None:

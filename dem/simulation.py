@@ -36,6 +36,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import SimulationError
+from dem.kernels.contacts import P_BETA
 from dem.kernels.integrate import (
     DONE,
     advance,
@@ -423,10 +424,19 @@ class Simulation:
             self.run(chunk)
             if self.rms_speed() < threshold:
                 return self.time - start
+        causes = []
+        incline = math.degrees(math.atan2(-self.gravity[0], -self.gravity[2]))
+        if abs(incline) > 0.05:
+            causes.append(f"the trough is inclined {incline:.3g} deg: grains that roll (spheres "
+                          "without material.rolling_friction) or slide (beyond the friction "
+                          "angle) never rest on it")  # fmt: skip
+        if self.law.params[P_BETA] > -1.0 + 1e-12:  # not critically damped: eps_n > 0
+            causes.append("raise the normal damping (lower material.restitution_normal)")
+        causes.append("check the contact stiffness and the time step")
         raise SimulationError(
             f"the fill did not come to rest within {max_time} s of simulated time (rms speed "
-            f"{self.rms_speed():.3g} m/s > {threshold:.3g} m/s); raise "
-            "material.restitution_normal damping (lower eps_n) or check the contact stiffness"
+            f"{self.rms_speed():.3g} m/s > {threshold:.3g} m/s); "
+            + "; ".join(causes)
             + (
                 "; in a finite feeder, spheres that roll freely keep running out over the "
                 "discharge edge: give material.rolling_friction (e.g. 0.05)"

@@ -282,6 +282,28 @@ def test_screw_and_clump_build_their_template(tmp_path):
     assert grain.mass == pytest.approx(case.material.density * grain.volume)
 
 
+@pytest.mark.parametrize(
+    "text, key, allowed",
+    [
+        ("0 0 0 0.002\n0 0 0 0.002\n", "spheres 1 and 2", "listed twice"),
+        ("0 0 0 1e-12\n", "line 1: r", "[1e-7, 10] m"),
+        ("0 0 0 0.002\n0 0 zero 0.002\n", "line 2", "four finite numbers"),
+    ],
+)
+def test_a_bad_clump_template_is_named_with_its_file_and_line(tmp_path, text, key, allowed):
+    """Errors inside a template name the template file (not case.toml), the line or members,
+    and the case key that points to it; 1e-12 m spheres (a segfault before) are refused."""
+    (tmp_path / "t.spheres").write_text(text)
+    clump = with_changes(
+        {"particles.radius": None, "particles.shape": "clump", "particles.template": "t.spheres"}
+    )
+    with pytest.raises(InputError) as info:
+        load_case(write_case(tmp_path, clump))
+    message = str(info.value)
+    assert info.value.key == key and allowed in message
+    assert str(tmp_path / "t.spheres") in message and "particles.template" in message
+
+
 # --- bad input -----------------------------------------------------------------------------------
 
 BAD = [

@@ -232,3 +232,20 @@ def test_wall_lever_arm_moves_the_contact_point_into_the_overlap():
         assert ft[0] == pytest.approx(out["surface"][0][0] * lever / (r - delta), rel=1e-12)
         assert ft[0] != 0.0
     assert out["surface"][1][1] != out["midpoint"][1][1]
+
+
+def test_settle_failure_names_the_incline_and_only_advises_eps_n_where_it_helps():
+    """A fill that cannot rest on an incline (spheres roll) says so; with eps_n = 0 already
+    (critical damping) it does not advise lowering eps_n."""
+    from dem.errors import SimulationError
+
+    rng = np.random.default_rng(3)
+    x, r = _packing(rng, n=10)
+    spheres = Spheres.create(x, r, 2500.0)
+    law = _law("linear", _coefficients("linear", 0.0, 0.3, 0.0, False, "coulomb"))
+    sim = Simulation(spheres, Trough(LENGTH, WIDTH, inclination=math.radians(20.0)), law, 1e-5)
+    with pytest.raises(SimulationError) as info:
+        sim.settle(max_time=0.01)
+    message = str(info.value)
+    assert "inclined 20 deg" in message
+    assert "restitution_normal" not in message
