@@ -319,3 +319,14 @@ def test_a_read_only_output_folder_is_refused_by_key(capsys, tmp_path):
     code, _, err = run(capsys, "pointmass", "sweep", "--throw-number", "1", "--angle", "20",
                        "--friction", "0.3", "--out", str(locked / "s.csv"))  # fmt: skip
     assert code == 2 and "--out" in err and "not writable" in err
+
+
+def test_a_sweep_too_large_for_memory_is_refused_before_computing(capsys, tmp_path):
+    """7e7 points died with MemoryError; a sweep over 1e6 points (or one axis of that many)
+    is refused at once, naming the options and the size."""
+    code, _, err = run(capsys, "pointmass", "sweep", "--throw-number", "0.5:3:0.0001",
+                       "--angle", "1:89:0.01", "--friction", "0.3")  # fmt: skip
+    assert code == 2 and err.count("\n") == 1 and "at most 1000000 points" in err, err
+    code, _, err = run(capsys, "pointmass", "sweep", "--throw-number", "0.5:3:1e-9",
+                       "--angle", "20", "--friction", "0.3")  # fmt: skip
+    assert code == 2 and "--throw-number" in err and "at most 1000000 values" in err, err

@@ -60,6 +60,11 @@ _COLUMNS = SWEEPABLE + (
 )
 
 
+#: Most points one sweep (or one axis of it) computes: 1e6 points take minutes and their
+#: arrays a few hundred MB; 7e7 ran out of memory.
+MAX_SWEEP_POINTS = 1_000_000
+
+
 def sweep(
     throw_number,
     angle,
@@ -78,6 +83,15 @@ def sweep(
     for name, axis in zip(SWEEPABLE, axes, strict=True):
         if axis.ndim != 1 or axis.size == 0:
             raise InputError(name, axis.tolist(), "a number or a non-empty 1-D list of numbers")
+    points = math.prod(axis.size for axis in axes)
+    if points > MAX_SWEEP_POINTS:
+        sizes = " x ".join(
+            f"{name} {axis.size}" for name, axis in zip(SWEEPABLE, axes, strict=True)
+        )
+        raise InputError(
+            ", ".join(SWEEPABLE), points, f"a sweep of at most {MAX_SWEEP_POINTS} points "
+            f"({sizes}): sweep fewer values, or in parts",
+        )  # fmt: skip
     grid = np.meshgrid(*axes, indexing="ij")
     result = velocities(*(g.ravel() for g in grid))
     result["regime"] = np.array([REGIMES[c] for c in result["regime_code"]])
@@ -328,19 +342,28 @@ def _golden_max(func, a, b, iterations=40):
 
 def parse_values(text: str, key: str) -> list[float]:
     """Parse ``"1.8"``, ``"0.25,0.35,0.6"`` or ``"start:stop:step"`` (stop included)."""
+    count = 0
     try:
         if ":" in text:
             parts = [float(p) for p in text.split(":")]
             if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
                 raise ValueError
+            if not all(math.isfinite(v) for v in parts):
+                raise ValueError
             start, stop, step = parts
             count = int(math.floor((stop - start) / step + 1e-9)) + 1
-            return [start + i * step for i in range(count)]
-        return [float(p) for p in text.split(",")]
+        else:
+            return [float(p) for p in text.split(",")]
     except ValueError:
         raise InputError(
             key, text, "a number, a comma list, or start:stop:step with step > 0"
         ) from None
+    if count > MAX_SWEEP_POINTS:
+        raise InputError(
+            key, text, f"at most {MAX_SWEEP_POINTS} values ({count} asked: a larger step, or "
+            "a narrower range)",
+        )  # fmt: skip
+    return [start + i * step for i in range(count)]
 
 
 __all__ = [
