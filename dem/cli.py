@@ -660,6 +660,12 @@ def main(argv: list[str] | None = None) -> int:
     except SimulationError as err:
         print(f"dem: simulation stopped: {err}", file=sys.stderr)
         return 1
+    except OSError as err:  # disk full, permission, a vanished folder: one line, no traceback
+        where = err.filename or "an output file"
+        cause = err.strerror or str(err) or type(err).__name__
+        print(f"dem: error: cannot write or read {where}: {cause}; what was written before it "
+              "stays readable (results.h5 up to its last cycle)", file=sys.stderr)  # fmt: skip
+        return 1
     except KeyboardInterrupt:
         print("dem: interrupted", file=sys.stderr)
         return 130

@@ -272,3 +272,32 @@ def test_a_signal_while_settling_stops_at_once_with_a_message(tmp_path, sig):
     assert "before the drive started" in err and "settling" in err
     assert "Traceback" not in err and "--resume" not in err
     assert not (out / "checkpoint.npz").exists()
+
+
+def test_a_full_disk_ends_in_one_line_and_a_readable_results_file(tmp_path, monkeypatch, capsys):
+    """ENOSPC while a run writes its cycles: exit 1, one line naming the cause, no traceback,
+    and results.h5 holds the cycles written before (the writer flushes each record)."""
+    import errno
+
+    from dem.cli import main
+    from dem.io.hdf5 import ResultsWriter
+
+    calls = {"n": 0}
+    original = ResultsWriter.append_cycle
+
+    def full_after_two(self, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 2:
+            raise OSError(errno.ENOSPC, "No space left on device", str(self.path))
+        return original(self, **kwargs)
+
+    monkeypatch.setattr(ResultsWriter, "append_cycle", full_after_two)
+    case_dir = _case_dir(tmp_path, cycles=2)
+    out = tmp_path / "out"
+    code = main(["run", str(case_dir), "--out", str(out), "--threads", "1"])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "No space left on device" in err and "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("dem: error: cannot write")
+    r = read_results(out / "results.h5")
+    assert len(r["cycles"]["mean_velocity"]) == 2
