@@ -448,7 +448,12 @@ def _cmd_export_liggghts(args) -> int:
     case = load_case(args.case_dir)
     # dem's own time step (explicit or automatic, checked against the stability limit), so
     # the deck integrates with the step a dem run of this case would take
-    timestep = timestep_for(case, timestep=args.timestep).dt
+    try:
+        timestep = timestep_for(case, timestep=args.timestep).dt
+    except InputError as exc:
+        if args.timestep is None:
+            raise
+        raise InputError("--timestep", args.timestep, exc.allowed) from None  # not the case's
     steps = int(round(case.run.cycles / case.drive.frequency / timestep))
     settle = args.settle_cycles if args.settle_cycles is not None else case.run.settle_cycles
     if settle is None:

@@ -208,6 +208,12 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
         capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d2"), "--timestep", "-1"
     )
     assert code == 2 and "timestep" in err
+    # a step above the stability limit is named as the option given, not as a case key
+    code, _, err = run(
+        capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d3"), "--timestep", "0.01"
+    )
+    assert code == 2 and "--timestep = 0.01" in err and "stability limit" in err, err
+    assert not (tmp_path / "d3").exists()
 
 
 def test_export_refuses_to_replace_a_deck_without_overwrite(capsys, tmp_path):
