@@ -282,6 +282,9 @@ def _lock_output(out_dir: Path):
 def run_case(case, out_dir: Path, **kwargs) -> dict:
     """Run ``case`` into ``out_dir`` holding the folder's lock; see :func:`_run_case`."""
     out_dir = Path(out_dir)
+    cycles = kwargs.get("cycles")
+    if cycles is not None and int(cycles) < 1:  # checked before the folder is made
+        raise InputError("--cycles", cycles, "a whole number >= 1")
     if kwargs.get("resume"):  # checked before the folder is touched
         _prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(kwargs.get("threads"))
