@@ -67,36 +67,6 @@ class RunInterrupted(Exception):
             super().__init__(f"{name} at cycle {cycle}; checkpoint written to {checkpoint}")
 
 
-class _StopNow:
-    """SIGINT/SIGTERM before the drive starts: stop at once, no checkpoint.
-
-    While compiling, filling and settling a signal raises :class:`RunInterrupted` without a
-    checkpoint; ``phase`` names what was going on.
-
-    Python runs the handler between bytecodes, so a signal that arrives inside one compiled
-    kernel call is honoured when the call returns (settling calls them in 5 ms chunks).
-    """
-
-    def __init__(self):
-        self.phase = "compiling"
-        self._old: dict[int, object] = {}
-
-    def __enter__(self) -> _StopNow:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                self._old[sig] = signal.signal(sig, self._handle)
-            except ValueError:  # not the main thread: signals stay as they are
-                pass
-        return self
-
-    def _handle(self, signum, frame) -> None:
-        raise RunInterrupted(signum, None, 0, self.phase)
-
-    def __exit__(self, *exc) -> None:
-        for sig, handler in self._old.items():
-            signal.signal(sig, handler)
-
-
 def _set_threads(threads: int | None) -> int:
     n = config.default_threads() if threads is None else int(threads)
     n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))
@@ -238,6 +208,23 @@ class _SignalFlag:
     def __exit__(self, *exc) -> None:
         for sig, handler in self._old.items():
             signal.signal(sig, handler)
+
+
+class _StopNow(_SignalFlag):
+    """SIGINT/SIGTERM before the drive starts: stop at once, no checkpoint.
+
+    While compiling, filling and settling a signal raises :class:`RunInterrupted` without a
+    checkpoint; ``phase`` names what was going on. Python runs the handler between bytecodes,
+    so a signal that arrives inside one compiled kernel call is honoured when the call returns
+    (settling calls them in 5 ms chunks).
+    """
+
+    def __init__(self):
+        super().__init__()
+        self.phase = "compiling"
+
+    def _handle(self, signum, frame) -> None:
+        raise RunInterrupted(signum, None, 0, self.phase)
 
 
 #: Lock file a run holds in its output folder while it writes there (``fcntl.flock``).
