@@ -276,12 +276,15 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
         _prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(kwargs.get("threads"))
     _check_memory(case, plan.plan(case, threads=n_threads, cycles=kwargs.get("cycles")))
+    made = not out_dir.exists()
     lock = _lock_output(out_dir)
     try:
         return _run_case(case, out_dir, **kwargs)
     finally:
         (out_dir / LOCK_FILE).unlink(missing_ok=True)  # still held: no one else has it
         lock.close()
+        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()  # a run refused before it wrote anything leaves no folder
 
 
 def _run_case(

@@ -301,3 +301,23 @@ def test_a_full_disk_ends_in_one_line_and_a_readable_results_file(tmp_path, monk
     assert err.strip().splitlines()[-1].startswith("dem: error: cannot write")
     r = read_results(out / "results.h5")
     assert len(r["cycles"]["mean_velocity"]) == 2
+
+
+def test_a_run_refused_inside_leaves_no_empty_output_folder(tmp_path):
+    """An error raised after the folder was locked (here a fill that cannot come to rest, while
+    settling) leaves no folder behind that was not there before."""
+    from dem.errors import SimulationError
+
+    bad = SMALL_CASE.replace("friction = 0.35", "friction = 0.35\nrestitution_normal = 0.95")
+    case = load_case(write_case(tmp_path / "case", bad))
+    out = tmp_path / "out"
+    import dem.config as config
+
+    old = config.DEM_SETTLE_MAX_TIME
+    config.DEM_SETTLE_MAX_TIME = 0.002  # the fill cannot rest in 2 ms
+    try:
+        with pytest.raises(SimulationError, match="did not come to rest"):
+            run_case(case, out, progress=False, threads=1, frames=False)
+    finally:
+        config.DEM_SETTLE_MAX_TIME = old
+    assert not out.exists()
