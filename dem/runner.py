@@ -205,6 +205,10 @@ class _SignalFlag:
     def _handle(self, signum, frame) -> None:
         self.signum = signum
 
+    def is_set(self) -> bool:
+        """Whether a signal has arrived."""
+        return self.signum is not None
+
     def __exit__(self, *exc) -> None:
         for sig, handler in self._old.items():
             signal.signal(sig, handler)
@@ -436,9 +440,14 @@ def _run_case(
                 end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
                 n = end - sim.step_index
                 t1 = time.perf_counter()
-                sim.run(n)
+                # a signal is honoured within DEM_CHECK_INTERVAL steps, mid-frame too; not in a
+                # feeder, whose exchanges fall on chunks counted from the call's first step
+                done = sim.run(n, stop=None if sim.feeder is not None else flag.is_set)
                 loop["wall_time_s"] += time.perf_counter() - t1
-                loop["steps"] += n
+                loop["steps"] += done
+                if done < n:  # stopped mid-frame: resume computes the rest from step_index
+                    _checkpoint(checkpoint, sim, loop)
+                    raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
                 if frames:
                     _write_frame(sim, vtk, results)
                     loop["h5_frames"] += 1

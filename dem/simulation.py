@@ -310,13 +310,15 @@ class Simulation:
             self.pairs.grow(status, need)
             resume = True
 
-    def run(self, n_steps: int) -> None:
+    def run(self, n_steps: int, stop=None) -> int:
         """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``.
 
         A finite feeder exchanges grains (discharge, and feed once the drive is on) after every
-        chunk of at most :attr:`dem.feeder.Feeder.interval` steps.
+        chunk of at most :attr:`dem.feeder.Feeder.interval` steps. ``stop`` (a callable, or
+        None) is asked after every chunk; when it returns True the run returns early. Returns
+        the steps advanced.
         """
-        left = int(n_steps)
+        left = total = int(n_steps)
         guard = self.guard
         feeder = self.feeder
         limit = config.DEM_CHECK_INTERVAL
@@ -337,6 +339,9 @@ class Simulation:
             if feeder is not None:
                 feeder.exchange(self)
             self.check()
+            if left > 0 and stop is not None and stop():
+                break
+        return total - left
 
     # --- diagnostics -------------------------------------------------------------------------
 

@@ -321,3 +321,44 @@ def test_a_run_refused_inside_leaves_no_empty_output_folder(tmp_path):
     finally:
         config.DEM_SETTLE_MAX_TIME = old
     assert not out.exists()
+
+
+def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_for_bit(
+    tmp_path, monkeypatch
+):
+    """A slow frame no longer hides a signal: the loop asks after every DEM_CHECK_INTERVAL
+    steps, checkpoints mid-frame, and the resumed run is bit-identical to an uninterrupted one."""
+    from dem import config
+    from dem.runner import RunInterrupted
+    from dem.simulation import Simulation
+
+    text = SMALL_CASE.replace("frames_per_cycle = 3", "frames_per_cycle = 1")
+    case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
+    reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
+
+    original, calls = Simulation.check, {"n": 0}
+
+    def check_then_signal(self):
+        original(self)
+        if self.drive_on:
+            calls["n"] += 1
+            if calls["n"] == 7:  # 5 checks a frame of 2457 steps: the 7th is inside the 2nd
+                os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(Simulation, "check", check_then_signal)
+    out = tmp_path / "interrupted"
+    with pytest.raises(RunInterrupted) as info:
+        run_case(case, out, progress=False, threads=1)
+    monkeypatch.setattr(Simulation, "check", original)
+    assert info.value.checkpoint is not None
+    steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
+    state = np.load(out / "checkpoint.npz")
+    step, drive_start = (int(v) for v in state["sim.counters"][:2])
+    assert (step - drive_start) % steps_per_frame != 0  # stopped mid-frame
+    assert (step - drive_start) % steps_per_frame % config.DEM_CHECK_INTERVAL == 0
+    resumed = run_case(case, out, progress=False, threads=1, resume=True)
+    assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
+    assert resumed["steps"] == reference["steps"]
+    a = read_results(tmp_path / "straight" / "results.h5")
+    b = read_results(out / "results.h5")
+    np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
