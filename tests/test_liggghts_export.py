@@ -329,6 +329,11 @@ def test_mesh_box_holds_the_mesh_and_the_fill_region_lies_inside_the_pan(mesh_de
     grain = case.particles.grain
     volume = case.particles.count * grain.volume
     assert volume / ((x1 - x0) * (y1 - y0) * (z1 - z0)) <= 0.08 + 1e-12
+    # the region holds the clumps' centres of mass (any orientation): their members reach the
+    # block grown by the grain's reach across y and downwards, which must clear the mesh
+    reach = grain.bounding_radius
+    y0, y1, z0 = y0 - reach, y1 + reach, z0 - reach
+    assert "all_in no orientation random" in " ".join(fix(c, "ins"))
     # every point of the block's surface lies on the grains' side of the mesh, clear of it
     # (an independent check: dem.mesh's closest-point kernels, not strip_top)
     mesh.index(float(np.max(hi - lo)))
@@ -418,7 +423,10 @@ def test_feeder_deck_has_the_back_wall_open_edge_and_one_grain_per_feed(tmp_path
     assert rate == case.feeder.feed_rate
     assert rate * every * dt == pytest.approx(grain_mass(case), rel=1e-3)
     [zone] = [a for a in c["region"] if a[0] == "feedzone"]
-    assert float(zone[2]) == 0.0 and float(zone[3]) == case.feeder.feed_length
+    # the zone holds centres of mass, a reach clear of the back wall, as dem.feeder places them
+    assert float(zone[2]) == pytest.approx(reach)
+    assert float(zone[3]) == pytest.approx(case.feeder.feed_length - reach)
+    assert "all_in no orientation random" in " ".join(feed)
     assert feed[feed.index("region") + 1] == "feedzone"
     assert fix(c, "balance")[2] == "print"
 

@@ -24,7 +24,9 @@ periodic over x in [0, length], which the mesh spans, and reaches
 the triangles across the periodic boundary itself (ghost elements); a sphere rolling across
 x = 0 on the U pan keeps its speed and height to all printed digits (checked by hand with
 LIGGGHTS 3.8). ``insert/pack`` checks new grains against each other (``overlapcheck``) and,
-with ``all_in``, keeps their bounding spheres inside the region, but not against a mesh, so
+with ``all_in``, keeps spheres inside the region (clumps are inserted at random orientations
+with their centres of mass in a region inset by their reach: :func:`_placement`), but not
+against a mesh, so
 the insertion block must itself clear the mesh: :func:`mesh_fill_block` takes the block over
 the pan with the largest cross-section below the mesh's top whose sides and floor stay a
 neighbour skin away from every triangle, and the column above it is as tall as the grains need
@@ -123,8 +125,8 @@ BALANCE_FILE = "balance.txt"
 SKIN_FRACTION = 0.5
 #: Solid volume fraction of the loose column the spheres are inserted into.
 FILL_VOLUME_FRACTION = 0.2
-#: The same for clumps: ``insert/pack`` (random orientations, ``all_in``) placed only 174 of
-#: 200 screws of ``cases/screw-trough`` at 0.14 and all of them at 0.10.
+#: The same for clumps: ``insert/pack`` (``all_in``) placed only 174 of 200 screws of
+#: ``cases/screw-trough`` at 0.14 and all of them at 0.10 (and at 0.08 with random orientations).
 FILL_VOLUME_FRACTION_CLUMPS = 0.08
 #: A feeder's fill column is shorter (fill in [reach, L - reach]); its loose fraction is scaled.
 FEEDER_FILL_SCALE = 0.6
@@ -405,6 +407,26 @@ def _drive_variables(d, gx0: float, gz0: float) -> list[str]:
     ]
 
 
+def _placement(case: Case) -> str:
+    """The insert fixes' placement keywords: spheres ``all_in yes``, clumps ``all_in no``.
+
+    Clumps get ``orientation random`` in a region inset by their reach (:func:`write_deck`).
+
+    LIGGGHTS 3.8's insert fixes default to the template's orientation (``quat_random_`` is false
+    in ``FixInsert``): without ``orientation random`` every screw starts with its axis along x,
+    and such a bed conveyed 8 % faster than dem's randomly oriented one
+    (validation/liggghts-screws, part D). Their ``all_in`` keeps a sphere of the template's
+    bounding radius inside the region, but about the point where the clump's centre of mass is
+    then put (``ParticleToInsertMultisphere::check_near_set_x_v_omega``), not about the
+    bounding sphere's centre: a rotated screw's tip reached past the side walls and 2 of 200
+    screws were deleted at once. The inset region holds the centre of mass instead, so every
+    member stays inside at any orientation.
+    """
+    if case.particles.shape == "sphere":
+        return " all_in yes"
+    return " all_in no orientation random"
+
+
 def _feeder_lines(
     case: Case,
     timestep: float,
@@ -438,6 +460,13 @@ def _feeder_lines(
     exchange = max(1, round(EXCHANGE_FRACTION / (d.frequency * timestep)))
     grain = grain_mass_of(case)
     every = max(exchange, round(grain / (f.feed_rate * timestep))) if f.feed_rate > 0 else 0
+    placement = _placement(case)
+    p = case.particles
+    if p.shape == "sphere":  # all_in keeps the sphere in the zone
+        x0, x1 = 0.0, f.feed_length
+    else:  # the zone holds centres of mass (_placement), as dem's feed does
+        reach = p.grain.bounding_radius
+        x0, x1 = reach, max(f.feed_length - reach, reach + 1e-6)
     lines = [
         "# finite feeder: grains fed at the back; a sphere past x = L is deleted (lost)",
         "variable charge equal ${natoms0}",
@@ -445,12 +474,12 @@ def _feeder_lines(
     fed = "0"
     if f.feed_rate > 0.0:
         lines += [
-            f"region feedzone block 0.0 {_fmt(f.feed_length)} {_fmt(fill_y[0])} "
+            f"region feedzone block {_fmt(x0)} {_fmt(x1)} {_fmt(fill_y[0])} "
             f"{_fmt(fill_y[1])} {_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
             f"fix feed all insert/rate/region seed {s_feed} distributiontemplate pdd "
             f"nparticles INF massrate {_fmt(f.feed_rate)} insert_every {every} "
             f"start {drive_start + every} "
-            "overlapcheck yes all_in yes vel constant 0.0 0.0 0.0 region feedzone",
+            f"overlapcheck yes{placement} vel constant 0.0 0.0 0.0 region feedzone",
         ]
         fed = "$(f_feed[1])"
     lines += [
@@ -569,6 +598,7 @@ def write_deck(
         thermo_every = max(1, round(steps_per_cycle))
 
     material_lines, model, settings = _contact_block(case, grain_mass)
+    placement = _placement(case)
 
     # loose insertion column and a box tall enough that thrown grains never leave it
     if p.shape == "sphere":
@@ -602,9 +632,19 @@ def write_deck(
         ]
     feeder = case.feeder
     reach = p.radius if p.shape == "sphere" else p.grain.bounding_radius
+    if p.shape != "sphere":  # the region holds centres of mass (_placement)
+        fill_y, fill_z0 = (fill_y[0] + reach, fill_y[1] - reach), fill_z0 + reach
     # a feeder fills [reach, L - reach] as dem does (dem.setup), clear of the back wall and edge
     fill_x = (0.0, t.length) if feeder is None else (reach, t.length - reach)
     fill_width = fill_y[1] - fill_y[0]
+    if fill_width <= 0.0:
+        raise InputError(
+            "trough.width" if t.mesh is None else "trough.mesh",
+            t.width if t.mesh is None else str(t.mesh),
+            f"room across y for a grain's reach of {reach:g} m either side of its centre of "
+            "mass (LIGGGHTS's insertion region)",
+            source,
+        )
     fill_length = fill_x[1] - fill_x[0]
     if feeder is not None:  # insert/pack placed 43 of cases/feeder's 50 screws at 0.08
         fill_fraction *= FEEDER_FILL_SCALE
@@ -697,8 +737,8 @@ def write_deck(
         f"{_fmt(fill_y[0])} {_fmt(fill_y[1])} "
         f"{_fmt(fill_z0)} {_fmt(fill_z0 + fill_height)} units box",
         f"fix ins all insert/pack seed {s_insert} distributiontemplate pdd "
-        "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once overlapcheck yes all_in yes "
-        f"particles_in_region {n} region fill",
+        "maxattempt 1000 vel constant 0.0 0.0 0.0 insert_every once "
+        f"overlapcheck yes{placement} particles_in_region {n} region fill",
         *integrator,
         "",
         *velocity,
