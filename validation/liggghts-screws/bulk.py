@@ -59,12 +59,17 @@ def bulk_cases() -> dict:
     return out
 
 
-def bulk_liggghts(case, tag: str, dt: float) -> dict:
-    """LIGGGHTS on the case's deck; per-cycle means from blocks of frames_per_cycle windows."""
+def bulk_liggghts(case, tag: str, dt: float, edit=None) -> dict:
+    """LIGGGHTS on the case's deck; per-cycle means from blocks of frames_per_cycle windows.
+
+    ``edit``, if given, takes the deck's text and returns the text to run (extra output).
+    """
     f, fpc = case.drive.frequency, case.output.frames_per_cycle
     steps = round(case.run.cycles / f / dt)
     deck_dir = DECKS / f"bulk_{tag}"
     deck = write_deck(case, deck_dir, timestep=dt, steps=steps)
+    if edit is not None:
+        deck.write_text(edit(deck.read_text()))
     runs = [int(n) for n in RUN_RE.findall(deck.read_text())]
     if len(runs) != 3:
         raise SystemExit(f"{deck}: expected three 'run N' lines (fill, settle, measure): {runs}")
