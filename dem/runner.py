@@ -440,9 +440,10 @@ def _run_case(
                 end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
                 n = end - sim.step_index
                 t1 = time.perf_counter()
-                # a signal is honoured within DEM_CHECK_INTERVAL steps, mid-frame too; not in a
-                # feeder, whose exchanges fall on chunks counted from the call's first step
-                done = sim.run(n, stop=None if sim.feeder is not None else flag.is_set)
+                # a signal is honoured within DEM_CHECK_INTERVAL steps (a feeder's exchange
+                # interval, if shorter), mid-frame too: the run stops after a whole chunk, so the
+                # resumed call's chunks (and a feeder's exchanges) fall on the same steps
+                done = sim.run(n, stop=flag.is_set)
                 loop["wall_time_s"] += time.perf_counter() - t1
                 loop["steps"] += done
                 if done < n:  # stopped mid-frame: resume computes the rest from step_index

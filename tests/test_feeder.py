@@ -287,3 +287,46 @@ def test_a_feeder_run_stopped_by_sigterm_resumes_bit_for_bit(tmp_path):
     assert b["frame_count"] == a["frame_count"]
     np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
     np.testing.assert_array_equal(a["frames"][-1]["grain_id"], b["frames"][-1]["grain_id"])
+
+
+def test_a_signal_mid_frame_stops_a_feeder_there_and_it_resumes_bit_for_bit(tmp_path, monkeypatch):
+    """A feeder honours SIGTERM after any exchange chunk, not only at a frame's end: the
+    checkpoint lies inside a frame, and the resumed run feeds, discharges and conveys exactly
+    as an uninterrupted one (its chunks, and so its exchanges, fall on the same steps)."""
+    import os
+    import signal
+
+    from dem.runner import RunInterrupted
+    from dem.simulation import Simulation
+
+    text = FEEDER.replace("frames_per_cycle = 4", "frames_per_cycle = 1")
+    case = load_case(write_case(tmp_path / "case", text.replace("cycles = 5", "cycles = 3")))
+    reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
+    original, calls = Simulation.check, {"n": 0}
+
+    def check_then_signal(self):
+        original(self)
+        if self.drive_on:
+            calls["n"] += 1
+            if calls["n"] == 23:  # 16 exchange chunks a frame: inside the second frame
+                os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(Simulation, "check", check_then_signal)
+    out = tmp_path / "interrupted"
+    with pytest.raises(RunInterrupted) as info:
+        run_case(case, out, progress=False, threads=1)
+    monkeypatch.setattr(Simulation, "check", original)
+    assert info.value.checkpoint is not None
+    steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
+    state = np.load(out / "checkpoint.npz")
+    step, drive_start = (int(v) for v in state["sim.counters"][:2])
+    assert (step - drive_start) % steps_per_frame != 0  # stopped mid-frame
+    resumed = run_case(case, out, progress=False, threads=1, resume=True)
+    assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
+    assert resumed["steps"] == reference["steps"]
+    for key in ("discharge_rate_per_cycle", "grains_inserted", "grains_discharged"):
+        assert resumed["feeder"][key] == reference["feeder"][key]
+    a = read_results(tmp_path / "straight" / "results.h5")
+    b = read_results(out / "results.h5")
+    np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
+    np.testing.assert_array_equal(a["frames"][-1]["grain_id"], b["frames"][-1]["grain_id"])
