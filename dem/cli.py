@@ -14,6 +14,7 @@ from pathlib import Path
 
 from dem import __version__
 from dem.errors import InputError, SimulationError
+from dem.io.files import replace_file, replace_text
 from dem.quantities import QUANTITIES
 
 EXIT_USAGE = 2
@@ -480,7 +481,6 @@ def _cmd_export_liggghts(args) -> int:
 
 def _cmd_calibrate(args) -> int:
     import datetime
-    import os
 
     from dem.calibrate import calibrate
     from dem.case import CASE_FILE, load_case, set_contact_keys
@@ -535,16 +535,14 @@ def _cmd_calibrate(args) -> int:
     )
     original = source.with_name(CASE_FILE + ".orig")
     if not original.exists():
-        original.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+        replace_text(original, source.read_text(encoding="utf-8"))
         print(f"kept the previous file as {original}")
-    tmp = source.with_name(CASE_FILE + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    try:
+
+    def write_checked(tmp):
+        tmp.write_text(text, encoding="utf-8")
         load_case(tmp)  # never replace a case with one that does not load
-    except InputError:
-        tmp.unlink()
-        raise
-    os.replace(tmp, source)
+
+    replace_file(source, write_checked)
     print(f"wrote {source} ([contact] tangential_stiffness_ratio, tangential_damping_ratio)")
     return 0 if cal.reachable else 1
 

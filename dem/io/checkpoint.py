@@ -14,12 +14,12 @@ truncated checkpoint in place of a good one.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
 from dem.errors import SimulationError
+from dem.io.files import replace_file
 from dem.kernels.forces import N_WALLS
 from dem.state import PairList
 
@@ -103,9 +103,7 @@ def write(path: Path, sim, loop: dict) -> None:
     """Write ``sim``'s state and the caller's ``loop`` position (JSON-serialisable) to ``path``."""
     state = state_dict(sim)
     state[LOOP_KEY] = np.array(json.dumps(loop))
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, **state)
-    os.replace(tmp, path)
+    replace_file(path, lambda tmp: np.savez(tmp, **state), suffix=".tmp.npz")
 
 
 def read(path: Path) -> tuple[dict[str, np.ndarray], dict]:

@@ -59,8 +59,13 @@ such a viewer sees the file as it was when it opened it.
 
 from __future__ import annotations
 
+import contextlib
 import datetime
+import errno
 import json
+import os
+import re
+import shutil
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -71,6 +76,9 @@ from dem.errors import InputError
 from dem.provenance import git_commit, package_versions  # package_versions: re-exported too
 
 FORMAT_VERSION = 2
+#: Free bytes results.h5 keeps in reserve beyond a write's own data (HDF5's metadata and chunk
+#: allocation): below it a write is refused rather than risked (:func:`_writing`).
+HDF5_FREE_MARGIN = 1 << 20
 #: The layout of runs whose grain count changes (ragged frames).
 RAGGED_VERSION = 3
 #: Layout versions :func:`read_results` understands.
@@ -126,7 +134,7 @@ class ResultsWriter:
         if resume_at is not None:
             self._resume(*resume_at)
             return
-        with h5py.File(self.path, "w", locking=False) as f:
+        with _writing(self.path, "w") as f:
             f.attrs["format_version"] = int(format_version)
             f.attrs["seed"] = int(seed)
             f.attrs["timestep"] = float(timestep)
@@ -165,7 +173,7 @@ class ResultsWriter:
                 f"{sorted(self._cycle_keys)}"
             )
         row = self._n_cycles
-        with h5py.File(self.path, "a", locking=False) as f:
+        with _writing(self.path, "a") as f:
             g = f["cycles"]
             if self._cycle_keys is None:
                 for k, v in values.items():
@@ -238,7 +246,8 @@ class ResultsWriter:
                 f"{None if q is None else q.shape}"
             )
         k = self._n_frames
-        with h5py.File(self.path, "a", locking=False) as f:
+        need = pos.nbytes + vel.nbytes + cc.nbytes + (0 if q is None else q.nbytes)
+        with _writing(self.path, "a", need) as f:
             g = f["frames"]
             if self._n_spheres is None:
                 if radius is None:
@@ -304,7 +313,8 @@ class ResultsWriter:
         q = None if orientation is None else np.asarray(orientation, dtype=np.float64)
         k = self._n_frames
         opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
-        with h5py.File(self.path, "a", locking=False) as f:
+        need = sum(a.nbytes for a in rows.values()) + (0 if q is None else q.nbytes)
+        with _writing(self.path, "a", need) as f:
             g = f["frames"]
             if "start" not in g:
                 for name, data in rows.items():
@@ -355,7 +365,7 @@ class ResultsWriter:
 
     def _resume(self, n_cycles: int, n_frames: int) -> None:
         """Reopen an interrupted file, trimmed back to its first n_cycles rows and n_frames."""
-        with h5py.File(self.path, "a", locking=False) as f:
+        with _writing(self.path, "a") as f:
             version = int(f.attrs.get("format_version", -1))
             expected = RAGGED_VERSION if self.ragged else FORMAT_VERSION
             if version != expected:
@@ -402,7 +412,7 @@ class ResultsWriter:
     def close(self) -> Path:
         """Mark the file complete; further appends raise. Returns the path."""
         if not self._closed:
-            with h5py.File(self.path, "a", locking=False) as f:
+            with _writing(self.path, "a") as f:
                 f.attrs["complete"] = True
             self._closed = True
         return self.path
@@ -473,6 +483,43 @@ class Frames:
                 "grain_index": g["grain_id"][()],
                 "orientation": g["orientation"][i] if "orientation" in g else None,
             }
+
+
+@contextlib.contextmanager
+def _writing(path: Path, mode: str, need: int = 0):
+    """``h5py.File(path, mode)`` whose write failures raise OSError naming ``path``.
+
+    A write that fails inside HDF5 (a full disk) leaves the library unable to close the file:
+    measured on a 300 kB tmpfs, h5py printed "Exception ignored" tracebacks and the process
+    segfaulted at exit. So the free space is checked first: with less than ``need`` bytes plus
+    :data:`HDF5_FREE_MARGIN` free, OSError(ENOSPC) is raised before the file is opened and
+    results.h5 stays as its last complete write left it. Should the disk fill between the check
+    and the write (another process), HDF5's RuntimeError, whose text carries the system's errno
+    ("errno = 28, error message = 'No space left on device'"), becomes the same OSError.
+    """
+    path = Path(path)
+    free = shutil.disk_usage(path.parent).free
+    if free < need + HDF5_FREE_MARGIN:
+        raise OSError(
+            errno.ENOSPC,
+            f"{os.strerror(errno.ENOSPC)} ({free} bytes free; dem stops writing results.h5 "
+            f"below {need + HDF5_FREE_MARGIN} so that it stays readable)",
+            str(path),
+        )
+    try:
+        with h5py.File(path, mode, locking=False) as f:
+            yield f
+    except (OSError, RuntimeError) as err:
+        raise _as_os_error(err, path) from err
+
+
+def _as_os_error(err: Exception, path: Path) -> OSError:
+    code = err.errno if isinstance(err, OSError) and err.errno else None
+    if code is None:
+        found = re.search(r"errno = (\d+)", str(err))
+        code = int(found.group(1)) if found else errno.EIO
+    message = os.strerror(code) if code != errno.EIO else str(err).splitlines()[0]
+    return OSError(code, message, str(path))
 
 
 def read_results(path: Path) -> dict:

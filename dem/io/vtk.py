@@ -41,6 +41,7 @@ Scale Array ``radius`` and Scale Factor 2 (the unit glyph has radius 0.5), or
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 from pathlib import Path
@@ -49,6 +50,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import pyvista as pv
 
+from dem.io.files import replace_file, replace_text
 from dem.trough import Trough
 
 PVD_NAME = "particles.pvd"
@@ -256,7 +258,7 @@ class VTKSeriesWriter:
 
         index = len(self._entries)
         p_name = f"particles_{index:06d}.vtp"
-        mesh.save(self.frames_dir / p_name, binary=True, compression="zlib")
+        save_vtp(mesh, self.frames_dir / p_name)
         t_name = self._write_trough(index, shift)
         self._entries.append((float(time), p_name, t_name))
         self._write_pvd()
@@ -277,15 +279,13 @@ class VTKSeriesWriter:
         """Write the trough of frame ``index`` if it needs a file of its own; returns its name."""
         if not self.lab_frame:
             if not self._trough_written:
-                self._trough_mesh.save(
-                    self.frames_dir / TROUGH_FILE, binary=True, compression="zlib"
-                )
+                save_vtp(self._trough_mesh, self.frames_dir / TROUGH_FILE)
                 self._trough_written = True
             return TROUGH_FILE
         name = f"trough_{index:06d}.vtp"
         moved = self._trough_mesh.copy(deep=True)
         moved.points = self._trough_mesh.points + shift.reshape(1, 3)
-        moved.save(self.frames_dir / name, binary=True, compression="zlib")
+        save_vtp(moved, self.frames_dir / name)
         return name
 
     def _write_pvd(self) -> None:
@@ -299,9 +299,42 @@ class VTKSeriesWriter:
                 file = quoteattr(f"{FRAMES_DIR}/{name}")
                 lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" file={file}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
-        tmp = self.pvd_path.with_name(self.pvd_path.name + ".tmp")
-        tmp.write_text("\n".join(lines), encoding="ascii")
-        os.replace(tmp, self.pvd_path)
+        replace_text(self.pvd_path, "\n".join(lines), encoding="ascii")
+
+
+def save_vtp(mesh: pv.PolyData, path: Path) -> None:
+    """Write ``mesh`` as a binary, zlib-compressed .vtp file, whole or not at all.
+
+    pyvista's ``save`` ignores the VTK writer's result: on a full disk it printed VTK's error
+    and left a truncated frame that the collection then listed. Here a failed write raises
+    OSError naming the file (errno ENOSPC on a full disk), VTK's own message is kept off the
+    terminal, and the file is written beside its name and renamed (:mod:`dem.io.files`).
+    """
+    from vtkmodules.vtkCommonCore import vtkObject
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    def write(tmp: Path) -> None:
+        writer = vtkXMLPolyDataWriter()  # a fresh one: VTK aborts when a failed one is reused
+        writer.SetFileName(str(tmp))
+        writer.SetInputData(mesh)
+        writer.SetDataModeToBinary()
+        writer.SetCompressorTypeToZLib()
+        shown = vtkObject.GetGlobalWarningDisplay()
+        vtkObject.GlobalWarningDisplayOff()
+        try:
+            ok = writer.Write()
+        finally:
+            vtkObject.SetGlobalWarningDisplay(shown)
+        if not ok:
+            code = writer.GetErrorCode()  # the system's errno for a failed write (28: ENOSPC)
+            system = 0 < code < 4096
+            raise OSError(
+                code if system else errno.EIO,
+                os.strerror(code) if system else f"VTK's writer failed (error code {code})",
+                str(tmp),
+            )
+
+    replace_file(path, write)
 
 
 def _check(a, shape: tuple[int, ...], name: str) -> np.ndarray:
