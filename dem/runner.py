@@ -279,7 +279,9 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
     if kwargs.get("resume"):  # checked before the folder is touched
         _prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(kwargs.get("threads"))
-    _check_memory(case, plan.plan(case, threads=n_threads, cycles=kwargs.get("cycles")))
+    estimate = plan.plan(case, threads=n_threads, cycles=kwargs.get("cycles"))
+    _check_memory(case, estimate)
+    _check_duration(case, estimate)
     made = not out_dir.exists()
     lock = _lock_output(out_dir)
     try:
@@ -518,6 +520,24 @@ def _check_memory(case, estimate) -> None:
             "particles.count", case.particles.count, f"a count whose state fits this machine: "
             f"it needs {plan._size(estimate.memory_bytes)}, the machine has "
             f"{plan._size(total)} (dem plan {case.name} says more)",
+            source=str(case.source),
+        )  # fmt: skip
+
+
+#: A run the plan estimates at more than this many seconds is refused at load (a year).
+MAX_RUN_SECONDS = 365.25 * 86400.0
+
+
+def _check_duration(case, estimate) -> None:
+    """Refuse a case whose steps (the estimate ``dem plan`` prints) would take over a year."""
+    if estimate.wall_time_s > MAX_RUN_SECONDS:
+        raise InputError(
+            "run.cycles", estimate.cycles,
+            f"a run this machine finishes within a year: {estimate.steps:.3g} steps "
+            f"(dt = {estimate.timestep:.3g} s, {estimate.steps_per_cycle:.3g} a cycle) of "
+            f"{estimate.spheres} spheres would take about "
+            f"{plan._duration(estimate.wall_time_s)}; fewer cycles or grains, or a longer step "
+            f"(a softer contact, larger grains) shorten it (dem plan {case.name} says more)",
             source=str(case.source),
         )  # fmt: skip
 

@@ -362,3 +362,20 @@ def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_
     a = read_results(tmp_path / "straight" / "results.h5")
     b = read_results(out / "results.h5")
     np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
+
+
+def test_a_run_that_would_take_years_is_refused_at_load_with_the_figure(tmp_path, capsys):
+    """The steps are estimated from the case alone (dem plan's estimate): 1e7 cycles of the
+    stiffest contact allowed would take years, so dem run refuses it, naming the steps and the
+    time, before anything is written."""
+    from dem.cli import main
+
+    text = SMALL_CASE.replace("cycles = 6", "cycles = 10000000")
+    case_dir = write_case(tmp_path / "case", text.replace("youngs_modulus = 5.0e7",
+                                                          "youngs_modulus = 1.0e13"))  # fmt: skip
+    out = tmp_path / "out"
+    code = main(["run", str(case_dir), "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "run.cycles = 10000000" in err and "steps" in err and "years" in err
+    assert not out.exists()
