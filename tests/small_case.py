@@ -40,3 +40,26 @@ def write_case(directory: Path, text: str = SMALL_CASE) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "case.toml").write_text(text)
     return directory
+
+
+def sigterm_at_check(monkeypatch, n: int) -> None:
+    """Make the n-th instability check with the drive on send this process SIGTERM.
+
+    The checks come every DEM_CHECK_INTERVAL steps (a feeder's exchange interval, if shorter),
+    so a test can place the signal inside a frame. ``monkeypatch.undo()`` restores them.
+    """
+    import os
+    import signal
+
+    from dem.simulation import Simulation
+
+    original, calls = Simulation.check, {"n": 0}
+
+    def check_then_signal(self):
+        original(self)
+        if self.drive_on:
+            calls["n"] += 1
+            if calls["n"] == n:
+                os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(Simulation, "check", check_then_signal)

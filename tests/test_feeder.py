@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from small_case import write_case
+from small_case import sigterm_at_check, write_case
 
 from dem import setup
 from dem.case import load_case
@@ -293,29 +293,17 @@ def test_a_signal_mid_frame_stops_a_feeder_there_and_it_resumes_bit_for_bit(tmp_
     """A feeder honours SIGTERM after any exchange chunk, not only at a frame's end: the
     checkpoint lies inside a frame, and the resumed run feeds, discharges and conveys exactly
     as an uninterrupted one (its chunks, and so its exchanges, fall on the same steps)."""
-    import os
-    import signal
 
     from dem.runner import RunInterrupted
-    from dem.simulation import Simulation
 
     text = FEEDER.replace("frames_per_cycle = 4", "frames_per_cycle = 1")
     case = load_case(write_case(tmp_path / "case", text.replace("cycles = 5", "cycles = 3")))
     reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
-    original, calls = Simulation.check, {"n": 0}
-
-    def check_then_signal(self):
-        original(self)
-        if self.drive_on:
-            calls["n"] += 1
-            if calls["n"] == 23:  # 16 exchange chunks a frame: inside the second frame
-                os.kill(os.getpid(), signal.SIGTERM)
-
-    monkeypatch.setattr(Simulation, "check", check_then_signal)
+    sigterm_at_check(monkeypatch, 23)  # 16 exchange chunks a frame: inside the second frame
     out = tmp_path / "interrupted"
     with pytest.raises(RunInterrupted) as info:
         run_case(case, out, progress=False, threads=1)
-    monkeypatch.setattr(Simulation, "check", original)
+    monkeypatch.undo()
     assert info.value.checkpoint is not None
     steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
     state = np.load(out / "checkpoint.npz")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from small_case import SMALL_CASE, write_case
+from small_case import SMALL_CASE, sigterm_at_check, write_case
 
 from dem.case import load_case
 from dem.errors import InputError
@@ -330,26 +330,16 @@ def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_
     steps, checkpoints mid-frame, and the resumed run is bit-identical to an uninterrupted one."""
     from dem import config
     from dem.runner import RunInterrupted
-    from dem.simulation import Simulation
 
     text = SMALL_CASE.replace("frames_per_cycle = 3", "frames_per_cycle = 1")
     case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
     reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
 
-    original, calls = Simulation.check, {"n": 0}
-
-    def check_then_signal(self):
-        original(self)
-        if self.drive_on:
-            calls["n"] += 1
-            if calls["n"] == 7:  # 5 checks a frame of 2457 steps: the 7th is inside the 2nd
-                os.kill(os.getpid(), signal.SIGTERM)
-
-    monkeypatch.setattr(Simulation, "check", check_then_signal)
+    sigterm_at_check(monkeypatch, 7)  # 5 checks a frame of 2457 steps: the 7th is inside the 2nd
     out = tmp_path / "interrupted"
     with pytest.raises(RunInterrupted) as info:
         run_case(case, out, progress=False, threads=1)
-    monkeypatch.setattr(Simulation, "check", original)
+    monkeypatch.undo()
     assert info.value.checkpoint is not None
     steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
     state = np.load(out / "checkpoint.npz")

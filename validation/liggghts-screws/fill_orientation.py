@@ -126,24 +126,30 @@ def dem_from_bed(case, bed: np.ndarray, cycles: int) -> dict:
         r = quat_to_matrix(b.q[i])
         b.ang_mom[i] = r @ (b.moments[i] * (r.T @ omega[i]))
     b.place(sim.spheres)
-    sim.start_drive()
-    per_cycle, height, order_x = [], [], []
-    period = sim.trough.period
-    for c in range(cycles):
-        z, s = order_of_sim(sim)
-        height.append(z)
-        order_x.append(s)
-        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
-        sim.stats[:] = 0.0
-        sim.run(end - sim.step_index)
-        per_cycle.append(sim.cycle_velocity())
     return {
         "fit_residual_max_m": resid,
         "member_spin_spread_rad_s": spread,
-        "per_cycle_velocity": per_cycle,
-        "height": height,
-        "order_x": order_x,
+        **drive_cycles(sim, 0, cycles),
     }
+
+
+def drive_cycles(sim, settle: int, cycles: int) -> dict:
+    """Drive on at phase 0; ``settle`` unmeasured cycles, then per measured cycle the velocity
+    and, at its start, the bed's height and order."""
+    sim.start_drive()
+    period = sim.trough.period
+    per_cycle, height, order_x = [], [], []
+    for c in range(settle + cycles):
+        if c >= settle:
+            z, s = order_of_sim(sim)
+            height.append(z)
+            order_x.append(s)
+        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
+        sim.stats[:] = 0.0
+        sim.run(end - sim.step_index)
+        if c >= settle:
+            per_cycle.append(sim.cycle_velocity())
+    return {"per_cycle_velocity": per_cycle, "height": height, "order_x": order_x}
 
 
 def order_of_sim(sim) -> tuple[float, float]:
@@ -157,21 +163,7 @@ def dem_own_fill(case, cycles: int) -> dict:
     """dem from its own fill and settling (part A): per-cycle velocity and order per cycle."""
     sim = setup.from_case(case)
     sim.settle()
-    sim.start_drive()
-    period = sim.trough.period
-    per_cycle, height, order_x = [], [], []
-    settle = case.run.settle_cycles
-    for c in range(settle + cycles):
-        if c >= settle:
-            z, s = order_of_sim(sim)
-            height.append(z)
-            order_x.append(s)
-        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
-        sim.stats[:] = 0.0
-        sim.run(end - sim.step_index)
-        if c >= settle:
-            per_cycle.append(sim.cycle_velocity())
-    return {"per_cycle_velocity": per_cycle, "height": height, "order_x": order_x}
+    return drive_cycles(sim, case.run.settle_cycles, cycles)
 
 
 def summary(v) -> dict:
