@@ -68,6 +68,9 @@ DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 DEM_GROWTH_FACTOR = 1.5
 #: Instability checks run every this many steps.
 DEM_CHECK_INTERVAL = 500
+#: A run that can be stopped (SIGINT/SIGTERM) checks at least this often, s: chunks shorten
+#: when 500 steps take longer (large scenes).
+DEM_STOP_LATENCY_S = 0.5
 #: Largest overlap allowed, as a fraction of the smaller radius, before the run is stopped.
 DEM_MAX_OVERLAP_FRACTION = 0.1
 #: A grain whose speed exceeds this factor times the largest speed the drive and gravity can

@@ -442,9 +442,9 @@ def _run_case(
                 end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
                 n = end - sim.step_index
                 t1 = time.perf_counter()
-                # a signal is honoured within DEM_CHECK_INTERVAL steps (a feeder's exchange
-                # interval, if shorter), mid-frame too: the run stops after a whole chunk, so the
-                # resumed call's chunks (and a feeder's exchanges) fall on the same steps
+                # a signal is honoured within DEM_CHECK_INTERVAL steps or DEM_STOP_LATENCY_S,
+                # mid-frame too (a feeder: within its exchange interval): the run stops after a
+                # whole chunk, so a resumed feeder's exchanges fall on the same steps
                 done = sim.run(n, stop=flag.is_set)
                 loop["wall_time_s"] += time.perf_counter() - t1
                 loop["steps"] += done

@@ -133,6 +133,7 @@ class Simulation:
         self.forces_valid = False
         #: A :class:`dem.threads.ThreadGuard` (the runner sets one for runs on several threads).
         self.guard = None
+        self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
     # --- stepping ---------------------------------------------------------------------------
 
@@ -315,8 +316,9 @@ class Simulation:
 
         A finite feeder exchanges grains (discharge, and feed once the drive is on) after every
         chunk of at most :attr:`dem.feeder.Feeder.interval` steps. ``stop`` (a callable, or
-        None) is asked after every chunk; when it returns True the run returns early. Returns
-        the steps advanced.
+        None) is asked after every chunk; when it returns True the run returns early. Without a
+        feeder the chunks then shorten to about ``DEM_STOP_LATENCY_S`` of wall time each, from
+        the last chunk's speed. Returns the steps advanced.
         """
         left = total = int(n_steps)
         guard = self.guard
@@ -326,15 +328,21 @@ class Simulation:
             limit = min(limit, feeder.interval)
         while left > 0:
             chunk = min(left, limit)
+            if stop is not None and feeder is None and self._step_seconds > 0.0:
+                # a big scene asks ``stop`` about every DEM_STOP_LATENCY_S, not every 500 steps
+                # (a million spheres take a minute for those); a feeder keeps its exchange
+                # chunks, so that a resumed run exchanges on the same steps
+                chunk = min(chunk, max(1, int(config.DEM_STOP_LATENCY_S / self._step_seconds)))
             if feeder is not None:
                 self.stats[2] += chunk * self.total_mass
+            t0 = time.perf_counter()
             if guard is None:
                 self._advance(chunk)
             else:
                 threads = guard.choose()
-                t0 = time.perf_counter()
                 self._advance(chunk)
                 guard.record(threads, chunk, time.perf_counter() - t0)
+            self._step_seconds = (time.perf_counter() - t0) / chunk
             left -= chunk
             if feeder is not None:
                 feeder.exchange(self)

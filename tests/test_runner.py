@@ -369,3 +369,33 @@ def test_a_run_that_would_take_years_is_refused_at_load_with_the_figure(tmp_path
     assert code == 2 and len(err.splitlines()) == 1, err
     assert "run.cycles = 10000000" in err and "steps" in err and "years" in err
     assert not out.exists()
+
+
+def test_a_slow_scene_asks_for_a_stop_every_stop_latency_not_500_steps(tmp_path, monkeypatch):
+    """When 500 steps take long (a million spheres take about a minute), ``run`` shortens its
+    chunks to DEM_STOP_LATENCY_S of wall time from the last chunk's speed, so a signal is still
+    honoured within about that (issue 15: "within about a second in every phase")."""
+    from dem import config, setup
+    from dem.simulation import Simulation
+
+    case = load_case(write_case(tmp_path / "case", SMALL_CASE))
+    sim = setup.from_case(case)
+    per_step = 0.002  # s: 500 steps would take a second
+
+    def slow_advance(self, n):
+        time.sleep(per_step * n)
+        self.step_index += n
+
+    monkeypatch.setattr(Simulation, "_advance", slow_advance)
+    monkeypatch.setattr(Simulation, "check", lambda self: None)
+    monkeypatch.setattr(config, "DEM_STOP_LATENCY_S", 0.05)
+    asked = []
+
+    def stop():
+        asked.append(time.perf_counter())
+        return False
+
+    done = sim.run(1200, stop=stop)
+    assert done == 1200
+    gaps = np.diff(asked)
+    assert len(asked) > 10 and gaps.max() < 0.05 * 3  # after the first, full-length chunk
