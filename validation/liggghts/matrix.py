@@ -44,6 +44,7 @@ import json
 import math
 import os
 import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -473,6 +474,38 @@ def plot(rows: list[dict]) -> None:
     fig.suptitle("dem against LIGGGHTS-PUBLIC 3.8 and the point mass (error bars: correlated se)")
     fig.tight_layout()
     fig.savefig(HERE / "matrix.png", dpi=120)
+    plt.close(fig)
+
+    # dem - LIGGGHTS in % of LIGGGHTS, every point, against the 5 % band
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    for ax, shape in zip(axes, ("sphere", "screw"), strict=True):
+        sel = [r for r in rows if r["shape"] == shape]
+        for k, r in enumerate(sel):
+            x = k
+            lig = r["v_liggghts"]
+            for key, se_key, dx, style in (
+                ("eq_minus_L_percent", "se_dem_eq", -0.15, dict(c="C0", marker="s")),
+                ("default_minus_L_percent", "se_dem_default", 0.15, dict(c="C1", marker="^")),
+            ):
+                err = 100.0 * math.hypot(r[se_key], r["se_liggghts"]) / lig
+                ax.errorbar(x + dx, r[key], err, capsize=2, ls="none", **style)
+        ax.axhspan(-AGREE_PERCENT, AGREE_PERCENT, color="0.9", zorder=0)
+        ax.axhline(0.0, color="k", lw=0.8)
+        ax.set_xticks(range(len(sel)))
+        ax.set_xticklabels(
+            [f"{r['phi_deg']:g}/{r['gamma']:g}{'/up' if r['alpha_deg'] else ''}/"
+             f"{r['fill'][0]}" for r in sel], rotation=90, fontsize=7,
+        )  # fmt: skip
+        ax.set_title(f"{shape}s: phi / Gamma / fill (d deep, s shallow)", fontsize=10)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("dem - LIGGGHTS (% of LIGGGHTS)")
+    axes[0].errorbar([], [], [], c="C0", marker="s", ls="none", label="LIGGGHTS's conventions")
+    axes[0].errorbar([], [], [], c="C1", marker="^", ls="none", label="dem's defaults")
+    axes[0].legend(fontsize=8, loc="lower left")
+    fig.suptitle("dem against LIGGGHTS-PUBLIC 3.8 (grey: the 5 % band; bars: 1 combined se)")
+    fig.tight_layout()
+    fig.savefig(HERE / "difference.png", dpi=120)
+    plt.close(fig)
 
 
 def main(argv=None) -> int:
@@ -485,14 +518,14 @@ def main(argv=None) -> int:
     results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     results.setdefault("points", {})
     if not args.report_only:
-        results["provenance"] = {
-            "script": "validation/liggghts/matrix.py",
+        results.setdefault("invocations", []).append({
+            "command": "validation/liggghts/matrix.py " + " ".join(argv or sys.argv[1:]),
             "git_commit": provenance.git_commit(),
             "date": provenance.utc_now(),
             "cores": os.cpu_count(),
             "numba_threads": 1,
             "liggghts_ranks": 1,
-        }
+        })  # fmt: skip
         for p in points():
             p = dataclasses.replace(p, seed=args.seed)
             if args.only in p.name:
