@@ -302,6 +302,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scratch", default=str(HERE / "scratch"))
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--skip-liggghts", action="store_true")
+    ap.add_argument("--skip-dem", action="store_true",
+                    help="rerun LIGGGHTS only, keeping the case's earlier dem run")  # fmt: skip
     ap.add_argument(
         "--feed-at-trough-rest",
         action="store_true",
@@ -330,8 +332,13 @@ def main(argv=None) -> int:
                 "feed_rate": case.feeder.feed_rate,
                 "settle_cycles": case.run.settle_cycles,
                 "cycles": case.run.cycles,
-                "dem": run_dem(name, case, args),
             }
+            earlier = results["cases"].get(name, {})
+            if args.skip_dem and "dem" in earlier:
+                entry["dem"] = earlier["dem"]
+                entry["liggghts_rerun"] = "LIGGGHTS rerun with --skip-dem; dem's run kept"
+            else:
+                entry["dem"] = run_dem(name, case, args)
             if not args.skip_liggghts:
                 entry["liggghts"] = run_liggghts_case(name, case, args)
             compare(entry)
