@@ -35,8 +35,10 @@ at the loose fill fraction.
 Finite feeders (``[feeder]``, :mod:`dem.feeder`): the box is closed across y and z and open
 along x (``boundary f f f``) from a margin behind the back wall to the discharge edge x = L; a
 sphere whose centre passes L leaves the box and LIGGGHTS deletes it (``thermo_modify lost
-ignore``), as dem removes a grain whose centre of mass passes L (a clump's members leave one by
-one in LIGGGHTS; its discharge lags dem's by the time the clump takes to cross the edge). The
+ignore``), as dem removes a grain whose centre of mass passes L. A clump goes as a whole in
+LIGGGHTS, when its first member's centre passes L (``fix multisphere`` deletes a body that has
+lost an atom: the balance's sphere count stays a multiple of the members), so it leaves earlier
+than in dem, which waits for its centre of mass. The
 back wall is ``wall/gran primitive xplane 0.0``, with a mesh too, as dem's fourth flat wall. The
 fill is insert/pack in [reach, L - reach], as dem's. The feed is ``insert/rate/region``
 (:func:`_feeder_lines`): one grain every m / feed_rate into the zone 0 < x < ``feed_length``,
@@ -491,9 +493,9 @@ def _feeder_lines(
         "# finite feeder: back wall x = 0 (primitive, also with a mesh), open discharge edge",
         f"#   x = L (a sphere past it leaves the box and is deleted); feed {f.feed_rate} kg/s "
         f"into 0 < x < {f.feed_length} m at rest in the trough frame (dem: at rest in the lab);",
-        f"#   {BALANCE_FILE}: tau, spheres in the box, grains fed, initial charge. A clump's",
-        "#   members leave one by one as they pass the edge (dem removes the grain when its",
-        "#   centre of mass passes it)",
+        f"#   {BALANCE_FILE}: tau, spheres in the box, grains fed, initial charge. A clump is",
+        "#   deleted whole when its first member passes the edge (dem removes the grain when",
+        "#   its centre of mass passes it)",
     ]
     return lines, note
 
