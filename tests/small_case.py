@@ -63,3 +63,25 @@ def sigterm_at_check(monkeypatch, n: int) -> None:
                 os.kill(os.getpid(), signal.SIGTERM)
 
     monkeypatch.setattr(Simulation, "check", check_then_signal)
+
+
+def stop_mid_frame(case, out: Path, monkeypatch, check: int, timestep: float) -> int:
+    """Run ``case`` into ``out`` until SIGTERM at the ``check``-th instability check; assert the
+    run stopped with a checkpoint inside a frame; return the driven steps done into that frame."""
+    import numpy as np
+    import pytest
+
+    from dem.runner import RunInterrupted, run_case
+
+    sigterm_at_check(monkeypatch, check)
+    with pytest.raises(RunInterrupted) as info:
+        run_case(case, out, progress=False, threads=1)
+    monkeypatch.undo()
+    assert info.value.checkpoint is not None
+    steps_per_frame = round(1.0 / (case.drive.frequency * case.output.frames_per_cycle
+                                   * timestep))  # fmt: skip
+    state = np.load(out / "checkpoint.npz")
+    step, drive_start = (int(v) for v in state["sim.counters"][:2])
+    into = (step - drive_start) % steps_per_frame
+    assert into != 0  # stopped mid-frame
+    return into

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from small_case import sigterm_at_check, write_case
+from small_case import stop_mid_frame, write_case
 
 from dem import setup
 from dem.case import load_case
@@ -294,21 +294,12 @@ def test_a_signal_mid_frame_stops_a_feeder_there_and_it_resumes_bit_for_bit(tmp_
     checkpoint lies inside a frame, and the resumed run feeds, discharges and conveys exactly
     as an uninterrupted one (its chunks, and so its exchanges, fall on the same steps)."""
 
-    from dem.runner import RunInterrupted
-
     text = FEEDER.replace("frames_per_cycle = 4", "frames_per_cycle = 1")
     case = load_case(write_case(tmp_path / "case", text.replace("cycles = 5", "cycles = 3")))
     reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
-    sigterm_at_check(monkeypatch, 23)  # 16 exchange chunks a frame: inside the second frame
     out = tmp_path / "interrupted"
-    with pytest.raises(RunInterrupted) as info:
-        run_case(case, out, progress=False, threads=1)
-    monkeypatch.undo()
-    assert info.value.checkpoint is not None
-    steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
-    state = np.load(out / "checkpoint.npz")
-    step, drive_start = (int(v) for v in state["sim.counters"][:2])
-    assert (step - drive_start) % steps_per_frame != 0  # stopped mid-frame
+    # 16 exchange chunks a frame: the 23rd check is inside the second frame
+    stop_mid_frame(case, out, monkeypatch, 23, reference["timestep"])
     resumed = run_case(case, out, progress=False, threads=1, resume=True)
     assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
     assert resumed["steps"] == reference["steps"]

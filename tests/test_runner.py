@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from small_case import SMALL_CASE, sigterm_at_check, write_case
+from small_case import SMALL_CASE, stop_mid_frame, write_case
 
 from dem.case import load_case
 from dem.errors import InputError
@@ -329,23 +329,15 @@ def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_
     """A slow frame no longer hides a signal: the loop asks after every DEM_CHECK_INTERVAL
     steps, checkpoints mid-frame, and the resumed run is bit-identical to an uninterrupted one."""
     from dem import config
-    from dem.runner import RunInterrupted
 
     text = SMALL_CASE.replace("frames_per_cycle = 3", "frames_per_cycle = 1")
     case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
     reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
 
-    sigterm_at_check(monkeypatch, 7)  # 5 checks a frame of 2457 steps: the 7th is inside the 2nd
     out = tmp_path / "interrupted"
-    with pytest.raises(RunInterrupted) as info:
-        run_case(case, out, progress=False, threads=1)
-    monkeypatch.undo()
-    assert info.value.checkpoint is not None
-    steps_per_frame = round(1.0 / (case.drive.frequency * reference["timestep"]))
-    state = np.load(out / "checkpoint.npz")
-    step, drive_start = (int(v) for v in state["sim.counters"][:2])
-    assert (step - drive_start) % steps_per_frame != 0  # stopped mid-frame
-    assert (step - drive_start) % steps_per_frame % config.DEM_CHECK_INTERVAL == 0
+    # 5 checks a frame of 2457 steps: the 7th is inside the 2nd
+    into = stop_mid_frame(case, out, monkeypatch, 7, reference["timestep"])
+    assert into % config.DEM_CHECK_INTERVAL == 0
     resumed = run_case(case, out, progress=False, threads=1, resume=True)
     assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]
     assert resumed["steps"] == reference["steps"]
