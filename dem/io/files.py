@@ -28,15 +28,11 @@ def replace_file(path: Path, write: Callable[[Path], None], suffix: str = ".tmp"
     try:
         write(tmp)
         os.replace(tmp, path)
-    except OSError as err:
+    except BaseException as err:
         with contextlib.suppress(OSError):
             tmp.unlink()
-        if err.filename is None or Path(err.filename) == tmp:
+        if isinstance(err, OSError) and (err.filename is None or Path(err.filename) == tmp):
             raise OSError(err.errno, err.strerror or str(err), str(path)) from err
-        raise
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
         raise
 
 
