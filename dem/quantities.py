@@ -24,6 +24,12 @@ from dataclasses import dataclass
 
 from dem.errors import InputError
 
+#: Most member spheres one grain may have (a screw's head and shank spheres, a clump template's
+#: lines). It bounds the template's own work (pairwise checks and mass properties, quadratic in
+#: the count) and sets the smallest ``particles.max_bumpiness`` a screw may ask for; the
+#: resolution study (validation/speed_accuracy) uses 6 to 15.
+MAX_GRAIN_SPHERES = 1000
+
 
 @dataclass(frozen=True)
 class Quantity:
@@ -150,7 +156,8 @@ QUANTITIES: dict[str, Quantity] = dict(
         _q("mass", "kg", lambda x: 0.0 < x <= 1.0e3, "mass must be in (0, 1000] kg",
            "grain mass, kg"),
         _q("max_bumpiness", "", lambda x: 0.0 < x <= 1.0,
-           "must satisfy 0 < b <= 1 (1: touching shank spheres; smaller: more spheres)",
+           "must satisfy 0 < b <= 1 (1: touching shank spheres; smaller: more spheres, at most "
+           f"{MAX_GRAIN_SPHERES} per grain)",
            "screw resolution: deepest valley between shank spheres over the shank radius"),
         _q("timestep", "s", lambda x: 0.0 < x <= 1.0, '"auto" or a time step in (0, 1] s',
            "time step dt, s"),

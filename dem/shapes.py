@@ -249,7 +249,9 @@ def screw(
         head_radius: R_h, m; R_h >= r_s.
         mass: Target mass, kg; the density is then m / V_union (the paper: about 2.5 g).
         density: rho, kg/m^3; give exactly one of mass and density.
-        max_bumpiness: b, 0 < b <= 1 (1: touching shank spheres).
+        max_bumpiness: b, 0 < b <= 1 (1: touching shank spheres); a b that would need more
+            than ``quantities.MAX_GRAIN_SPHERES`` member spheres is refused, naming the
+            smallest b this screw allows.
 
     """
     _check_positive("length", length, "m")
@@ -264,12 +266,46 @@ def screw(
     if not 0.0 < max_bumpiness <= 1.0:
         raise InputError("max_bumpiness", max_bumpiness, "0 < b <= 1 (fraction of shank_radius)")
     spacing, count = screw_spacing(length, shank_radius, head_radius, max_bumpiness)
+    if count + 2 > quantities.MAX_GRAIN_SPHERES:  # checked before any array is made
+        _refuse_resolution(length, shank_radius, head_radius, max_bumpiness)
     x = spacing * np.arange(count + 1)
     x = x[x + shank_radius > head_radius]  # spheres wholly inside the head add nothing
     centres = np.zeros((len(x) + 1, 3))
     centres[1:, 0] = x
     radii = np.concatenate([[head_radius], np.full(len(x), shank_radius)])
     return clump(centres, radii, mass=mass, density=density, name="screw")
+
+
+def _refuse_resolution(
+    length: float, shank_radius: float, head_radius: float, max_bumpiness: float
+) -> None:
+    """InputError: the screw would need more than ``MAX_GRAIN_SPHERES`` member spheres.
+
+    With n_max = MAX_GRAIN_SPHERES - 2 gaps (the head and n + 1 shank spheres), the rule of
+    :func:`screw` holds with n <= n_max for s_max >= span / n_max, i.e. b (2 - b) >= q^2 with
+    q = span / (2 r_s n_max): b >= 1 - sqrt(1 - q^2) (written q^2 / (1 + sqrt(1 - q^2)), exact
+    for small q). The bound is shown rounded up, so the value it names is accepted.
+    """
+    cap = quantities.MAX_GRAIN_SPHERES
+    span = length - head_radius - shank_radius
+    q = span / (2.0 * shank_radius * (cap - 2))
+    if q >= 1.0:  # even touching shank spheres (b = 1) are too many: the screw is too slender
+        longest = head_radius + shank_radius + 2.0 * shank_radius * (cap - 2)
+        raise InputError(
+            "length", length,
+            f"<= {longest:.6g} m for shank_radius = {shank_radius:g} m: a screw has at most "
+            f"{cap} member spheres, at max_bumpiness = 1 (touching shank spheres)",
+        )  # fmt: skip
+    lowest = q * q / (1.0 + math.sqrt(1.0 - q * q))
+    digits = 2 - math.floor(math.log10(lowest))  # three significant digits, rounded up
+    shown = math.ceil(lowest * 10.0**digits) / 10.0**digits
+    s_max = 2.0 * shank_radius * math.sqrt(max_bumpiness * (2.0 - max_bumpiness))
+    raise InputError(
+        "max_bumpiness", max_bumpiness,
+        f"{shown:.3g} <= b <= 1 for this screw: a grain has at most {cap} member spheres, "
+        f"b = {max_bumpiness:g} would make about {span / s_max + 2.0:.3g} (smaller b: more "
+        "spheres)",
+    )  # fmt: skip
 
 
 def screw_spacing(
@@ -320,6 +356,11 @@ def clump(
         raise InputError("radii", radii.tolist(), "finite centres and radii > 0 (m)")
     if (mass is None) == (density is None):
         raise InputError("mass, density", (mass, density), "exactly one of the two given")
+    if len(radii) > quantities.MAX_GRAIN_SPHERES:  # before the pairwise checks below
+        raise InputError(
+            "spheres", len(radii),
+            f"at most {quantities.MAX_GRAIN_SPHERES} member spheres per grain",
+        )  # fmt: skip
     gaps = np.linalg.norm(centres[:, None, :] - centres[None, :, :], axis=2)
     same = np.argwhere(np.triu(gaps <= 1e-9 * radii.max(), k=1))
     if len(same):
