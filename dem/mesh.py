@@ -5,8 +5,8 @@ from the floor; metres), fixed to the trough and driven with it. STL (ASCII or b
 here, its size and grammar checked (:func:`read_stl`); any other format meshio reads works too
 (OBJ, VTK, VTU, PLY, ...), its face indices checked before use; quadrilaterals are split into
 two triangles. Every file dem cannot use is refused in one line naming ``trough.mesh``.
-Triangle normals
-(right-hand winding a -> b -> c) should point to the grains' side: the fill places grains there.
+Triangle normals (right-hand winding a -> b -> c) should point to the grains' side: the fill
+places grains there.
 The contact law and the rules against double counting are in :mod:`dem.kernels.mesh`.
 
 The section stays periodic in x with period ``trough.length``: the mesh must span x from 0 to
