@@ -479,6 +479,23 @@ def _read_mesh(t: Table) -> Path | None:
     return mesh
 
 
+def _check_inclination(trough: TroughSpec, material: MaterialSpec, t: Table) -> None:
+    """Refuse a trough steeper than the friction angle atan(mu), either way.
+
+    There no friction holds a grain on the floor: the bed slides downhill ever faster, the
+    periodic section has no steady conveying velocity to measure, and the run would end only when
+    a grain outran the instability check. Refused, not warned: no run of it gives a result.
+    """
+    limit = math.degrees(math.atan(material.friction))
+    if abs(trough.inclination) > limit:
+        raise t.error(
+            "inclination", trough.inclination,
+            f"within the friction angle atan(material.friction = {material.friction:g}) = "
+            f"{limit:.4g} deg: [-{limit:.4g}, {limit:.4g}] degrees (steeper, no friction holds a "
+            "grain on the floor and the bed slides downhill ever faster)",
+        )  # fmt: skip
+
+
 def _read_drive(t: Table, inclination: float) -> DriveSpec:
     t.check_known(_DRIVE_KEYS)
     frequency = t.quantity("frequency")
@@ -779,6 +796,7 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
     trough = _read_trough(table("trough"))
     drive = _read_drive(table("drive"), trough.inclination)
     material = _read_material(table("material"))
+    _check_inclination(trough, material, table("trough"))
     contact = _read_contact(table("contact"))
     particles = _build_grain(
         _read_particles(table("particles")), material.density, table("particles")
