@@ -348,7 +348,7 @@ def _cmd_run(args) -> int:
     except RunInterrupted as stop:
         print(f"dem: stopped by {stop}", file=sys.stderr)
         if stop.checkpoint is not None:
-            print(f"dem: continue with: dem run {args.case_dir} --resume", file=sys.stderr)
+            print(f"dem: continue with: {_resume_command(args, case, out)}", file=sys.stderr)
         return 128 + stop.signum
     keys = (
         "mean_velocity",
@@ -363,6 +363,25 @@ def _cmd_run(args) -> int:
             print(f"{key:26s} {summary[key]}")
     print(f"wrote {out / 'summary.json'}")
     return 0
+
+
+def _resume_command(args, case, out: Path) -> str:
+    """The ``dem run`` line that resumes this run: every option a resume must repeat.
+
+    The folder, the measured cycles (a resume is refused with others) and the frames setting
+    (``--no-frames``, ``--lab-frame``), and the threads if they were given.
+    """
+    import shlex
+
+    parts = ["dem", "run", str(args.case_dir), "--out", str(out), "--resume"]
+    parts += ["--cycles", str(args.cycles if args.cycles is not None else case.run.cycles)]
+    if args.no_frames:
+        parts.append("--no-frames")
+    if args.lab_frame:
+        parts.append("--lab-frame")
+    if args.threads is not None:
+        parts += ["--threads", str(args.threads)]
+    return shlex.join(parts)
 
 
 def _cmd_plan(args) -> int:

@@ -11,7 +11,13 @@ What one run does, in order:
 4. every ``DEM_CHECKPOINT_EVERY`` cycles, and when SIGINT or SIGTERM arrives (checked between
    chunks), write ``checkpoint.npz`` (state, pair history, loop counters, writer positions);
    a signal then ends the run with :class:`RunInterrupted`;
-5. write ``summary.json`` (DESIGN.md section 6) and mark results.h5 complete.
+5. write ``summary.json`` (DESIGN.md section 6; strict JSON, written whole by a rename) and
+   mark results.h5 complete. A signal after the last cycle is recorded until then: the run
+   finishes its summary and says so.
+
+The output folder holds only what dem made: a link under a name dem writes (``frames``,
+``results.h5``, the lock ``.dem-run.lock``) is refused before anything is written, so nothing
+is written, truncated or deleted through it.
 
 ``resume=True`` reloads the checkpoint, trims results.h5 and the VTK collection back to what
 the checkpoint had seen, and continues: the result is bit-identical to an uninterrupted run,
@@ -26,6 +32,7 @@ import math
 import os
 import re
 import signal
+import stat
 import sys
 import time
 import warnings
@@ -37,8 +44,9 @@ import numpy as np
 from dem import config, measure, plan, setup
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
+from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import ResultsWriter, package_versions
-from dem.io.vtk import FRAMES_DIR, PVD_NAME, VTKSeriesWriter
+from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
 from dem.provenance import record
 from dem.simulation import Simulation
 from dem.threads import ThreadGuard
@@ -144,7 +152,12 @@ def _components(case) -> list[dict]:
 
 
 def _prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
-    """Refuse to overwrite an earlier run silently; clear it only when asked to."""
+    """Refuse to overwrite an earlier run silently; clear it only when asked to.
+
+    A link under a name dem writes (a planted ``frames`` -> somewhere else) is refused in every
+    mode: dem neither writes into nor deletes through a link it did not make.
+    """
+    _refuse_links(out_dir)
     earlier = [name for name in RUN_OUTPUTS if (out_dir / name).exists()]
     if resume:
         if not (out_dir / CHECKPOINT).exists():
@@ -171,6 +184,18 @@ def _prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
 
 
+def _refuse_links(out_dir: Path) -> None:
+    """Refuse a symbolic link at any name dem writes in ``out_dir`` (checked before any change)."""
+    for name in RUN_OUTPUTS:
+        path = out_dir / name
+        if path.is_symlink():
+            raise InputError(
+                "--out", str(path), "a file or folder of dem's own, not a link (dem never writes "
+                "or deletes through a link it did not make): remove the link or choose another "
+                "--out",
+            )  # fmt: skip
+
+
 #: The files dem writes into ``frames/`` (:mod:`dem.io.vtk`); nothing else there is removed.
 FRAME_FILE_RE = re.compile(r"(particles_\d{6}|trough_\d{6}|trough)\.vtp")
 
@@ -178,10 +203,11 @@ FRAME_FILE_RE = re.compile(r"(particles_\d{6}|trough_\d{6}|trough)\.vtp")
 def _remove_frames(frames: Path) -> None:
     """Remove the VTK files dem wrote into ``frames``, by name.
 
-    Anything else stays, and so does the folder if anything is left in it.
+    Anything else stays (a link too, even under a frame's name), and so does the folder if
+    anything is left in it.
     """
     for path in frames.iterdir():
-        if path.is_file() and FRAME_FILE_RE.fullmatch(path.name):
+        if not path.is_symlink() and path.is_file() and FRAME_FILE_RE.fullmatch(path.name):
             path.unlink()
     if not any(frames.iterdir()):
         frames.rmdir()
@@ -239,35 +265,82 @@ def _lock_output(out_dir: Path):
     """Hold an exclusive lock on ``out_dir``: a second run into the same folder is refused.
 
     Returns the open lock file (closing it releases the lock; the kernel releases it too if the
-    process dies, so a killed run leaves no stale lock).
+    process dies). The lock file is made afresh (``O_EXCL``) and written only then; one left by
+    a run that died (its lock gone with it) is removed and made again, so it never blocks a new
+    run. It is opened without following a link (``O_NOFOLLOW``): a link planted under its name
+    is refused (exit 2) and its target is neither written nor truncated.
     """
     import fcntl
 
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / LOCK_FILE
+    cloexec = getattr(os, "O_CLOEXEC", 0)
     while True:
-        stream = open(path, "a+")  # noqa: SIM115 - held until the run ends
+        created = True
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | cloexec, 0o644)
+        except FileExistsError:
+            created = False
+            try:
+                fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW | cloexec)
+            except FileNotFoundError:  # the run before removed it between our two opens
+                continue
+            except OSError as err:  # ELOOP: a link; EISDIR: a folder
+                raise _lock_refused(path, err) from None
+        stream = os.fdopen(fd, "r+")  # noqa: SIM115 - held until the run ends
+        if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO or a device under the lock's name
+            stream.close()
+            raise _lock_refused(path, None)
         try:
             fcntl.flock(stream, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            stream.seek(0)
-            holder = stream.read().strip() or "another process"
+            holder = stream.read(200).strip() or "another process"
             stream.close()
             raise InputError(
                 "--out", str(out_dir), f"a folder no other run is writing ({holder} is writing "
                 "it now: wait for it, or choose another --out)",
             ) from None  # fmt: skip
-        try:  # the run before may have removed the file between our open and our lock
-            if os.stat(path).st_ino == os.fstat(stream.fileno()).st_ino:
+        if _same_file(path, stream):
+            if created:
                 break
-        except FileNotFoundError:
-            pass
+            os.unlink(path)  # a stale lock of a run that died: made again, never written into
         stream.close()
-    stream.seek(0)
-    stream.truncate()
     stream.write(f"dem run pid {os.getpid()}\n")
     stream.flush()
     return stream
+
+
+def _same_file(path: Path, stream) -> bool:
+    """Whether ``path`` (not followed if a link) is the file ``stream`` has open."""
+    try:
+        return os.lstat(path).st_ino == os.fstat(stream.fileno()).st_ino
+    except FileNotFoundError:
+        return False
+
+
+def _lock_refused(path: Path, err: OSError | None) -> InputError:
+    what = "a link" if path.is_symlink() else "not a plain file"
+    if err is not None and not path.is_symlink():
+        what = err.strerror or what
+    return InputError(
+        "--out", str(path), f"dem's own lock file ({what} here: dem does not open a lock it did "
+        "not make; remove it, or choose another --out)",
+    )  # fmt: skip
+
+
+def _ignore_file_size_signal():
+    """Ignore SIGXFSZ (returns the handler it replaced; None where it cannot be set).
+
+    Its default action kills the process with a core dump at the file size limit (``ulimit
+    -f``); ignored, the write fails with EFBIG and the run ends in one line, exit 1, like a full
+    disk. Python's own start-up ignores it already; a program embedding dem may not.
+    """
+    if not hasattr(signal, "SIGXFSZ"):
+        return None
+    try:
+        return signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals stay as they are
+        return None
 
 
 def run_case(case, out_dir: Path, **kwargs) -> dict:
@@ -284,10 +357,14 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
     _check_duration(case, estimate)
     made = not out_dir.exists()
     lock = _lock_output(out_dir)
+    size_signal = _ignore_file_size_signal()
     try:
         return _run_case(case, out_dir, **kwargs)
     finally:
-        (out_dir / LOCK_FILE).unlink(missing_ok=True)  # still held: no one else has it
+        if size_signal is not None:
+            signal.signal(signal.SIGXFSZ, size_signal)
+        if _same_file(out_dir / LOCK_FILE, lock):  # still held: no one else has it
+            (out_dir / LOCK_FILE).unlink()
         lock.close()
         if made and out_dir.is_dir() and not any(out_dir.iterdir()):
             out_dir.rmdir()  # a run refused before it wrote anything leaves no folder
@@ -321,7 +398,8 @@ def _run_case(
             Otherwise (default) in the trough frame. results.h5 is always in the trough frame.
 
     Raises:
-        RunInterrupted: SIGINT or SIGTERM arrived; a checkpoint was written first.
+        RunInterrupted: SIGINT or SIGTERM arrived before the last cycle ended; a checkpoint was
+            written first (after the last cycle the summary is finished instead).
 
     """
     cycles = case.run.cycles if cycles is None else int(cycles)
@@ -333,21 +411,12 @@ def _run_case(
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     if not resume:
         _warn_plan(estimate)
-    with _StopNow() as stop:
-        _compile_first(case, progress)
-        stop.phase = "filling"
-        if progress:
-            print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
-                  flush=True)  # fmt: skip
-        sim = setup.from_case(case)
-    if config.DEM_THREAD_GUARD and n_threads > 1:
-        sim.guard = ThreadGuard(n_threads)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
 
     fingerprint = _fingerprint(case)
-    if resume:
+    if resume:  # the checkpoint is checked against the case before the fill
         try:
             state, loop = checkpoint_io.read(checkpoint)
         except Exception as exc:  # a truncated or foreign file: zip, npy, JSON or key errors
@@ -364,12 +433,23 @@ def _run_case(
             )  # fmt: skip
         loop.setdefault("cycles", loop["total_cycles"] - (settle or 0))  # older checkpoints
         loop.setdefault("settle_cycles", settle)
+        _check_frames_setting(loop, checkpoint, frames=frames, lab_frame=lab_frame)
         if loop["cycles"] != cycles:
             raise InputError(
                 "--cycles",
                 cycles,
                 f"the interrupted run has {loop['cycles']}: resume with the same",
             )
+    with _StopNow() as stop:
+        _compile_first(case, progress)
+        stop.phase = "filling"
+        if progress:
+            print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
+                  flush=True)  # fmt: skip
+        sim = setup.from_case(case)
+    if config.DEM_THREAD_GUARD and n_threads > 1:
+        sim.guard = ThreadGuard(n_threads)
+    if resume:
         try:
             checkpoint_io.load_state(sim, state)
         except SimulationError as exc:
@@ -405,6 +485,8 @@ def _run_case(
             "vtk_entries": [],
             "h5_cycles": 0,
             "h5_frames": 0,
+            "frames": bool(frames),
+            "lab_frame": bool(lab_frame),
         }
     vtk = results = None
     if frames:
@@ -434,6 +516,10 @@ def _run_case(
 
         bar = tqdm(total=_planned(loop), initial=loop["cycle"], unit="cycle",
                    desc=f"dem {case.name}")  # fmt: skip
+    # SIGINT/SIGTERM are recorded, not fatal, until summary.json is on disk: the summary's
+    # point-mass model compiles for seconds on a fresh machine, and a signal there used to end
+    # the run with no summary, no checkpoint and no message. After the last cycle the summary
+    # is finished (the run's result) and the signal reported.
     try:
         with _SignalFlag() as flag:
             while loop["settle_cycles"] is None or loop["cycle"] < loop["total_cycles"]:
@@ -467,10 +553,27 @@ def _run_case(
                 if flag.signum is not None and unfinished:
                     _checkpoint(checkpoint, sim, loop)
                     raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
+            if bar is not None:
+                bar.close()
+                bar = None
+            summary = _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
+                              progress)  # fmt: skip
+            checkpoint.unlink(missing_ok=True)
+            late = flag.signum
     finally:
         if bar is not None:
             bar.close()
+    if late is not None and progress:
+        print(f"dem: {signal.Signals(late).name} arrived after the last cycle: the run finished "
+              f"its summary first ({out_dir / SUMMARY})", file=sys.stderr)  # fmt: skip
+    return summary
 
+
+def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk, progress):
+    """Write summary.json (strict JSON, whole or not at all), mark results.h5 complete.
+
+    Returns the summary as a dict (an undefined value NaN, where the file has null).
+    """
     summary = _summary(case, sim, loop, cycles, n_threads)
     summary["plan"] = estimate.as_dict()
     if sim.guard is not None:
@@ -481,12 +584,38 @@ def _run_case(
             print(f"dem: {n_threads} threads ran slower than one here (another process on the "
                   f"cores?): {share:.0%} of the steps ran on one thread",
                   file=sys.stderr)  # fmt: skip
-    (out_dir / SUMMARY).write_text(json.dumps(summary, indent=2) + "\n")
+    # strict JSON (an undefined value, a one-cycle run's stderr, is null, not NaN), written whole
+    replace_text(out_dir / SUMMARY, json_text(summary) + "\n")
     results.close()
     if vtk is not None:
         vtk.close()
-    checkpoint.unlink(missing_ok=True)
     return summary
+
+
+def _check_frames_setting(loop: dict, checkpoint: Path, *, frames: bool, lab_frame: bool) -> None:
+    """Refuse to resume with frames when the run wrote none, or the reverse (or another frame).
+
+    A checkpoint records both settings; an older one tells by its frames (a run with frames
+    writes frame 0 before the first cycle; in the lab frame every frame has its trough file).
+    """
+    entries = loop.get("vtk_entries") or []
+    was_frames = loop.get("frames", loop.get("h5_frames", 0) > 0)
+    was_lab = loop.get("lab_frame", bool(entries) and entries[0][2] != TROUGH_FILE)
+    if was_frames != frames:
+        said = "wrote no frames (--no-frames)" if not was_frames else "wrote frames"
+        fix = "with --no-frames" if not was_frames else "without --no-frames"
+        raise InputError(
+            "--resume", str(checkpoint), f"a checkpoint of a run with the same frames setting: "
+            f"the interrupted run {said}; resume it {fix}, or start again with --overwrite",
+        )  # fmt: skip
+    if frames and was_lab != lab_frame:
+        said = "the lab frame (--lab-frame)" if was_lab else "the trough frame"
+        fix = "with --lab-frame" if was_lab else "without --lab-frame"
+        raise InputError(
+            "--resume", str(checkpoint), f"a checkpoint of a run with the same frames: the "
+            f"interrupted run wrote them in {said}; resume it {fix}, or start again with "
+            "--overwrite",
+        )  # fmt: skip
 
 
 def _compile_first(case, progress: bool) -> None:

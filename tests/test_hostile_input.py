@@ -5,6 +5,10 @@ non-finite numbers, 1e300 and -1e300 (which used to pass the range checks and ov
 a run), a string, a boolean and a table. ``dem run`` must exit 2 with one line on stderr that
 names the key, print no traceback, and write nothing (no output folder). A new key is covered
 by adding it to :data:`KEYS`.
+
+A link planted in the output folder under a name dem writes (the lock, ``frames``, results.h5,
+...) is hostile input too: refused the same way, and nothing written, truncated or deleted
+through it (:data:`PLANTED`).
 """
 
 import pytest
@@ -113,3 +117,71 @@ def test_a_count_whose_state_exceeds_the_machine_is_refused_before_anything(tmp_
     assert "particles.count" in err and "fits this machine" in err
     assert time.monotonic() - t0 < 30.0
     assert not out.exists()
+
+
+#: Links planted in the output folder under names dem writes, as (name, what the link points
+#: to, options). Before: the lock link's target was truncated and overwritten (a dangling one
+#: created), ``--overwrite`` deleted the user's particles_*.vtp through a linked frames/, and
+#: summary.json and results.h5 were written through their links.
+PLANTED = [
+    (".dem-run.lock", "file", []),
+    (".dem-run.lock", "nothing", []),
+    ("frames", "folder", ["--overwrite"]),
+    ("frames", "folder", []),
+    ("frames", "nothing", []),
+    ("summary.json", "nothing", []),
+    ("results.h5", "nothing", []),
+    ("results.h5", "file", ["--overwrite"]),
+    ("particles.pvd", "nothing", []),
+    ("checkpoint.npz", "file", ["--resume"]),
+]  # fmt: skip
+
+
+def _snapshot(path):
+    """What is at ``path``: None, a file's bytes, or a folder's {name: bytes}."""
+    if path.is_dir():
+        return {p.name: p.read_bytes() for p in path.iterdir()}
+    return path.read_bytes() if path.exists() else None
+
+
+@pytest.mark.parametrize("name, target, options", PLANTED,
+                         ids=[f"{n}-{t}{''.join(o)}" for n, t, o in PLANTED])  # fmt: skip
+def test_a_planted_link_is_refused_and_nothing_is_written_or_deleted_through_it(
+    tmp_path, capsys, name, target, options
+):
+    case_dir = write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", "cycles = 1"))
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    aim = mine / f"the_{name.strip('.')}"
+    if target == "file":
+        aim.write_bytes(b"precious\n")
+    elif target == "folder":
+        aim.mkdir()
+        (aim / "particles_000000.vtp").write_bytes(b"my own frame\n")
+        (aim / "notes.txt").write_bytes(b"mine\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / name).symlink_to(aim, target_is_directory=target == "folder")
+    before = _snapshot(aim)
+    code = main(["run", str(case_dir), "--out", str(out), "--threads", "1", *options])
+    _, err = capsys.readouterr()
+    assert code == 2, err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert str(out / name) in err and "link" in err, err
+    assert _snapshot(aim) == before  # the target: not written, truncated, made or emptied
+    assert (out / name).is_symlink()  # the link itself stays: dem did not make it
+
+
+def test_a_planted_link_at_a_temporary_name_is_replaced_not_written_through(tmp_path):
+    """summary.json, the collection and the frames are written to NAME.tmp and renamed: a link
+    planted at NAME.tmp is removed and the file made afresh, its target untouched."""
+    from dem.io.files import replace_text
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious\n")
+    (tmp_path / "summary.json.tmp").symlink_to(victim)
+    replace_text(tmp_path / "summary.json", "{}\n")
+    assert victim.read_text() == "precious\n"
+    assert (tmp_path / "summary.json").read_text() == "{}\n"
+    assert not (tmp_path / "summary.json").is_symlink()
+    assert not (tmp_path / "summary.json.tmp").exists()

@@ -7,22 +7,37 @@ option the resume needs, and a resume with another frames setting is refused. su
 strict JSON. The planted links of item 1 and 2 are door cases: tests/test_hostile_input.py.
 """
 
+import json
+import math
 import os
+import shlex
+import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from small_case import SMALL_CASE, write_case
+from small_case import SMALL_CASE, sigterm_at_check, write_case
 
+from dem.case import load_case
+from dem.cli import main
 from dem.io.hdf5 import read_results
-from dem.runner import LOCK_FILE
+from dem.runner import LOCK_FILE, run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:
     return write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", f"cycles = {cycles}"))
+
+
+def _strict(text: str):
+    """json.loads that refuses NaN, Infinity and -Infinity (not JSON, RFC 8259)."""
+
+    def refuse(name):
+        raise ValueError(f"{name} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
 
 
 def _dem(args: list[str], *, script: str = "", preexec_fn=None, timeout: float = 600):
@@ -82,3 +97,120 @@ def test_the_room_check_names_a_file_size_limit(tmp_path, monkeypatch):
         hdf5.ResultsWriter(tmp_path / "results.h5", case={}, versions={}, seed=1, timestep=1.0)
     assert info.value.errno == errno.EFBIG and "ulimit -f" in str(info.value)
     assert not (tmp_path / "results.h5").exists()
+
+
+# --- item 4: a signal while the summary is written ----------------------------------------------
+
+#: The point-mass model of the summary compiles for seconds on a fresh machine: the signal then.
+SIGNAL_IN_SUMMARY = """
+import os, signal
+import dem.runner as runner
+_pointmass = runner._pointmass
+def late(case):
+    os.kill(os.getpid(), signal.{sig})
+    return _pointmass(case)
+runner._pointmass = late
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_while_the_summary_is_written_still_gives_the_summary(tmp_path, sig):
+    """It used to end the run with exit 143, no message, no summary, no checkpoint, and the
+    folder refused both a rerun and --resume. Now the run finishes the summary, says so and
+    releases its folder."""
+    case_dir = _case_dir(tmp_path, cycles=2)
+    out = tmp_path / "out"
+    script = SIGNAL_IN_SUMMARY.format(sig=sig.name)
+    done = _dem(["run", str(case_dir), "--out", str(out), "--threads", "1"], script=script)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert f"{sig.name} arrived after the last cycle" in done.stderr
+    summary = _strict((out / "summary.json").read_text())
+    assert len(summary["per_cycle_velocity"]) == 2
+    assert read_results(out / "results.h5")["complete"]
+    assert not (out / "checkpoint.npz").exists() and not (out / LOCK_FILE).exists()
+
+
+def test_a_stale_lock_of_a_dead_run_does_not_block_a_new_one(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / LOCK_FILE).write_text("dem run pid 999999999\n")  # its run was killed: no flock
+    run_case(load_case(_case_dir(tmp_path, cycles=1)), out, progress=False, threads=1,
+             frames=False)  # fmt: skip
+    assert (out / "summary.json").is_file() and not (out / LOCK_FILE).exists()
+
+
+# --- item 5: the resume hint and the frames setting ---------------------------------------------
+
+
+@pytest.mark.parametrize("options", [["--no-frames"], ["--lab-frame", "--cycles", "4"]])
+def test_the_resume_hint_repeats_every_option_the_resume_needs(tmp_path, monkeypatch, capsys,
+                                                               options):  # fmt: skip
+    """The hint was ``dem run CASE --resume``: without --out it resumed another folder, without
+    --cycles it was refused, without --no-frames it mixed frames into a run that had none."""
+    case_dir = _case_dir(tmp_path)
+    out = tmp_path / "elsewhere"
+    sigterm_at_check(monkeypatch, 12)
+    code = main(["run", str(case_dir), "--out", str(out), "--threads", "1", *options])
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    assert code == 128 + signal.SIGTERM, err
+    hint = [x for x in err.splitlines() if x.startswith("dem: continue with: ")]
+    assert len(hint) == 1
+    argv = shlex.split(hint[0].removeprefix("dem: continue with: "))
+    assert argv[:2] == ["dem", "run"] and "--resume" in argv and str(out) in argv
+    assert all(o in argv for o in options)
+    assert main(argv[1:]) == 0, capsys.readouterr().err
+    summary = _strict((out / "summary.json").read_text())
+    assert summary["cycles"] == (4 if "--cycles" in options else 6)
+
+
+@pytest.mark.parametrize(
+    "first, resumed",
+    [(["--no-frames"], []), ([], ["--no-frames"]), ([], ["--lab-frame"])],
+    ids=["frames-on-a-run-without", "no-frames-on-a-run-with", "lab-frame-on-trough-frame"],
+)
+def test_a_resume_with_another_frames_setting_is_refused_and_changes_nothing(
+    tmp_path, monkeypatch, capsys, first, resumed
+):
+    case_dir = _case_dir(tmp_path)
+    out = tmp_path / "out"
+    sigterm_at_check(monkeypatch, 12)
+    assert main(["run", str(case_dir), "--out", str(out), "--threads", "1", *first]) == 143
+    monkeypatch.undo()
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    code = main(["run", str(case_dir), "--out", str(out), "--threads", "1", "--resume", *resumed])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert str(out / "checkpoint.npz") in err and "frame" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+# --- item 6: strict JSON ------------------------------------------------------------------------
+
+
+def test_summary_of_a_one_cycle_run_is_strict_json(tmp_path):
+    """One measured cycle has no standard error: summary.json said NaN, which is not JSON."""
+    out = tmp_path / "out"
+    summary = run_case(load_case(_case_dir(tmp_path, cycles=1)), out, progress=False, threads=1,
+                       frames=False)  # fmt: skip
+    written = _strict((out / "summary.json").read_text())
+    assert written["mean_velocity_stderr"] is None and math.isnan(summary["mean_velocity_stderr"])
+    assert written["mean_velocity"] == summary["mean_velocity"]
+
+
+def test_summary_json_is_written_whole_by_a_rename(tmp_path, monkeypatch):
+    """summary.json goes to a temporary file renamed over it: never a part-written summary."""
+    import dem.io.files as files
+
+    renamed = []
+    original = files.os.replace
+
+    def record(src, dst):
+        renamed.append(Path(dst).name)
+        return original(src, dst)
+
+    monkeypatch.setattr(files.os, "replace", record)
+    run_case(load_case(_case_dir(tmp_path, cycles=1)), tmp_path / "out", progress=False,
+             threads=1, frames=False)  # fmt: skip
+    assert "summary.json" in renamed

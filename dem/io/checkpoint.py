@@ -126,6 +126,8 @@ LOOP_OPTIONAL = {
     "settle_detected": (bool,),
     "discharge_per_cycle": (list,),
     "hold_up_per_cycle": (list,),
+    "frames": (bool,),
+    "lab_frame": (bool,),
 }
 _FRAME_FILE = re.compile(r"[A-Za-z0-9_.-]+\.vtp")
 

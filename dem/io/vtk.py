@@ -147,6 +147,9 @@ class VTKSeriesWriter:
             )
         self.out_dir = Path(out_dir)
         self.frames_dir = self.out_dir / FRAMES_DIR
+        if self.frames_dir.is_symlink():  # never write into a folder through a link
+            raise OSError(errno.ELOOP, "a link where dem writes its frames folder",
+                          str(self.frames_dir))  # fmt: skip
         self.frames_dir.mkdir(parents=True, exist_ok=True)
         self.length = float(trough_length)
         self.width = float(trough_width)
