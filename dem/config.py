@@ -71,10 +71,31 @@ DEM_CHECK_INTERVAL = 500
 #: A run that can be stopped (SIGINT/SIGTERM) checks at least this often, s: chunks shorten
 #: when 500 steps take longer (large scenes).
 DEM_STOP_LATENCY_S = 0.5
-#: Largest overlap allowed, as a fraction of the smaller radius, before the run is stopped.
-DEM_MAX_OVERLAP_FRACTION = 0.1
+#: Overlap guard (dem.simulation.Simulation.check), as fractions of the smaller radius, sampled
+#: at every check (every DEM_CHECK_INTERVAL steps). Accuracy bound: a run whose largest overlap
+#: exceeds it finishes, with a warning and the record (max_overlap_fraction: where, when, the
+#: stiffness that would bring it under) in summary.json. An overlap is set by the stiffness
+#: against the load and the impacts, not by the time step: a stable screw bed at LIGGGHTS parity
+#: (E 5e7 Pa, Gamma 2.5) peaks at 0.107 radii for one seed of three, and LIGGGHTS finishes it.
+DEM_OVERLAP_WARN_FRACTION = 0.1
+#: Hard bound: an overlap beyond it stops the run. At half a radius the contact laws (small
+#: strains) say nothing and a grain is half way through its neighbour or the wall; five times
+#: the accuracy bound, so a stable run's impacts (0.1-0.2 radii at the softest shipped contacts)
+#: stay clear of it while a soft contact that lets grains through is stopped at once.
+DEM_MAX_OVERLAP_FRACTION = 0.5
+#: ... and an overlap that grows without bound stops the run before it reaches that: the same
+#: contact the deepest, above the accuracy bound, at this many checks in a row after the first,
+#: each deeper than the last by at least this factor (0.11 -> 0.37 radii over 1500 steps). An
+#: impact lasts about 50 steps (the automatic step is t_c / 50), so a check 500 steps later sees
+#: another; only a contact being driven ever deeper (an integration out of its stable range)
+#: grows like this.
+DEM_OVERLAP_GROWTH_CHECKS = 3
+DEM_OVERLAP_GROWTH_FACTOR = 1.5
 #: A grain whose speed exceeds this factor times the largest speed the drive and gravity can
-#: give (A omega + sqrt(2 g h_fill)) stops the run.
+#: give (A omega + sqrt(2 g h_fill)) stops the run (energy the step loop made), as does a grain
+#: higher above the fill than that speed throws it (a grain that outran the check between two
+#: checks). A bed whose mean x-velocity is over half that speed, downhill on an inclined trough,
+#: is named as running away down it.
 DEM_MAX_SPEED_FACTOR = 20.0
 #: Settling ends when the rms grain speed falls below this fraction of sqrt(g r).
 DEM_SETTLE_SPEED_FRACTION = 0.01

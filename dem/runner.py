@@ -452,6 +452,7 @@ def _run_case(
     if resume:
         try:
             checkpoint_io.load_state(sim, state)
+            sim.restore_overlap(loop.get("max_overlap"))  # the running maximum so far
         except SimulationError as exc:
             raise InputError(
                 "--resume", str(checkpoint), f"a checkpoint of this case: {exc}"
@@ -576,6 +577,10 @@ def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
     """
     summary = _summary(case, sim, loop, cycles, n_threads)
     summary["plan"] = estimate.as_dict()
+    # the deepest overlap at the checks; above the accuracy bound a warning, not a stop
+    summary["max_overlap"] = sim.overlap_summary()
+    summary["max_overlap_fraction"] = summary["max_overlap"]["fraction"]
+    summary["warnings"] = sim.overlap_warnings()
     if sim.guard is not None:
         sim.guard.restore()
         summary["thread_guard"] = sim.guard.as_dict()
@@ -589,6 +594,8 @@ def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
     results.close()
     if vtk is not None:
         vtk.close()
+    for text in summary["warnings"]:
+        warnings.warn(f"{case.name}: {text}", stacklevel=3)
     return summary
 
 
@@ -718,6 +725,7 @@ def _checkpoint(path: Path, sim: Simulation, loop: dict) -> None:
     """Write a checkpoint; a finite feeder's counters and generator travel in the loop JSON."""
     if sim.feeder is not None:
         loop["feeder"] = sim.feeder.state()
+    loop["max_overlap"] = sim.overlap_summary()
     checkpoint_io.write(path, sim, loop)
 
 
