@@ -219,3 +219,39 @@ def test_summary_holds_the_overlap_record_and_the_warning(tmp_path, monkeypatch)
     monkeypatch.undo()
     summary = run_case(case, tmp_path / "again", progress=False, frames=False)
     assert summary["warnings"] == [] and summary["max_overlap_fraction"] < 1e-6
+
+
+def test_a_resumed_run_reports_the_overlap_of_the_whole_run(tmp_path, monkeypatch):
+    """The record travels in the checkpoint: a run stopped mid-frame and resumed reports the
+    deepest overlap of both parts (the fill's landing, before the stop, included), as the
+    uninterrupted run does; a tampered record is a bad --resume file."""
+    import zipfile
+
+    from small_case import SMALL_CASE, stop_mid_frame, write_case
+
+    from dem.errors import InputError
+
+    text = SMALL_CASE.replace("frames_per_cycle = 3", "frames_per_cycle = 1")
+    case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
+    straight = run_case(case, tmp_path / "straight", progress=False, threads=1)
+    out = tmp_path / "interrupted"
+    stop_mid_frame(case, out, monkeypatch, 7, straight["timestep"])
+    with np.load(out / "checkpoint.npz") as state:
+        loop = json.loads(str(state["loop.json"]))
+    assert loop["max_overlap"]["fraction"] > 0.0
+    # a copy with a tampered record is refused, naming --resume
+    bad = tmp_path / "bad"
+    import shutil
+
+    shutil.copytree(out, bad)
+    loop_bad = dict(loop, max_overlap={"fraction": "deep"})
+    with np.load(out / "checkpoint.npz") as state:
+        arrays = {k: state[k] for k in state.files}
+    arrays["loop.json"] = np.array(json.dumps(loop_bad))
+    np.savez(bad / "checkpoint.npz", **arrays)
+    assert zipfile.is_zipfile(bad / "checkpoint.npz")
+    with pytest.raises(InputError, match="--resume"):
+        run_case(case, bad, progress=False, threads=1, resume=True)
+    resumed = run_case(case, out, progress=False, threads=1, resume=True)
+    assert resumed["max_overlap"] == straight["max_overlap"]
+    assert resumed["max_overlap"]["fraction"] >= loop["max_overlap"]["fraction"]
