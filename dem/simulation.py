@@ -21,9 +21,12 @@ placed; after the per-member gather (walls, no body force) the forces and torque
 the bodies, M a_body is added at each centre of mass and the closing half kick places the members
 again. Members of one clump never contact each other. Plain spheres keep the sphere integrator.
 
-Every ``DEM_CHECK_INTERVAL`` steps Python checks for instability (non-finite values, overlaps
-beyond ``DEM_MAX_OVERLAP_FRACTION`` of the radius, grains far faster than drive and gravity can
-make them) and raises :class:`dem.errors.SimulationError` naming the cause and the fix.
+Every ``DEM_CHECK_INTERVAL`` steps Python checks for instability (non-finite values, grains far
+faster than drive and gravity can make them, overlaps beyond ``DEM_MAX_OVERLAP_FRACTION`` of the
+radius or growing at consecutive checks, a grain out of the trough) and raises
+:class:`dem.errors.SimulationError` naming the measured cause, the grain, where and when, and the
+fix. The deepest overlap is recorded (:meth:`Simulation.overlap_summary`); one above
+``DEM_OVERLAP_WARN_FRACTION`` is an accuracy matter, a warning, not a stop.
 """
 
 from __future__ import annotations
