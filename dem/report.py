@@ -31,6 +31,10 @@ from pathlib import Path
 import numpy as np
 
 from dem import measure, plots
+from dem.errors import InputError
+
+SUMMARY = "summary.json"
+RESULTS = "results.h5"
 
 COMPARISON_COLUMNS = (
     "run",
@@ -73,6 +77,9 @@ def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
     """Write the figures and texts of one or several runs (see the module docstring).
 
+    Every ``summary.json`` and ``results.h5`` is read and checked before the first report file
+    is written, so a corrupt one ends the report with nothing written.
+
     Args:
         out_dirs: Run output folders, each with ``summary.json`` (``results.h5`` optional).
         dest: Report folder; default ``OUT/report`` for one run, ``<common parent>/report`` for
@@ -83,14 +90,17 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
 
     Raises:
         FileNotFoundError: A folder has no ``summary.json``.
+        InputError: A ``summary.json`` or ``results.h5`` that is not what a dem run writes
+            (cut short, of another shape, mistyped, unreadable): one line naming the file.
 
     """
     out_dirs = [Path(d) for d in out_dirs]
     if not out_dirs:
         raise ValueError("make_report needs at least one output folder")
     for d in out_dirs:
-        if not (d / "summary.json").is_file():
-            raise FileNotFoundError(f"{d / 'summary.json'} not found: is {d} a dem run folder?")
+        if not (d / SUMMARY).is_file():
+            raise FileNotFoundError(f"{d / SUMMARY} not found: is {d} a dem run folder?")
+    inputs = [(read_summary(d / SUMMARY), _load_results(d)) for d in out_dirs]
     if dest is None:
         if len(out_dirs) == 1:
             dest = out_dirs[0] / "report"
@@ -101,15 +111,85 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
     labels = _labels(out_dirs)
     written: list[Path] = []
     rows = []
-    for label, d in zip(labels, out_dirs, strict=True):
+    for label, d, (summary, results) in zip(labels, out_dirs, inputs, strict=True):
         run_dest = dest if len(out_dirs) == 1 else dest / label
         run_dest.mkdir(parents=True, exist_ok=True)
-        files, row = _report_run(d, run_dest, label)
+        files, row = _report_run(d, run_dest, label, summary, results)
         written += files
         rows.append(row)
     if len(out_dirs) > 1:
         written += _comparison(rows, dest)
     return written
+
+
+#: summary.json keys a report reads, by what each must be (null is allowed for every one).
+_NUMBERS = tuple(
+    dict.fromkeys(
+        [c for c in COMPARISON_COLUMNS if c not in ("run", "case")]
+        + ["mass_flow_rate_per_width", "total_mass", "timestep", "timestep_limit", "steps",
+           "wall_time_s", "threads", "settle_cycles"]
+    )
+)  # fmt: skip
+_WHOLE = ("grains", "spheres", "cycles", "steps", "threads", "settle_cycles")
+_TEXTS = ("case", "contact_model")
+_FEEDER_NUMBERS = ("discharge_rate", "discharge_rate_stderr", "feed_rate", "length",
+                   "grains_inserted", "grains_in_trough", "grains_discharged",
+                   "feed_backlog")  # fmt: skip
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def read_summary(path: Path, key: str = "OUT") -> dict:
+    """``summary.json`` as a dict, every value a report or a sweep reads checked for its type.
+
+    Raises :class:`InputError` naming ``key`` (the option or argument that led to the file),
+    the file and what is wrong: not readable as JSON (a run killed while writing it), not an
+    object, or a value of the wrong type (a number as text, a list where a number belongs).
+    """
+    path = Path(path)
+
+    def refuse(what: str) -> InputError:
+        return InputError(key, str(path), f"a summary.json as dem run writes it: {what}")
+
+    try:
+        summary = json.loads(path.read_bytes())
+    except (ValueError, RecursionError) as err:  # JSONDecodeError, UnicodeDecodeError
+        cause = str(err).splitlines()[0] if str(err) else type(err).__name__
+        raise refuse(f"it is not valid JSON ({cause}): cut short or damaged; run the case "
+                     "again") from None  # fmt: skip
+    if not isinstance(summary, dict):
+        raise refuse(f"it holds a JSON {type(summary).__name__}, not a JSON object")
+
+    def bad(name: str, value, wanted: str) -> InputError:
+        shown = repr(value)
+        shown = shown if len(shown) <= 40 else shown[:37] + "..."
+        return refuse(f"{name} is {shown}, not {wanted}")
+
+    for name in _NUMBERS:
+        v = summary.get(name)
+        if v is not None and not _is_number(v):
+            raise bad(name, v, "a number")
+        if name in _WHOLE and v is not None and not (math.isfinite(v) and v == int(v) and v >= 0):
+            raise bad(name, v, "a whole number >= 0")
+    for name in _TEXTS:
+        v = summary.get(name)
+        if v is not None and not isinstance(v, str):
+            raise bad(name, v, "a text")
+    per = summary.get("per_cycle_velocity")
+    if per is not None and not (isinstance(per, list) and all(
+            v is None or _is_number(v) for v in per)):  # fmt: skip
+        raise bad("per_cycle_velocity", per, "a list of numbers")
+    feeder = summary.get("feeder")
+    if feeder is not None:
+        if not isinstance(feeder, dict):
+            raise bad("feeder", feeder, "an object (or null)")
+        for name in _FEEDER_NUMBERS:
+            v = feeder.get(name)
+            if v is not None and not _is_number(v):
+                raise bad(f"feeder.{name}", v, "a number")
+    return summary
 
 
 def _labels(out_dirs: list[Path]) -> list[str]:
@@ -125,12 +205,46 @@ def _labels(out_dirs: list[Path]) -> list[str]:
 
 
 def _load_results(d: Path) -> dict | None:
-    path = d / "results.h5"
+    """``results.h5`` read and checked, with its last frame read now; None where there is none.
+
+    A file HDF5 cannot open, that lacks a group dem writes, or whose columns or last frame are
+    not numbers of the shapes dem writes is an :class:`InputError` naming the file.
+    """
+    path = d / RESULTS
     if not path.is_file():
         return None
     from dem.io.hdf5 import read_results
 
-    return read_results(path)
+    def refuse(what: str) -> InputError:
+        return InputError("OUT", str(path), f"a results.h5 as dem run writes it: {what}; move "
+                          "it away to report from summary.json alone")  # fmt: skip
+
+    try:
+        results = read_results(path)
+        if not isinstance(results["case"], dict):
+            raise refuse("its case_json is not a JSON object")
+        for name, column in results["cycles"].items():
+            column = np.asarray(column)
+            if column.ndim != 1 or column.dtype.kind not in "biuf":
+                raise refuse(f"/cycles/{name} is not a column of numbers")
+        last = results["frames"][-1] if results["frame_count"] > 0 else None
+        if last is not None:
+            n = np.shape(last["radius"])
+            for name, shape in (("positions", n + (3,)), ("velocity", n + (3,))):
+                value = np.asarray(last[name])
+                if value.shape != shape or value.dtype.kind not in "iuf":
+                    raise refuse(f"its last frame's {name} is {value.shape}, not {shape} numbers")
+            if len(n) != 1 or np.asarray(last["radius"]).dtype.kind not in "iuf":
+                raise refuse("its last frame's radius is not a column of numbers")
+    except InputError as err:
+        if err.key == "OUT":
+            raise
+        raise refuse(f"{err.key} = {err.value!r}: {err.allowed}") from None
+    except (OSError, KeyError, ValueError, TypeError, IndexError, RuntimeError) as err:
+        cause = (str(err).splitlines() or [""])[0] or type(err).__name__
+        raise refuse(f"it cannot be read ({type(err).__name__}: {cause})") from None
+    results["last_frame"] = last
+    return results
 
 
 def _cycle_series(summary: dict, results: dict | None):
@@ -158,9 +272,8 @@ def _num(summary: dict, key: str) -> float:
     return float(v) if isinstance(v, int | float) else math.nan
 
 
-def _report_run(d: Path, dest: Path, label: str) -> tuple[list[Path], dict]:
-    summary = json.loads((d / "summary.json").read_text())
-    results = _load_results(d)
+def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | None
+                ) -> tuple[list[Path], dict]:  # fmt: skip
     files: list[Path] = []
     notes: list[str] = []
     case = summary.get("case", label)
@@ -216,7 +329,7 @@ def _report_run(d: Path, dest: Path, label: str) -> tuple[list[Path], dict]:
         notes.append("no per-cycle discharge in results.h5: discharge.png skipped")
 
     if results is not None and results["frame_count"] > 0:
-        frame = results["frames"][-1]
+        frame = results["last_frame"]
         tr = results["case"].get("trough", {}) if isinstance(results["case"], dict) else {}
         length = float(tr.get("length") or np.ptp(frame["positions"][:, 0]) or 1.0)
         width = float(tr.get("width") or 2 * np.max(np.abs(frame["positions"][:, 1])) or 1.0)
