@@ -19,26 +19,60 @@ from dem.quantities import QUANTITIES
 
 EXIT_USAGE = 2
 
+#: The quantity (:data:`dem.quantities.QUANTITIES`) of each numeric option: its range.
+_QUANTITY_OF = {
+    "--throw-number": "throw_number",
+    "--angle": "angle",
+    "--friction": "friction",
+    "--inclination": "inclination",
+    "--frequency": "frequency",
+    "--amplitude": "amplitude",
+    "--peak-acceleration": "peak_acceleration",
+    "--drive-velocity": "drive_velocity",
+    "--eps-t": "restitution",
+    "--eps-n": "restitution",
+    "--cycles": "cycles",
+    "--threads": "threads",
+    "--workers": "workers",
+    "--max-runs": "max_runs",
+    "--tolerance": "tolerance",
+}
+
 #: Allowed values of each numeric option, used in error messages.
 #: Help and "missing option" texts of the options, from the one table of quantities.
-_ALLOWED = {
-    _option: QUANTITIES[_name].help
-    for _option, _name in {
-        "--throw-number": "throw_number",
-        "--angle": "angle",
-        "--friction": "friction",
-        "--inclination": "inclination",
-        "--frequency": "frequency",
-        "--amplitude": "amplitude",
-        "--peak-acceleration": "peak_acceleration",
-        "--drive-velocity": "drive_velocity",
-        "--cycles": "cycles",
-        "--threads": "threads",
-    }.items()
-} | {
+_ALLOWED = {_option: QUANTITIES[_name].help for _option, _name in _QUANTITY_OF.items()} | {
     "--eps-t": "tangential " + QUANTITIES["restitution"].help,
     "--eps-n": "normal " + QUANTITIES["restitution"].help,
 }
+
+
+def _check_numbers(args) -> None:
+    """Every numeric option given to this command against its range, before any work.
+
+    An option out of range is an :class:`InputError` naming the option (``--frequency``), the
+    value and the range, whether or not the command goes on to use it (an option the chosen
+    ``--hold`` ignores is a typing error all the same). Options holding value lists
+    (``dem pointmass sweep``) are checked value by value where they are parsed.
+    """
+    for option, name in _QUANTITY_OF.items():
+        value = getattr(args, option[2:].replace("-", "_"), None)
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            QUANTITIES[name].check(value, option)
+
+
+def _plot_path(text: str, default_name: str) -> Path:
+    """The path ``--plot`` names, refused by option before any work if it cannot be one.
+
+    A .png file name (any case) is taken as it is; an existing folder gets ``default_name``
+    inside it; anything else is refused, since matplotlib would write it with .png added.
+    """
+    path = Path(text)
+    if path.is_dir():
+        path = path / default_name
+    elif path.suffix.lower() != ".png":
+        raise InputError("--plot", text, f"a .png file name, or an existing folder to write "
+                         f"{default_name} in")  # fmt: skip
+    return _writable_path("--plot", path, folder=False)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -152,6 +186,7 @@ def _add_restitution(p: argparse.ArgumentParser) -> None:
 def _cmd_thresholds(args) -> int:
     from dem import pointmass
 
+    _check_numbers(args)
     t = pointmass.thresholds(args.angle, args.friction, args.inclination)
     result = {
         "angle": args.angle,
@@ -174,6 +209,7 @@ def _cmd_thresholds(args) -> int:
 def _cmd_velocity(args) -> int:
     from dem import pointmass
 
+    _check_numbers(args)
     r = pointmass.velocity(
         args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n
     )
@@ -225,16 +261,17 @@ def _cmd_sweep(args) -> int:
 
 
 def _cmd_optimum(args) -> int:
-    from dem.pointmass.sweep import optimum, parse_values
+    from dem.pointmass.sweep import optimum
 
+    _check_numbers(args)
     bounds = None
     if args.bounds:
-        parts = args.bounds.split(":")
-        if len(parts) != 2:
-            raise InputError("--bounds", args.bounds, "LOW:HIGH")
-        bounds = tuple(parse_values(p, "--bounds")[0] for p in parts)
-    if args.plot:
-        _writable_path("--plot", args.plot, folder=False)
+        try:  # each a number ("10,20:30" took 10 and dropped 20)
+            lo, hi = (float(p) for p in args.bounds.split(":"))
+        except ValueError:
+            raise InputError("--bounds", args.bounds, "LOW:HIGH, two numbers") from None
+        bounds = (lo, hi)
+    plot = _plot_path(args.plot, "optimum.png") if args.plot else None
     o = optimum(
         args.over,
         args.hold,
@@ -250,10 +287,11 @@ def _cmd_optimum(args) -> int:
         eps_n=args.eps_n,
         bounds=bounds,
     )
-    if args.plot:
+    if plot is not None:
         from dem.plots import optimum_figure
 
-        optimum_figure(o, args.plot)
+        optimum_figure(o, plot)
+        print(f"wrote {plot}", file=sys.stderr)
     if args.json:
         _print_json(o.as_dict(with_curve=args.curve))
         return 0
@@ -284,7 +322,9 @@ def _pointmass_parser(sub) -> None:
     p.add_argument("--throw-number", type=_number, required=True, help=_ALLOWED["--throw-number"])
     _add_material(p)
     _add_restitution(p)
-    p.add_argument("--frequency", type=_number, help="also give the velocity in m/s at this Hz")
+    p.add_argument("--frequency", type=_number,
+                   help="also give the velocity in m/s at this drive frequency f, Hz; "
+                   + QUANTITIES["frequency"].allowed)  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_velocity)
 
@@ -324,7 +364,8 @@ def _pointmass_parser(sub) -> None:
     p.add_argument("--drive-velocity", type=_number, help=_ALLOWED["--drive-velocity"])
     p.add_argument("--frequency", type=_number, default=60.0, help=_ALLOWED["--frequency"])
     p.add_argument("--bounds", help="LOW:HIGH of the scanned variable")
-    p.add_argument("--plot", help="write a PNG of the scanned curve")
+    p.add_argument("--plot", help="write a PNG of the scanned curve: a .png file name, or an "
+                   "existing folder to write optimum.png in")  # fmt: skip
     p.add_argument("--curve", action="store_true", help="include the scanned curve in --json")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_optimum)
@@ -400,6 +441,7 @@ def _cmd_plan(args) -> int:
 def _cmd_dem_sweep(args) -> int:
     from dem.sweep import parse_set, run_sweep
 
+    _check_numbers(args)
     sets = [parse_set(text) for text in args.set]
     out = _writable_path("--out", args.out or Path(args.case_dir) / "sweep", folder=True)
     result = run_sweep(
@@ -421,6 +463,7 @@ def _cmd_dem_sweep(args) -> int:
 def _cmd_dem_optimum(args) -> int:
     from dem.optimum import bulk_optimum
 
+    _check_numbers(args)
     bounds = None
     if args.bounds:
         try:
@@ -506,6 +549,7 @@ def _cmd_calibrate(args) -> int:
     from dem.plots import calibration_figure
 
     case = load_case(args.case_dir)
+    plot = _plot_path(args.plot, "calibration.png") if args.plot else None
     source = case.directory / CASE_FILE
     print(
         f"dem calibrate {case.name}: eps_t target {case.material.restitution_tangential:g}, "
@@ -536,8 +580,9 @@ def _cmd_calibrate(args) -> int:
             "grazing impact cannot lose more than mu v_n (see the plot)",
             file=sys.stderr,
         )
-    plot = Path(args.plot) if args.plot else case.directory / "output" / "calibration.png"
-    plot.parent.mkdir(parents=True, exist_ok=True)
+    if plot is None:
+        plot = case.directory / "output" / "calibration.png"
+        plot.parent.mkdir(parents=True, exist_ok=True)
     calibration_figure(cal, case.material.friction, plot)
     print(f"wrote {plot}")
     if args.dry_run:
@@ -621,8 +666,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hold", default="throw_number", help="held fixed: throw_number or "
                    "amplitude over drive.angle; frequency over drive.throw_number")  # fmt: skip
     p.add_argument("--bounds", help="LO:HI of the search (default 10:60 deg, Gamma 0.5:4)")
-    p.add_argument("--tolerance", type=_number, help="bracket half-width to stop at (1 deg)")
-    p.add_argument("--max-runs", type=_whole, default=20, help="most DEM runs (default 20)")
+    p.add_argument("--tolerance", type=_number, help="bracket half-width to stop at "
+                   "(default 1 deg, Gamma 0.05); " + QUANTITIES["tolerance"].allowed)  # fmt: skip
+    runs = "most DEM runs (default 20); " + QUANTITIES["max_runs"].allowed
+    p.add_argument("--max-runs", type=_whole, default=20, help=runs)
     p.add_argument("--out", help="output folder (default CASE_DIR/optimum)")
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: local)")
     p.add_argument("--workers", type=_whole, help="local workers (default: one per core)")
@@ -635,7 +682,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("case_dir", help="directory holding case.toml")
     p.add_argument("--dry-run", action="store_true", help="print and plot, change nothing")
-    p.add_argument("--plot", help="eps_t figure (default CASE_DIR/output/calibration.png)")
+    p.add_argument(
+        "--plot",
+        help="eps_t figure: a .png file name, or an existing folder to "
+        "write calibration.png in (default CASE_DIR/output/calibration.png)",
+    )
     p.set_defaults(func=_cmd_calibrate)
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")

@@ -175,6 +175,15 @@ QUANTITIES: dict[str, Quantity] = dict(
            "VTK frames per drive cycle"),
         _q("threads", "", lambda n: 1 <= n <= 4096, "a whole number of threads in [1, 4096]",
            "numba threads"),
+        # sweeps and searches of DEM runs (dem sweep, dem optimum)
+        _q("workers", "", lambda n: 1 <= n <= 4096,
+           "a whole number of worker processes in [1, 4096]", "local Dask workers"),
+        _q("max_runs", "", lambda n: 5 <= n <= 10**4,
+           "a whole number of DEM runs in [5, 10000] (the search starts with 5)",
+           "most DEM runs of a search"),
+        _q("tolerance", "", lambda x: 0.0 < x <= 100.0,
+           "must be in (0, 100], in the scanned variable's unit (deg or Gamma)",
+           "bracket half-width at which a search stops"),
     ]
 )  # fmt: skip
 

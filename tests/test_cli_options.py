@@ -1,0 +1,103 @@
+"""Every numeric option of the point-mass commands against its range at the door, and the
+``--plot`` paths of ``dem pointmass optimum`` and ``dem calibrate``: exit 2 and one line naming
+the option, the value and the range, before anything is computed or written."""
+
+import shutil
+
+import pytest
+
+from dem.cli import main
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+VELOCITY = ["pointmass", "velocity", "--throw-number", "1.5", "--angle", "25", "--friction", "0.3"]
+OPTIMUM = ["pointmass", "optimum", "--over", "angle", "--hold", "throw_number",
+           "--throw-number", "1.5", "--friction", "0.3"]  # fmt: skip
+THRESHOLDS = ["pointmass", "thresholds", "--angle", "25", "--friction", "0.3"]
+SWEEP = ["pointmass", "sweep", "--throw-number", "1.5", "--angle", "25", "--friction", "0.3"]
+
+
+def run(capsys, *argv):
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        # the velocity's --frequency was taken as given: -60 Hz gave a negative velocity
+        (VELOCITY + ["--frequency", "-60"], "--frequency = -60.0: frequency must be in (0, 1e5]"),
+        (VELOCITY + ["--frequency", "0"], "--frequency = 0.0"),
+        (VELOCITY + ["--frequency", "1e9"], "--frequency = 1000000000.0"),
+        (VELOCITY + ["--frequency", "nan"], "not a finite number"),
+        # options the chosen hold does not use were ignored whatever their value
+        (OPTIMUM + ["--amplitude", "-1"], "--amplitude = -1.0: amplitude must be in (0, 1] m"),
+        (OPTIMUM + ["--drive-velocity", "0"], "--drive-velocity = 0.0"),
+        (OPTIMUM + ["--peak-acceleration", "1e9"], "--peak-acceleration = 1000000000.0"),
+        (OPTIMUM + ["--angle", "95"], "--angle = 95.0"),
+        (OPTIMUM + ["--frequency", "-60"], "--frequency = -60.0"),
+        (OPTIMUM + ["--inclination", "-95"], "--inclination = -95.0"),
+        (OPTIMUM + ["--eps-n", "2"], "--eps-n = 2.0"),
+        (OPTIMUM + ["--bounds", "10:95"], "--bounds = 95.0"),
+        (OPTIMUM + ["--bounds", "10:x"], "--bounds"),
+        (OPTIMUM + ["--bounds", "10:20:30"], "--bounds"),
+        (OPTIMUM + ["--bounds", "10,20:30"], "--bounds = '10,20:30': LOW:HIGH, two numbers"),
+        (OPTIMUM + ["--bounds", "10:inf"], "--bounds = inf"),
+        (THRESHOLDS + ["--inclination", "90"], "--inclination = 90.0"),
+        (SWEEP + ["--eps-t", "0.5,1.5"], "--eps-t = 1.5"),
+        (SWEEP + ["--inclination", "nan"], "--inclination = nan"),
+    ],
+)
+def test_numeric_options_out_of_range_are_refused_at_the_door(capsys, argv, needle):
+    code, out, err = run(capsys, *argv)
+    assert code == 2, err
+    assert needle in err and err.count("\n") == 1 and "Traceback" not in err, err
+    assert out == ""
+
+
+def test_the_velocity_in_m_per_s_still_comes_with_a_frequency(capsys):
+    code, out, err = run(capsys, *VELOCITY, "--frequency", "60")
+    assert code == 0 and "m/s at 60 Hz" in out, err
+
+
+@pytest.mark.parametrize("command", ["optimum", "calibrate"])
+def test_a_plot_path_without_png_is_refused_before_the_work(capsys, tmp_path, command):
+    """``--plot DIR.../name`` without .png was written as name.png while dem said it wrote
+    name; now a name that is neither a folder nor a .png file is refused by option."""
+    target = tmp_path / "figure"
+    argv = OPTIMUM if command == "optimum" else ["calibrate", "cases/single-sphere", "--dry-run"]
+    code, out, err = run(capsys, *argv, "--plot", target)
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert f"--plot = '{target}'" in err and ".png" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_pointmass_optimum_plot_into_a_folder_writes_the_file_it_names(capsys, tmp_path):
+    code, out, err = run(capsys, *OPTIMUM, "--plot", tmp_path)
+    assert code == 0, err
+    figure = tmp_path / "optimum.png"
+    assert figure.read_bytes()[:8] == PNG
+    assert list(tmp_path.iterdir()) == [figure]
+    assert f"wrote {figure}" in err
+
+
+def test_calibrate_plot_into_a_folder_writes_the_file_it_names(capsys, tmp_path):
+    """``dem calibrate --plot DIR`` wrote DIR.png beside the folder and said it wrote DIR."""
+    case = tmp_path / "one"
+    shutil.copytree("cases/single-sphere", case)
+    toml = case / "case.toml"
+    toml.write_text(toml.read_text().replace("throw_number = 0.6", "throw_number = 1.8"))
+    folder = tmp_path / "plots"
+    folder.mkdir()
+    code, out, err = run(capsys, "calibrate", case, "--dry-run", "--plot", folder)
+    assert code == 0, err
+    figure = folder / "calibration.png"
+    assert figure.read_bytes()[:8] == PNG and f"wrote {figure}\n" in out, out
+    assert not (tmp_path / "plots.png").exists()
+    named = tmp_path / "cal.PNG"  # a .png name, any case, is taken as it is
+    code, out, err = run(capsys, "calibrate", case, "--dry-run", "--plot", named)
+    assert code == 0 and named.read_bytes()[:8] == PNG and f"wrote {named}\n" in out, out
