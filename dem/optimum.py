@@ -212,21 +212,47 @@ def bulk_optimum(
         raise InputError("--over", over, f"one of {', '.join(OVER)}")
     if hold not in OVER[over]:
         raise InputError("--hold", hold, f"for --over {over}: one of {', '.join(OVER[over])}")
+    from dem.quantities import check
+
+    # the options first, by their names: the case file is not to blame for them
+    if tolerance is not None:
+        check("tolerance", tolerance, "--tolerance")
+    check("max_runs", max_runs, "--max-runs")
+    if cycles is not None:
+        check("cycles", cycles, "--cycles")
+    if workers is not None:
+        check("workers", workers, "--workers")
+    lo, hi = bounds or ((10.0, 60.0) if over == "drive.angle" else (0.5, 4.0))
+    for x in (lo, hi):
+        check(over.split(".")[1], x, "--bounds")
+    if not lo < hi:
+        raise InputError("--bounds", f"{lo:g}:{hi:g}", "LO:HI with the lower bound below the upper")
+    tol = tolerance if tolerance is not None else (1.0 if over == "drive.angle" else 0.05)
     case_dir, out = Path(case_dir), Path(out)
     case = load_case(case_dir)
     held = _held(case, over, hold)
-    lo, hi = bounds or ((10.0, 60.0) if over == "drive.angle" else (0.5, 4.0))
-    tol = tolerance or (1.0 if over == "drive.angle" else 0.05)
     for x in (lo, hi):  # the bounds themselves must make valid cases
-        load_case(case_dir, held | {over: x})
+        try:
+            load_case(case_dir, held | {over: x})
+        except InputError as err:
+            raise InputError(
+                "--bounds", f"{lo:g}:{hi:g}", f"bounds at which the case holds: at {over} = "
+                f"{x:g} (holding {hold}) {err.key} = {err.value!r}: {err.allowed}",
+            ) from None  # fmt: skip
     objective = "velocity_norm" if (over, hold) == ("drive.angle", "throw_number") else "velocity"
     key = "mean_velocity_norm" if objective == "velocity_norm" else "mean_velocity"
-    out.mkdir(parents=True, exist_ok=True)
     counter = [0]
     from dem import config
     from dem.sweep import dask_client
 
     client, cluster = dask_client(scheduler, workers or config.default_threads(), "dem optimum")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except BaseException:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+        raise
 
     def evaluate(batch):
         from dem.sweep import run_point

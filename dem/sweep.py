@@ -8,9 +8,11 @@ Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thread 
 core, by default; a running ``dask scheduler`` when ``--scheduler ADDRESS`` is given (the point
 folders must then be on storage that every worker sees).
 
-A rerun skips the points whose folder holds a summary.json and resumes the ones that hold a
-checkpoint. A point that fails (bad physics the guard stops, a lost worker) is reported with its
-error and leaves the others running; the sweep's exit status says that some failed. The results
+A grid of more than :data:`MAX_POINTS` points is refused before a case is loaded: each point
+is a whole ``dem run``. A rerun skips the points whose folder holds a summary.json and resumes
+the ones that hold a checkpoint. A point that fails (bad physics the guard stops, a lost worker)
+is reported with its error and leaves the others running; the sweep's exit status says that some
+failed. The results
 are gathered into ``sweep.csv``, ``sweep.h5`` (one dataset per column) and ``sweep.png`` (the
 bulk velocity against the first swept key, with the point-mass model beside it).
 
@@ -50,6 +52,9 @@ COLUMNS = (
 #: Keys that take whole numbers.
 WHOLE = {"count", "cycles", "settle_cycles", "seed", "frames_per_cycle"}
 TABLE = "sweep"
+#: Most points one ``dem sweep`` runs: each is a whole ``dem run`` (seconds to hours), so 1e4
+#: points is days of a cluster at the least; ``dem pointmass sweep`` allows 1e6 cheap points.
+MAX_POINTS = 10_000
 
 
 @dataclass(frozen=True)
@@ -101,6 +106,14 @@ def grid(sets: list[tuple[str, list]]) -> list[dict]:
     keys = [k for k, _ in sets]
     if len(set(keys)) != len(keys):
         raise InputError("--set", ", ".join(keys), "each key at most once")
+    sizes = [len(v) for _, v in sets]
+    total = math.prod(sizes)
+    if total > MAX_POINTS:
+        shape = " x ".join(str(n) for n in sizes)
+        raise InputError(
+            "--set", total, f"a DEM sweep of at most {MAX_POINTS} points ({shape} values of "
+            f"{', '.join(keys)}): each point is a whole dem run; sweep fewer values, or in parts",
+        )  # fmt: skip
     return [
         dict(zip(keys, combo, strict=True)) for combo in itertools.product(*(v for _, v in sets))
     ]
@@ -174,10 +187,7 @@ def run_sweep(
     """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``."""
     case_dir, out = Path(case_dir), Path(out)
     points = plan_points(case_dir, sets, out)
-    out.mkdir(parents=True, exist_ok=True)
     todo = [p for p in points if status(p) != "done"]
-    if todo:
-        _warn_plan(case_dir, todo[0], threads, cycles)
     skipped = len(points) - len(todo)
     failed: dict[str, str] = {}
     if todo:
@@ -188,6 +198,8 @@ def run_sweep(
         n = workers or max(1, config.default_threads() // max(threads, 1))
         client, cluster = dask_client(scheduler, min(n, len(todo)), "dem sweep")
         try:
+            out.mkdir(parents=True, exist_ok=True)
+            _warn_plan(case_dir, todo[0], threads, cycles)
             futures = {
                 client.submit(run_point, str(case_dir), p.overrides, str(p.folder), cycles,
                               threads, frames, key=f"dem-sweep-{p.name}", pure=False): p
@@ -213,6 +225,7 @@ def run_sweep(
             client.close()
             if cluster is not None:
                 cluster.close()
+    out.mkdir(parents=True, exist_ok=True)
     rows = gather(points, failed)
     csv_path = write_table(rows, out)
     plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
@@ -231,7 +244,12 @@ def dask_client(scheduler: str | None, workers: int, command: str):
     except ImportError:  # pragma: no cover - the message is the point
         raise InputError(command, "dask", "the sweep extra: pip install 'dem[sweep]'") from None
     if scheduler:
-        return Client(scheduler), None
+        try:
+            return Client(scheduler), None
+        except (OSError, ValueError, TypeError) as err:  # TimeoutError is an OSError
+            cause = (str(err).splitlines() or [""])[0] or type(err).__name__
+            raise InputError("--scheduler", scheduler, f"the address of a running dask scheduler "
+                             f"that answers ({cause})") from None  # fmt: skip
     cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
                            dashboard_address=None)  # fmt: skip
     return Client(cluster), cluster
