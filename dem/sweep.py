@@ -10,9 +10,13 @@ folders must then be on storage that every worker sees).
 
 A grid of more than :data:`MAX_POINTS` points is refused before a case is loaded: each point
 is a whole ``dem run``. A rerun skips the points whose folder holds a summary.json and resumes
-the ones that hold a checkpoint. A point that fails (bad physics the guard stops, a lost worker)
-is reported with its error and leaves the others running; the sweep's exit status says that some
-failed. The results
+the ones that hold a checkpoint. A finished point is reused only when its case and run options
+are this sweep's: each finished point's folder holds ``sweep_point.json``, the resolved case
+(:func:`dem.runner._fingerprint`, as a checkpoint records it) with the measured cycles and the
+frames setting; a finished point without it, or of another case or other options, is refused
+before anything runs, naming the point and each key that differs, and left as it is. A point
+that fails (bad physics the guard stops, a lost worker) is reported with its error and leaves
+the others running; the sweep's exit status says that some failed. The results
 are gathered into ``sweep.csv``, ``sweep.h5`` (one dataset per column) and ``sweep.png`` (the
 bulk velocity against the first swept key, with the point-mass model beside it).
 
@@ -55,15 +59,21 @@ TABLE = "sweep"
 #: Most points one ``dem sweep`` runs: each is a whole ``dem run`` (seconds to hours), so 1e4
 #: points is days of a cluster at the least; ``dem pointmass sweep`` allows 1e6 cheap points.
 MAX_POINTS = 10_000
+#: The record of the case and options a finished point ran with, beside its summary.json.
+RECORD = "sweep_point.json"
 
 
 @dataclass(frozen=True)
 class SweepPoint:
-    """One point of a sweep: its index, its overrides and its output folder."""
+    """One point of a sweep: its index, its overrides, its output folder and its record.
+
+    ``record`` is what :data:`RECORD` holds once the point has finished (:func:`record`).
+    """
 
     index: int
     overrides: dict
     folder: Path
+    record: dict | None = None
 
     @property
     def name(self) -> str:
@@ -129,19 +139,73 @@ def _fmt(value) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
-def plan_points(case_dir: Path, sets: list[tuple[str, list]], out: Path) -> list[SweepPoint]:
+def plan_points(case_dir: Path, sets: list[tuple[str, list]], out: Path, *,
+                cycles: int | None = None, frames: bool = False) -> list[SweepPoint]:  # fmt: skip
     """The points, each checked by loading its case (an error names the point and the key)."""
     from dem.case import load_case
 
     points = []
     for i, overrides in enumerate(grid(sets)):
         try:
-            load_case(case_dir, overrides)
+            case = load_case(case_dir, overrides)
         except InputError as err:
             raise InputError(err.key, err.value, f"{err.allowed} (sweep point {overrides})",
                              err.source) from None  # fmt: skip
-        points.append(SweepPoint(i, overrides, out / folder_name(i, overrides)))
+        points.append(SweepPoint(i, overrides, out / folder_name(i, overrides),
+                                 record(case, cycles, frames)))  # fmt: skip
     return points
+
+
+def record(case, cycles: int | None, frames: bool) -> dict:
+    """What a finished point ran, as :data:`RECORD` holds it.
+
+    The resolved case as a checkpoint records it (every key but the name and the folder), the
+    measured cycles and whether frames were written.
+    """
+    from dem.runner import _fingerprint
+
+    measured = case.run.cycles if cycles is None else int(cycles)
+    return _fingerprint(case) | {"cycles": measured, "frames": bool(frames)}
+
+
+def check_finished(points: list[SweepPoint], out: Path) -> None:
+    """Refuse to reuse a finished point that this sweep would not have made.
+
+    Each finished point's :data:`RECORD` must equal its planned record and its summary.json
+    must read (:func:`dem.report.read_summary`); otherwise an :class:`InputError` names the
+    point and each key that differs (or what is missing). Nothing is changed: the finished
+    point stays for the user to keep or move away.
+    """
+    from dem.report import read_summary
+    from dem.runner import SUMMARY, _changes
+
+    differ: list[tuple[SweepPoint, str]] = []
+    for p in points:
+        if status(p) != "done":
+            continue
+        path = p.folder / RECORD
+        try:
+            before = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
+        except (OSError, ValueError):
+            before = None
+        if not isinstance(before, dict):
+            why = (f"it holds {SUMMARY} but no readable record ({RECORD}) of the case and "
+                   "options that made it (an older dem, or copied in)")  # fmt: skip
+            differ.append((p, why))
+            continue
+        changed = _changes(before, p.record)
+        if changed:
+            differ.append((p, "it was run with " + "; ".join(changed)))
+        else:
+            read_summary(p.folder / SUMMARY, "--out")
+    if differ:
+        p, why = differ[0]
+        more = f" (and {len(differ) - 1} more points)" if len(differ) > 1 else ""
+        raise InputError(
+            "--out", str(out), f"a sweep folder whose finished points are of this case and "
+            f"options: point {p.name}{more} differs: {why}. Choose another --out, or move the "
+            "point's folder away to run it again",
+        )  # fmt: skip
 
 
 def status(point: SweepPoint) -> str:
@@ -157,19 +221,27 @@ def status(point: SweepPoint) -> str:
 
 def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
               frames: bool) -> dict:  # fmt: skip
-    """Run one point (a Dask task; also callable directly); returns its summary."""
+    """Run one point (a Dask task; also callable directly); returns its summary.
+
+    The point's :data:`RECORD` is removed before the run and written after it finished, so a
+    summary.json beside a record is always the record's.
+    """
     from dem.case import load_case
+    from dem.io.files import replace_text
     from dem.plan import PlanWarning
     from dem.runner import run_case
 
     case = load_case(case_dir, overrides)
     point = SweepPoint(0, overrides, Path(folder))
     resume = status(point) == "interrupted"
+    (point.folder / RECORD).unlink(missing_ok=True)
     with warnings.catch_warnings():  # the sweep warns once, for its first point
         warnings.simplefilter("ignore", PlanWarning)
-        return run_case(case, Path(folder), cycles=cycles, threads=threads, progress=False,
-                        overwrite=not resume and Path(folder).exists(), resume=resume,
-                        frames=frames)  # fmt: skip
+        summary = run_case(case, Path(folder), cycles=cycles, threads=threads, progress=False,
+                           overwrite=not resume and Path(folder).exists(), resume=resume,
+                           frames=frames)  # fmt: skip
+    replace_text(point.folder / RECORD, json.dumps(record(case, cycles, frames), indent=1) + "\n")
+    return summary
 
 
 def run_sweep(
@@ -186,7 +258,8 @@ def run_sweep(
 ) -> dict:
     """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``."""
     case_dir, out = Path(case_dir), Path(out)
-    points = plan_points(case_dir, sets, out)
+    points = plan_points(case_dir, sets, out, cycles=cycles, frames=frames)
+    check_finished(points, out)
     todo = [p for p in points if status(p) != "done"]
     skipped = len(points) - len(todo)
     failed: dict[str, str] = {}
@@ -268,6 +341,7 @@ def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
 
 def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     """One row per point: its overrides, its summary's values, and its status."""
+    from dem.report import read_summary
     from dem.runner import SUMMARY
 
     rows = []
@@ -275,7 +349,7 @@ def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
         row = {"point": p.name} | {k: v for k, v in p.overrides.items()}
         path = p.folder / SUMMARY
         if path.is_file():
-            summary = json.loads(path.read_text())
+            summary = read_summary(path, "--out")
             row |= {c: summary.get(c) for c in COLUMNS} | {"status": "done", "error": ""}
         else:
             row |= {c: None for c in COLUMNS}

@@ -1,8 +1,10 @@
-"""``dem sweep`` and ``dem optimum`` at the door: grid size, scheduler, option ranges.
+"""``dem sweep`` and ``dem optimum`` at the door: grid size, scheduler, reuse of finished points.
 
-Each bad input ends with exit 2 and one line naming the option, before anything runs.
+Each bad input ends with exit 2 and one line naming the option (or the point and the keys that
+differ), before anything runs, and nothing already in the sweep folder is lost.
 """
 
+import json
 import socket
 import time
 
@@ -10,6 +12,7 @@ import pytest
 from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
+from dem.runner import SUMMARY
 
 pytest.importorskip("distributed")
 
@@ -128,3 +131,65 @@ def test_optimum_options_out_of_range_are_named_not_the_case_file(capsys, tmp_pa
     for needle in needles:
         assert needle in err, err
     assert not out.exists()
+
+
+def sweep(capsys, case, out, *extra):
+    return run(capsys, "sweep", case, "--set", "drive.angle=20", "--out", out, "--workers", "1",
+               "--json", *extra)  # fmt: skip
+
+
+def test_a_finished_point_is_reused_only_for_the_same_case_and_options(capsys, tmp_path):
+    """A finished point of another --cycles or another case was reported as the new result
+    (exit 0); now the sweep refuses, naming the point and each key that differs, and leaves the
+    finished point as it was. The same case and options still reuse it."""
+    case = write_case(tmp_path / "case", TINY)
+    out = tmp_path / "out"
+    code, _, err = sweep(capsys, case, out, "--cycles", "2")
+    assert code == 0, err
+    summary = out / "000_drive.angle=20" / SUMMARY
+    before = summary.read_bytes()
+
+    code, _, err = sweep(capsys, case, out, "--cycles", "3")
+    assert code == 2 and one_line(err), err
+    assert "000_drive.angle=20" in err and "cycles = 2 (now 3)" in err, err
+    assert summary.read_bytes() == before
+
+    other = write_case(tmp_path / "other", TINY.replace("friction = 0.35", "friction = 0.5"))
+    code, _, err = sweep(capsys, other, out, "--cycles", "2")
+    assert code == 2 and one_line(err), err
+    assert "material.friction = 0.35 (now 0.5)" in err and "cycles" not in err, err
+    assert summary.read_bytes() == before
+
+    code, out_text, err = sweep(capsys, case, out, "--cycles", "2")
+    assert code == 0, err
+    assert json.loads(out_text)["skipped"] == 1 and summary.read_bytes() == before
+
+
+def test_a_finished_point_without_a_record_is_not_taken_as_this_sweeps(capsys, tmp_path):
+    """A summary.json with no record of its case (copied in, or an older dem) could be of any
+    case: refused, not reported as this sweep's result, and left in place."""
+    case = write_case(tmp_path / "case", TINY)
+    point = tmp_path / "out" / "000_drive.angle=20"
+    point.mkdir(parents=True)
+    (point / SUMMARY).write_text(json.dumps({"mean_velocity": 1.0, "cycles": 6}))
+    code, _, err = sweep(capsys, case, tmp_path / "out")
+    assert code == 2 and one_line(err), err
+    assert "000_drive.angle=20" in err and "record" in err, err
+    assert json.loads((point / SUMMARY).read_text())["mean_velocity"] == 1.0
+    assert not (tmp_path / "out" / "sweep.csv").exists()
+
+
+@pytest.mark.parametrize("text", ["", '{"mean_velocity": 0.0', "[1, 2]"])
+def test_a_corrupt_summary_of_a_finished_point_is_named(capsys, tmp_path, text):
+    """A truncated or list-valued summary.json of a finished point was a traceback when the
+    sweep gathered it; now it is named before anything runs."""
+    case = write_case(tmp_path / "case", TINY)
+    out = tmp_path / "out"
+    code, _, err = sweep(capsys, case, out, "--cycles", "2")
+    assert code == 0, err
+    summary = out / "000_drive.angle=20" / SUMMARY
+    summary.write_text(text)
+    code, _, err = sweep(capsys, case, out, "--cycles", "2")
+    assert code == 2 and one_line(err), err
+    assert str(summary) in err, err
+    assert summary.read_text() == text
