@@ -43,7 +43,7 @@ MESH_TROUGHS = True
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
 CONTACT_MODELS = ("hertz_mindlin", "linear")
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
-TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts")
+TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts", "impact")
 #: Where a wall contact's tangential force acts (:data:`dem.kernels.contacts.WALL_LEVER_ARMS`).
 WALL_LEVER_ARMS = ("surface", "midpoint")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
@@ -193,8 +193,10 @@ class ContactSpec:
             :mod:`dem.tangential`), 2/7 (linear, "liggghts"); Hertz-Mindlin with "liggghts"
             takes k_t from G and refuses the key.
         limit_force: True keeps the normal force repulsive (LIGGGHTS ``limitForce on``).
-        tangential: ``"coulomb"`` (total tangential force capped at mu |F_n|) or
-            ``"liggghts"`` (spring capped, dashpot on top), see :mod:`dem.kernels.contacts`.
+        tangential: ``"impact"`` (eps_t delivered by each impact, capped by Coulomb, then a
+            rigid Coulomb stick), ``"coulomb"`` (one spring-dashpot, total tangential force
+            capped at mu |F_n|) or ``"liggghts"`` (spring capped, dashpot on top), see
+            :mod:`dem.kernels.contacts`. "impact" refuses the tangential spring's keys.
         tangential_damping_ratio: zeta_t of "coulomb" (None: the default,
             :data:`dem.config.DEM_TANGENTIAL_DAMPING_RATIO`); "liggghts" refuses it.
         wall_lever_arm: Where a wall contact's tangential force acts: ``"surface"`` (default,
@@ -372,6 +374,8 @@ class Case:
             elif ratio is None:
                 ratio = DEFAULT_TANGENTIAL_STIFFNESS_RATIO
         damping = None if tangential == "liggghts" else c.tangential_damping_ratio
+        if tangential == "impact":
+            ratio, damping = None, None
         contact = replace(
             c,
             tangential=tangential,
@@ -582,7 +586,11 @@ def _read_contact(t: Table) -> ContactSpec:
         ("hertz_mindlin", "liggghts"): ("stiffness", "tangential_stiffness_ratio"),
         ("linear", "coulomb"): ("youngs_modulus",),
         ("linear", "liggghts"): ("youngs_modulus",),
+        ("hertz_mindlin", "impact"): ("stiffness",),
+        ("linear", "impact"): ("youngs_modulus",),
     }[model, tangential]
+    if tangential == "impact":
+        foreign += ("tangential_stiffness_ratio", "tangential_damping_ratio")
     if tangential == "liggghts":
         foreign += ("tangential_damping_ratio",)
     for key in foreign:

@@ -64,6 +64,13 @@ DEM_SKIN_FRACTION = 0.25
 #: Default tangential damping ratio zeta_t of ``[contact] tangential = "coulomb"``
 #: (dem.tangential): damps the ringing of a resting contact within a few periods.
 DEM_TANGENTIAL_DAMPING_RATIO = 0.3
+#: ``[contact] tangential = "impact"``: the enduring contact's stick is a spring-dashpot sized by
+#: the time step, not by the material: angular frequency DEM_STICK_RATE / dt on the contact's
+#: tangential mass, damping ratio DEM_STICK_DAMPING_RATIO (dem.kernels.contacts). Chosen by
+#: measurement (validation/impact-law): stiff enough that a grain sticks as Coulomb's rigid
+#: stick, soft enough that a clump with many members on the floor stays stable.
+DEM_STICK_RATE = 0.2
+DEM_STICK_DAMPING_RATIO = 0.7
 #: Neighbour lists are regrown to this factor times the needed size when they overflow.
 DEM_GROWTH_FACTOR = 1.5
 #: Instability checks run every this many steps.

@@ -116,7 +116,8 @@ class Simulation:
         if mesh is not None:
             mesh.index(r_max + self.skin)
             spheres.use_mesh()
-        self.pairs = PairList.for_spheres(spheres.n)
+        spheres.set_history_width(law.history_width)
+        self.pairs = PairList.for_spheres(spheres.n, law.history_width)
         self.geom = Geometry(trough.length, trough.width, self.skin, self.dt, trough.back)
         self.gravity = trough.gravity
         self.drive_on = False
@@ -213,6 +214,7 @@ class Simulation:
             spheres = s.take(old, bodies.body_of)
         ids = self.grain_id[keep]
         if new_spheres is not None and new_spheres.n:
+            new_spheres.set_history_width(self.law.history_width)
             new_spheres.force[:] = new_spheres.mass[:, None] * a_body
             if new_bodies is None:
                 spheres = spheres.concat(new_spheres, np.arange(spheres.n + new_spheres.n))
@@ -227,7 +229,7 @@ class Simulation:
         k = p.n_pairs
         pi, pj = where[p.pair_i[:k]], where[p.pair_j[:k]]
         both = (pi >= 0) & (pj >= 0)
-        pairs = PairList.for_spheres(spheres.n)
+        pairs = PairList.for_spheres(spheres.n, self.law.history_width)
         if both.sum() > pairs.capacity:
             pairs.grow(OVERFLOW_PAIRS, int(both.sum()))
         kept = int(both.sum())

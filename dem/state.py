@@ -94,8 +94,18 @@ class Spheres:
         from dem.kernels.mesh import MESH_SLOTS
 
         if self.mesh_hist.shape[0] != MESH_SLOTS * self.n:
-            self.mesh_hist = np.zeros((MESH_SLOTS * self.n, 3))
+            self.mesh_hist = np.zeros((MESH_SLOTS * self.n, self.wall_hist.shape[1]))
             self.mesh_normal = np.zeros((MESH_SLOTS * self.n, 3))
+
+    def set_history_width(self, width: int) -> None:
+        """Give the wall and mesh springs ``width`` floats per contact, at rest, if they differ.
+
+        ``width`` is the contact law's history width (:data:`dem.kernels.contacts.HISTORY_WIDTH`).
+        """
+        if self.wall_hist.shape[1] != width:
+            self.wall_hist = np.zeros((self.wall_hist.shape[0], width))
+        if self.mesh_hist.shape[1] != width:
+            self.mesh_hist = np.zeros((self.mesh_hist.shape[0], width))
 
     def take(self, index: np.ndarray, body: np.ndarray) -> Spheres:
         """The spheres ``index`` (int, in the order given) as new arrays, owned by grains ``body``.
@@ -108,7 +118,8 @@ class Spheres:
         def rows(a, k):
             if a.shape[0] == 0:
                 return a.copy()
-            return np.ascontiguousarray(a.reshape(-1, k, 3)[index].reshape(-1, 3))
+            w = a.shape[1]
+            return np.ascontiguousarray(a.reshape(-1, k, w)[index].reshape(-1, w))
 
         from dem.kernels.mesh import MESH_SLOTS
 
@@ -327,7 +338,8 @@ class PairList:
         counters: int64 (2,): valid pairs, builds so far.
         x_ref: Positions at the last build, (n, 3).
         pair_i, pair_j: int64 (cap,): i < j, sorted by the key i n + j (:attr:`pair_key`).
-        hist: Tangential elongation per pair, (cap, 3), m.
+        width: Floats of contact history per pair (the law's, 3 or 5).
+        hist: Contact history per pair, (cap, width): the tangential elongation, m, first.
         part_start: CSR sphere -> its pair ends, int64 (n + 1,): sphere s owns the slots
             ``part_start[s]`` to ``part_start[s + 1]``, in increasing pair index.
         part_slot: The slot of pair k's end i (entry 2 k) and end j (entry 2 k + 1), int64
@@ -341,6 +353,7 @@ class PairList:
     capacity: int
     cell_capacity: int
     slots: int = 16
+    width: int = 3
     counters: np.ndarray = field(init=False)
 
     def __post_init__(self):
@@ -349,9 +362,9 @@ class PairList:
         self.x_ref = np.full((n, 3), np.inf)  # forces a build at the first step
         self.pair_i = np.zeros(cap, dtype=np.int64)
         self.pair_j = np.zeros(cap, dtype=np.int64)
-        self.hist = np.zeros((cap, 3))
+        self.hist = np.zeros((cap, self.width))
         self.scratch_j = np.zeros(n * self.slots, dtype=np.int32)
-        self.scratch_hist = np.zeros((cap, 3))
+        self.scratch_hist = np.zeros((cap, self.width))
         self.counts = np.zeros(n, dtype=np.int64)
         self.offsets = np.zeros(n + 1, dtype=np.int64)
         self.cell_of = np.zeros(n, dtype=np.int64)
@@ -362,12 +375,12 @@ class PairList:
         self.inbox = np.zeros((0, 6))  # allocated by ensure_inbox() for the parallel pair loop
 
     @classmethod
-    def for_spheres(cls, n: int) -> PairList:
+    def for_spheres(cls, n: int, width: int = 3) -> PairList:
         """A list for n spheres with room for 4 pairs each, regrown when a build overflows.
 
         A dense bed of equal spheres uses 2.9 pairs a sphere with the skin.
         """
-        return cls(n=n, capacity=max(16, 4 * n), cell_capacity=max(64, 4 * n))
+        return cls(n=n, capacity=max(16, 4 * n), cell_capacity=max(64, 4 * n), width=width)
 
     @property
     def pair_key(self) -> np.ndarray:

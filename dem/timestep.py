@@ -46,6 +46,10 @@ class ContactLaw:
         ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
         if c.tangential == "coulomb":
             ratio, zeta_t, factor = tangential.resolve(c, m, case.particles)
+        elif c.tangential == "impact":
+            factor = tangential.tangential_mass_factor(
+                case.particles.shape, case.particles.rotation, case.particles.grain
+            )
         return cls(
             model=c.model,
             params=contacts.make_params(
@@ -61,6 +65,8 @@ class ContactLaw:
                 tangential_damping_ratio=zeta_t,
                 tangential_mass_factor=factor,
                 wall_lever_arm=c.wall_lever_arm,
+                restitution_tangential=m.restitution_tangential,
+                model=c.model,
             ),
         )
 
@@ -82,6 +88,11 @@ class ContactLaw:
         f_w = float(p[contacts.P_WALL_ARM])
         out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
         return out
+
+    @property
+    def history_width(self) -> int:
+        """Floats of contact history per contact (:data:`dem.kernels.contacts.HISTORY_WIDTH`)."""
+        return contacts.HISTORY_WIDTH[self.tangential]
 
     @property
     def model_id(self) -> int:

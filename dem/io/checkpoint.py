@@ -32,6 +32,7 @@ import numpy as np
 from dem import config
 from dem.errors import SimulationError
 from dem.io.files import replace_file
+from dem.kernels.contacts import HISTORY_WIDTH
 from dem.kernels.forces import N_WALLS
 from dem.kernels.mesh import MESH_SLOTS
 from dem.state import PairList
@@ -61,17 +62,17 @@ LAYOUT = {
     "sph.mass": ("n", (), _F, "positive"),
     "sph.inv_mass": ("n", (), _F, "positive"),
     "sph.inv_inertia": ("n", (), _F, "positive"),
-    "sph.wall_hist": ("walls", (3,), _F, "finite"),
+    "sph.wall_hist": ("walls", ("hist",), _F, "finite"),
     "sph.body": ("n", (), _I, "index"),
-    "sph.mesh_hist": ("mesh", (3,), _F, "finite"),
+    "sph.mesh_hist": ("mesh", ("hist",), _F, "finite"),
     "sph.mesh_normal": ("mesh", (3,), _F, "finite"),
     "nb.counters": (2, (), _I, "index"),
     "nb.x_ref": ("n", (3,), _F, "no-nan"),
     "nb.pair_i": ("cap", (), _I, "index"),
     "nb.pair_j": ("cap", (), _I, "index"),
-    "nb.hist": ("cap", (3,), _F, None),  # the valid pairs' rows are checked below
+    "nb.hist": ("cap", ("hist",), _F, None),  # the valid pairs' rows are checked below
     "nb.scratch_j": ("n*slots", (), np.dtype(np.int32), None),
-    "nb.scratch_hist": ("cap", (3,), _F, None),
+    "nb.scratch_hist": ("cap", ("hist",), _F, None),
     "nb.counts": ("n", (), _I, None),
     "nb.offsets": ("n+1", (), _I, None),
     "nb.cell_of": ("n", (), _I, None),
@@ -180,7 +181,7 @@ def load_state(sim, state: dict[str, np.ndarray]) -> None:
         for key in vars(sim.bodies):
             setattr(sim.bodies, key, np.ascontiguousarray(state[f"body.{key}"]).copy())
         sim.spheres.body = sim.bodies.body_of
-    sim.pairs = PairList(n, capacity, cell_capacity, slots)
+    sim.pairs = PairList(n, capacity, cell_capacity, slots, sim.law.history_width)
     for key, value in vars(sim.pairs).items():
         if isinstance(value, np.ndarray) and key not in TRANSIENT:
             setattr(sim.pairs, key, np.ascontiguousarray(state[f"nb.{key}"]).copy())
@@ -194,6 +195,12 @@ def load_state(sim, state: dict[str, np.ndarray]) -> None:
 def _against(sim, state: dict[str, np.ndarray], n: int) -> None:
     """The checks of a valid checkpoint against the simulation of the case it is resumed with."""
     other = "it belongs to another case; start the run again without --resume"
+    width = state["nb.hist"].shape[1]
+    if width != sim.law.history_width:
+        raise CheckpointError(
+            f"checkpoint keeps {width} floats of contact history, the case's tangential law "
+            f"({sim.law.tangential!r}) {sim.law.history_width}: {other}"
+        )
     if ("body.x" in state) != (sim.bodies is not None):
         kind = "rigid clumps" if "body.x" in state else "single spheres"
         raise CheckpointError(f"checkpoint holds {kind}, the case not: {other}")
@@ -295,8 +302,17 @@ def validate(state: dict[str, np.ndarray]) -> None:
         "stats": len(state["sim.stats"]) if np.ndim(state["sim.stats"]) == 1 else 3,
         "grains": bodies, "B": bodies, "B+1": bodies + 1, None: None,
     }  # fmt: skip
+    # the contact history's width is the tangential law's (HISTORY_WIDTH): one of its values,
+    # the same in every history array
+    width = np.shape(state["nb.hist"])[1] if np.ndim(state["nb.hist"]) == 2 else -1
+    if width not in set(HISTORY_WIDTH.values()):
+        raise CheckpointError(
+            f"nb.hist has shape {np.shape(state['nb.hist'])}: (pairs, w) with w one of "
+            f"{sorted(set(HISTORY_WIDTH.values()))}, a tangential law's history width"
+        )
     layout = LAYOUT | (BODY_LAYOUT if clumps else {})
     for key, (row, trailing, dtype, values) in layout.items():
+        trailing = tuple(width if t == "hist" else t for t in trailing)
         shape = () if row is None else (rows.get(row, row), *trailing)
         array = _dtype_shape(key, state[key], dtype, shape)
         if values == "finite" and not np.isfinite(array).all():

@@ -36,6 +36,31 @@ with the tangential force F_t by one of two conventions (``[contact] tangential`
       F_t = -mu |F_n| s / |s|,  s <- -F_t / k_t             otherwise (sliding, no damping)
 
   While sticking, a heavily damped contact can transmit more than mu |F_n|.
+- ``"impact"`` (impact-aware: eps_t is a material property, not a per-drive fit). One spring
+  cannot be both soft enough during an impact to return eps_t = 0.8 (k_t / k_n ~ 0.02-0.1) and
+  stiff enough at rest to stick as Coulomb's rigid stick (that spring rings near the drive
+  frequency). So a contact remembers its phase (5 floats of history, :data:`HISTORY_WIDTH`):
+
+  * *impact*, from first touch while approaching (v_n = v_r . n < 0): at first touch the slip
+    velocity v_t0 and approach speed |v_n0| fix a force ratio
+    c = min((1 - eps_t) |v_t0| / |v_n0|, mu (1 + eps_n)) / (1 + e_n), and the tangential force is
+    F_t = -c F_n^+ t0 (t0 = v_t0 / |v_t0| projected on the tangent plane, F_n^+ = max(F_n, 0)).
+    Over a free impact the normal impulse is (1 + e_n) m* |v_n0|, e_n the normal law's own
+    restitution (:func:`normal_law_restitution`), so the tangential impulse is
+    min((1 - eps_t) m* |v_t0|, mu (1 + eps_n) m* |v_n0|): the paper's Eq. 12 where Coulomb allows
+    it, the Coulomb-bounded landing (:mod:`dem.pointmass.bounded`) where it does not, and never
+    more than mu F_n at any instant. Because F_t is proportional to F_n, a clump landing on
+    several members at once gets the same total as on one. The impact ends when the separating
+    speed stops growing (the contact force is back to the external load), when the slip along t0
+    has stopped (a rolling sphere reaches rolling: it keeps eps_t >= 5/7), or after
+    :data:`IMPACT_MAX_PHASE` radians of the local normal oscillation sqrt(k_n / m*).
+  * *enduring*, after that: a stick spring-dashpot sized by the time step, not by the material,
+    k_s = f_t m* (alpha / dt)^2, gamma_s = 2 zeta_s alpha f_t m* / dt (alpha = ``stick_rate``,
+    :data:`dem.config.DEM_STICK_RATE`), total force capped at mu F_n^+ as in "coulomb". Its
+    spring is set at the switch so that the force is continuous. As dt shrinks (a stiffer
+    material) it converges to Coulomb's rigid stick.
+
+  A contact that breaks (its history reset to zeros) starts a new impact when it re-forms.
 
 Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directional torque):
 w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
@@ -68,7 +93,12 @@ import math
 import numba
 import numpy as np
 
-from dem.config import DEM_TANGENTIAL_DAMPING_RATIO, NUMBA_OPTIONS
+from dem.config import (
+    DEM_STICK_DAMPING_RATIO,
+    DEM_STICK_RATE,
+    DEM_TANGENTIAL_DAMPING_RATIO,
+    NUMBA_OPTIONS,
+)
 
 #: Contact law selectors (the case's ``contact.model``) -> integer id used by the kernels.
 MODELS = {"linear": 0, "hertz_mindlin": 1}
@@ -91,10 +121,21 @@ P_ZETA_T = 11  #: "coulomb": tangential damping ratio zeta_t
 P_MASS_T = 12  #: "coulomb": tangential mass factor f_t (tangential effective mass f_t m*)
 P_COULOMB_DAMP_T = 13  #: "coulomb", Hertz: 2 zeta_t sqrt(2 kappa Y* f_t): gamma_t = this q
 P_WALL_ARM = 14  #: f_w: a wall contact's lever arm is r - f_w delta (:data:`WALL_LEVER_ARMS`)
-N_PARAMS = 15
+P_IMPACT_RATIO = 15  #: "impact": (1 - eps_t) / (1 + e_n), e_n the normal law's own restitution
+P_STICK_RATE = 16  #: "impact": alpha, the stick's angular frequency times dt (rad per step)
+P_STICK_ZETA = 17  #: "impact": damping ratio of the stick
+P_IMPACT_CAP = 18  #: "impact": the largest c, min(mu, mu (1 + eps_n) / (1 + e_n))
+N_PARAMS = 19
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
-TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0}
+TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
+IMPACT = TANGENTIAL["impact"]
+#: Floats of contact history per contact, by convention: the spring s (3); "impact" adds its
+#: phase and the previous normal velocity (:func:`_impact_tangential`).
+HISTORY_WIDTH = {"coulomb": 3, "liggghts": 3, "impact": 5}
+#: "impact": an impact phase lasts at most this many radians of the local normal oscillation
+#: (sqrt(k_n / m*) integrated over time); a free impact ends within about 3.
+IMPACT_MAX_PHASE = 2.0 * math.pi
 #: f_w of each ``wall_lever_arm``: "surface" puts a wall contact's point on the wall's surface
 #: (r - delta from the centre), "midpoint" halfway into the overlap (r - delta / 2), as
 #: LIGGGHTS 3.8 does for its walls (surface_model_default.h: ``cr = radi - 0.5 * deltan``).
@@ -119,6 +160,37 @@ def damping_beta(restitution: float) -> float:
     return log_e / math.sqrt(log_e * log_e + math.pi * math.pi)
 
 
+def normal_law_restitution(model: int, beta: float) -> float:
+    """Normal restitution e_n that the normal law itself gives a free impact (no gravity).
+
+    The rebound speed over the approach speed at the end of the repulsion (the force, spring
+    plus dashpot, first back to zero), from a Runge-Kutta integration of the dimensionless
+    impact (m* = 1, v = 1; k_n = 1 for the linear law, Y* = R* = 1 for Hertz). Both laws give an
+    e_n independent of the impact speed: the linear law's damping ratio -beta is a constant, and
+    Hertz's damping grows with the overlap as sqrt(S_n) does (Tsuji et al. 1992). e_n is close to
+    the case's eps_n for eps_n > 0, and 0.135 for eps_n = 0 (both laws):
+    critical damping still returns a little of the approach speed as the spring unloads.
+    """
+    damp = -2.0 * beta if model == LINEAR else -2.0 * _SQRT_5_6 * beta * math.sqrt(2.0)
+
+    def accel(x, v):  # x the overlap, v its rate; returns the overlap's acceleration
+        if model == LINEAR:
+            return -(x + damp * v)
+        root = math.sqrt(max(x, 0.0))
+        return -((4.0 / 3.0) * root * x + damp * math.sqrt(root) * v)
+
+    x, v, h = 0.0, 1.0, 1e-4
+    while True:
+        k1x, k1v = v, accel(x, v)
+        k2x, k2v = v + 0.5 * h * k1v, accel(x + 0.5 * h * k1x, v + 0.5 * h * k1v)
+        k3x, k3v = v + 0.5 * h * k2v, accel(x + 0.5 * h * k2x, v + 0.5 * h * k2v)
+        k4x, k4v = v + h * k3v, accel(x + h * k3x, v + h * k3v)
+        x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
+        v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
+        if x <= 0.0 or (v < 0.0 and accel(x, v) >= 0.0):
+            return -v
+
+
 def make_params(
     *,
     stiffness: float = 0.0,
@@ -133,6 +205,10 @@ def make_params(
     tangential_damping_ratio: float = DEM_TANGENTIAL_DAMPING_RATIO,
     tangential_mass_factor: float = 1.0,
     wall_lever_arm: str = "surface",
+    restitution_tangential: float = 0.8,
+    stick_rate: float = DEM_STICK_RATE,
+    stick_damping_ratio: float = DEM_STICK_DAMPING_RATIO,
+    model: str = "",
 ) -> np.ndarray:
     """Pack contact coefficients into the ``params`` array of the kernels, shape (N_PARAMS,).
 
@@ -140,7 +216,9 @@ def make_params(
     ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
     ``tangential_damping_ratio`` zeta_t and ``tangential_mass_factor`` f_t are used by
     ``tangential = "coulomb"`` only (module docstring). ``wall_lever_arm`` is a key of
-    :data:`WALL_LEVER_ARMS`.
+    :data:`WALL_LEVER_ARMS`. ``tangential = "impact"`` uses ``restitution_tangential`` eps_t,
+    the normal law's own restitution (:func:`normal_law_restitution` of ``model``, which it
+    then needs), ``stick_rate`` alpha, ``stick_damping_ratio`` and ``tangential_mass_factor``.
     """
     if wall_lever_arm not in WALL_LEVER_ARMS:
         raise ValueError(
@@ -165,6 +243,16 @@ def make_params(
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
     p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
+    if tangential == "impact":
+        if model not in MODELS:
+            raise ValueError(f"tangential 'impact' needs the normal model, got {model!r}")
+        if not 0.0 <= restitution_tangential <= 1.0:
+            raise ValueError(f"eps_t must lie in [0, 1], got {restitution_tangential}")
+        e_n = normal_law_restitution(MODELS[model], p[P_BETA])
+        p[P_IMPACT_RATIO] = (1.0 - restitution_tangential) / (1.0 + e_n)
+        p[P_IMPACT_CAP] = min(friction, friction * (1.0 + restitution) / (1.0 + e_n))
+        p[P_STICK_RATE] = stick_rate
+        p[P_STICK_ZETA] = stick_damping_ratio
     p[P_COULOMB_DAMP_T] = (
         2.0
         * tangential_damping_ratio
@@ -274,6 +362,91 @@ def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
 
 
 @numba.njit(**NUMBA_OPTIONS)
+def _impact_tangential(p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt):
+    """Tangential force of the impact-aware law; updates ``hist[k]`` (5 floats) in place.
+
+    History: ``hist[k, 3]`` is the phase (0 a new contact, 1 + theta an impact, theta the
+    radians of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring),
+    ``hist[k, 4]`` the normal velocity v_n = v_r . n of the previous step, ``hist[k, 0:3]`` the
+    impact's force ratio vector c (impact) or the stick's spring s (enduring).
+
+    Returns (F_t,) as three floats.
+    """
+    fnp = fn if fn > 0.0 else 0.0
+    f_max = p[P_MU] * fnp
+    phase = hist[k, 3]
+    if phase == 0.0:
+        # first touch: an approach makes an impact that takes (1 - eps_t) of the slip velocity
+        # through a tangential force c F_n, c = (1 - eps_t) |v_t| / ((1 + e_n) |v_n|), capped
+        # where the rigid impact's Coulomb bound mu (1 + eps_n) m |v_n| is reached
+        vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
+        hist[k, 0] = 0.0
+        hist[k, 1] = 0.0
+        hist[k, 2] = 0.0
+        if vn < 0.0:
+            phase = 1.0
+            if vt > 0.0:
+                ratio = p[P_IMPACT_RATIO] * vt / -vn
+                if ratio > p[P_IMPACT_CAP]:
+                    ratio = p[P_IMPACT_CAP]
+                hist[k, 0] = ratio * vtx / vt
+                hist[k, 1] = ratio * vty / vt
+                hist[k, 2] = ratio * vtz / vt
+        else:
+            phase = -1.0
+    m_t = p[P_MASS_T] * m_eff
+    alpha = p[P_STICK_RATE]
+    ks = m_t * alpha * alpha / (dt * dt)
+    gs = 2.0 * p[P_STICK_ZETA] * alpha * m_t / dt
+    if phase > 0.0:
+        # impact: F_t = -F_n c, c projected onto the tangent plane; ends when the separating
+        # speed stops growing (the contact force is back to the external load), when the slip
+        # along c has stopped, or after IMPACT_MAX_PHASE
+        cx = hist[k, 0]
+        cy = hist[k, 1]
+        cz = hist[k, 2]
+        cn = cx * nx + cy * ny + cz * nz
+        cx -= cn * nx
+        cy -= cn * ny
+        cz -= cn * nz
+        ftx = -fnp * cx
+        fty = -fnp * cy
+        ftz = -fnp * cz
+        theta = phase - 1.0 + dt * math.sqrt(kn / m_eff)
+        slip = vtx * cx + vty * cy + vtz * cz
+        over = vn > 0.0 and vn <= hist[k, 4]
+        stuck = slip <= 0.0 and cx * cx + cy * cy + cz * cz > 0.0
+        hist[k, 4] = vn
+        if not (over or stuck or theta > IMPACT_MAX_PHASE):
+            hist[k, 0] = cx
+            hist[k, 1] = cy
+            hist[k, 2] = cz
+            hist[k, 3] = 1.0 + theta
+            return ftx, fty, ftz
+        # switch to the enduring stick, its spring set so that the force is continuous
+        hist[k, 0] = -(ftx + gs * vtx) / ks
+        hist[k, 1] = -(fty + gs * vty) / ks
+        hist[k, 2] = -(ftz + gs * vtz) / ks
+        hist[k, 3] = -1.0
+        return ftx, fty, ftz
+    # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
+    sx = hist[k, 0] + vtx * dt
+    sy = hist[k, 1] + vty * dt
+    sz = hist[k, 2] + vtz * dt
+    sn = sx * nx + sy * ny + sz * nz
+    sx -= sn * nx
+    sy -= sn * ny
+    sz -= sn * nz
+    ftx, fty, ftz, sx, sy, sz = _coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
+    hist[k, 0] = sx
+    hist[k, 1] = sy
+    hist[k, 2] = sz
+    hist[k, 3] = -1.0
+    hist[k, 4] = vn
+    return ftx, fty, ftz
+
+
+@numba.njit(**NUMBA_OPTIONS)
 def contact_force(
     model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
     ci, cj, m_eff, r_eff, hist, k, dt,
@@ -310,6 +483,12 @@ def contact_force(
     vtx = vrx - vn * nx - (wy * nz - wz * ny)
     vty = vry - vn * ny - (wz * nx - wx * nz)
     vtz = vrz - vn * nz - (wx * ny - wy * nx)
+    if p[P_TANGENTIAL] == IMPACT:
+        ftx, fty, ftz = _impact_tangential(
+            p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt
+        )
+        return _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj,
+                       r_eff)  # fmt: skip
     # tangential spring: increment, then project onto the current tangent plane
     sx = hist[k, 0] + vtx * dt
     sy = hist[k, 1] + vty * dt
@@ -326,6 +505,12 @@ def contact_force(
     hist[k, 0] = sx
     hist[k, 1] = sy
     hist[k, 2] = sz
+    return _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj, r_eff)
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj, r_eff):
+    """Force on i, torques -c n x F_t on i and j plus rolling resistance, and F_n (10 floats)."""
     # torques -c n x F_t
     cx = ny * ftz - nz * fty
     cy = nz * ftx - nx * ftz

@@ -52,9 +52,8 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
     rj = radius[j]
     rsum = ri + rj
     if d2 >= rsum * rsum:
-        hist[k, 0] = 0.0
-        hist[k, 1] = 0.0
-        hist[k, 2] = 0.0
+        for c in range(hist.shape[1]):
+            hist[k, c] = 0.0
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     d = math.sqrt(d2)
     delta = rsum - d
@@ -236,9 +235,8 @@ def wall_forces(
     if (x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r
             and x[i, 0] - back >= r):  # fmt: skip
         for row in range(N_WALLS * i, N_WALLS * i + N_WALLS):
-            wall_hist[row, 0] = 0.0
-            wall_hist[row, 1] = 0.0
-            wall_hist[row, 2] = 0.0
+            for c in range(wall_hist.shape[1]):
+                wall_hist[row, c] = 0.0
         return fx, fy, fz, tx, ty, tz
     for w in range(N_WALLS - 1):
         nz = 0.0
@@ -255,9 +253,8 @@ def wall_forces(
         delta = r - gap
         row = N_WALLS * i + w
         if delta <= 0.0:
-            wall_hist[row, 0] = 0.0
-            wall_hist[row, 1] = 0.0
-            wall_hist[row, 2] = 0.0
+            for c in range(wall_hist.shape[1]):
+                wall_hist[row, c] = 0.0
             continue
         fx, fy, fz, tx, ty, tz = add_wall_contact(
             model, p, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
@@ -275,9 +272,8 @@ def _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, 
     row = N_WALLS * i + N_WALLS - 1
     delta = r - (x[i, 0] - back)
     if delta <= 0.0:
-        wall_hist[row, 0] = 0.0
-        wall_hist[row, 1] = 0.0
-        wall_hist[row, 2] = 0.0
+        for c in range(wall_hist.shape[1]):
+            wall_hist[row, c] = 0.0
         return fx, fy, fz, tx, ty, tz
     return add_wall_contact(
         model, p, 1.0, 0.0, 0.0, delta, v, omega, i, m, r, wall_hist, row, dt,

@@ -158,8 +158,9 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
     c = cell_of(px, x[i, 1], x[i, 2], mesh.grid, mesh.dims)
     if c < 0 or mesh.cell_start[c] == mesh.cell_start[c + 1]:
         for row in range(MESH_SLOTS * i, MESH_SLOTS * i + MESH_SLOTS):
-            for k in range(3):
+            for k in range(mesh.slot_hist.shape[1]):
                 mesh.slot_hist[row, k] = 0.0
+            for k in range(3):
                 mesh.slot_normal[row, k] = 0.0
         return fx, fy, fz, tx, ty, tz
     f = mesh_forces(
@@ -217,9 +218,8 @@ def mesh_forces(
             if best < 0:  # more contacts than slots: take the last one's spring
                 best = MESH_SLOTS - 1
             row = base + best
-            slot_hist[row, 0] = 0.0
-            slot_hist[row, 1] = 0.0
-            slot_hist[row, 2] = 0.0
+            for k in range(slot_hist.shape[1]):
+                slot_hist[row, k] = 0.0
         claimed |= 1 << best
         row = base + best
         slot_normal[row, 0] = nx
@@ -235,8 +235,9 @@ def mesh_forces(
     for s in range(MESH_SLOTS):
         if not claimed & (1 << s):
             row = base + s
-            for k in range(3):
+            for k in range(slot_hist.shape[1]):
                 slot_hist[row, k] = 0.0
+            for k in range(3):
                 slot_normal[row, k] = 0.0
     return fx, fy, fz, tx, ty, tz
 

@@ -149,13 +149,11 @@ def _carry_history(n, counts, offsets, scratch_j, slots, pair_i, pair_j, hist, n
             while m < n_old and pair_i[m] * n + pair_j[m] < key:
                 m += 1
             if m < n_old and pair_i[m] * n + pair_j[m] == key:
-                out_hist[k, 0] = hist[m, 0]
-                out_hist[k, 1] = hist[m, 1]
-                out_hist[k, 2] = hist[m, 2]
+                for c in range(hist.shape[1]):
+                    out_hist[k, c] = hist[m, c]
             else:
-                out_hist[k, 0] = 0.0
-                out_hist[k, 1] = 0.0
-                out_hist[k, 2] = 0.0
+                for c in range(hist.shape[1]):
+                    out_hist[k, c] = 0.0
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -238,9 +236,8 @@ def rebuild(
             pair_i[k] = i
             pair_j[k] = scratch_j[i * slots + m]
     for k in range(n_new):
-        hist[k, 0] = scratch_hist[k, 0]
-        hist[k, 1] = scratch_hist[k, 1]
-        hist[k, 2] = scratch_hist[k, 2]
+        for c in range(hist.shape[1]):
+            hist[k, c] = scratch_hist[k, c]
     # CSR: sphere -> its pair ends; slot of end i (2 k) and end j (2 k + 1)
     counts[:n] = 0
     for k in range(n_new):
