@@ -216,6 +216,11 @@ class Calibration:
         deviation_before: The same with the case's contact as given.
         fan: Incidences 5-85 deg at the mean impact speed, (F,), deg.
         fan_before, fan_after: eps_t over ``fan`` before and after, (F,).
+        targets: What each impact can reach, (L,): eps_t, or the Coulomb-bounded value
+            1 - mu (1 + eps_n) cot(theta) where friction binds (the rigid landing's bound).
+        bounded: Where friction binds, (L,) bool.
+        fitted: Whether anything was fitted: False for ``tangential = "impact"``, whose law
+            delivers eps_t by construction (kappa is then nan and ``after`` is ``before``).
 
     """
 
@@ -235,6 +240,26 @@ class Calibration:
     fan: np.ndarray
     fan_before: np.ndarray
     fan_after: np.ndarray
+    targets: np.ndarray
+    bounded: np.ndarray
+    fitted: bool = True
+
+    @property
+    def worst(self) -> float:
+        """Largest |eps_t - reachable target| over the impacts after the fit."""
+        return float(np.nanmax(np.abs(self.after - self.targets)))
+
+
+def bounded_targets(eps_t: float, eps_n: float, mu: float, incidence) -> np.ndarray:
+    """eps_t a landing at ``incidence`` (deg from the normal) can reach under Coulomb.
+
+    A rigid landing takes at most mu (1 + eps_n) v_n from v_t, so eps_t >= 1 - mu (1 + eps_n)
+    cot(theta) (:mod:`dem.pointmass.bounded`): the target is the larger of the two.
+    """
+    theta = np.radians(np.asarray(incidence, dtype=float))
+    with np.errstate(divide="ignore"):
+        bound = 1.0 - mu * (1.0 + eps_n) / np.tan(theta)
+    return np.maximum(eps_t, bound)
 
 
 def _nanmean_rows(values: np.ndarray) -> np.ndarray:
@@ -303,23 +328,27 @@ def calibrate(
     away from the target. ``reachable`` says
     whether every landing is within ``tolerance`` of the target at the fitted kappa.
 
+    The target of each landing is what Coulomb lets it reach (:func:`bounded_targets`), so a
+    grazing landing that friction bounds neither pulls the fit nor counts against it.
+    ``tangential = "impact"`` leaves nothing to fit: its impacts are measured and reported as
+    they are (``fitted`` False).
+
     Raises:
-        InputError: ``contact.tangential`` is not "coulomb".
+        InputError: ``contact.tangential`` is "liggghts".
 
     """
-    if case.contact.tangential != "coulomb":
+    if case.contact.tangential == "liggghts":
         raise InputError(
             "contact.tangential",
             case.contact.tangential,
-            "'coulomb' (the 'liggghts' convention takes k_t from Mindlin, not from eps_t)",
+            "'impact' or 'coulomb' (the 'liggghts' convention takes k_t from Mindlin, not from "
+            "eps_t)",
             source=str(case.source),
         )
     from dem.kernels import contacts
     from dem.timestep import ContactLaw
 
     target = case.material.restitution_tangential
-    law = ContactLaw.from_case(case)
-    zeta_t = float(law.params[contacts.P_ZETA_T])
     impacts = landings(case)
     if impacts.shape[0]:
         # a periodic orbit lands the same way every cycle: measure each distinct landing once
@@ -342,6 +371,30 @@ def calibrate(
         rng = np.random.default_rng(case.run.seed)
         quats = list(random_orientations(orientations, rng))
 
+    m = case.material
+    targets = bounded_targets(m.restitution_tangential, m.restitution_normal, m.friction,
+                              impacts[:, 0])  # fmt: skip
+    bounded = targets > target
+    fan = np.arange(5.0, 86.0, 10.0)
+    fan_impacts = np.column_stack([fan, np.full(fan.size, np.mean(impacts[:, 1]))])
+    if case.contact.tangential == "impact":
+        e_t, e_n = _measure(case, impacts, quats)
+        after = np.nanmean(e_t, axis=1)
+        fan_values = _nanmean_rows(_measure(case, fan_impacts, quats, strict=False)[0])
+        weights = np.sin(np.radians(impacts[:, 0])) ** 2
+        weights /= weights.sum()
+        deviation = math.sqrt(float(np.sum(weights * (after - targets) ** 2)))
+        eps = float(np.nanmean(e_t))
+        return Calibration(
+            target=target, kappa=math.nan, zeta_t=math.nan, eps_t=eps,
+            eps_t_spread=float(np.nanstd(e_t)), eps_n=float(np.nanmean(e_n)),
+            residual=eps - float(np.mean(targets)),
+            reachable=bool(np.max(np.abs(after - targets)) <= tolerance), impacts=impacts,
+            before=after, after=after, deviation=deviation, deviation_before=deviation,
+            fan=fan, fan_before=fan_values, fan_after=fan_values, targets=targets,
+            bounded=bounded, fitted=False,
+        )  # fmt: skip
+    zeta_t = float(ContactLaw.from_case(case).params[contacts.P_ZETA_T])
     # a landing matters by the tangential momentum at stake: weight (v_t / V)^2 = sin^2(theta)
     weights = np.sin(np.radians(impacts[:, 0])) ** 2
     weights /= weights.sum()
@@ -353,7 +406,7 @@ def calibrate(
         if log_kappa not in cache:
             kappa = math.exp(log_kappa)
             e_t, e_n = _measure(_with_tangential(case, kappa, zeta_t), impacts, quats)
-            deviation = np.nanmean(e_t, axis=1) - target
+            deviation = np.nanmean(e_t, axis=1) - targets
             cache[log_kappa] = (float(np.sum(weights * deviation**2)), e_t, e_n)
             if progress is not None:
                 progress(kappa, float(np.nanmean(e_t)))
@@ -365,6 +418,7 @@ def calibrate(
     grid = np.linspace(*LOG_KAPPA_RANGE, 16)
     for x in grid:
         evaluate(float(x))
+    law = ContactLaw.from_case(case)
     x = math.log(start if start is not None else float(law.params[contacts.P_KT_RATIO]))
     evaluate(x)
     x = min(cache, key=lambda k: cache[k][0])
@@ -375,8 +429,7 @@ def calibrate(
     best = math.exp(best_log)
     _, e_t, e_n = cache[best_log]
     eps = float(np.nanmean(e_t))
-    fan = np.arange(5.0, 86.0, 10.0)
-    fan_impacts = np.column_stack([fan, np.full(fan.size, np.mean(impacts[:, 1]))])
+    after = np.nanmean(e_t, axis=1)
     fan_before = _nanmean_rows(_measure(case, fan_impacts, quats, strict=False)[0])
     fan_after = _nanmean_rows(
         _measure(_with_tangential(case, best, zeta_t), fan_impacts, quats, strict=False)[0]
@@ -388,14 +441,16 @@ def calibrate(
         eps_t=eps,
         eps_t_spread=float(np.nanstd(e_t)),
         eps_n=float(np.nanmean(e_n)),
-        residual=eps - target,
-        reachable=bool(np.max(np.abs(np.nanmean(e_t, axis=1) - target)) <= tolerance),
+        residual=eps - float(np.mean(targets)),
+        reachable=bool(np.max(np.abs(after - targets)) <= tolerance),
         impacts=impacts,
         before=before,
-        after=np.nanmean(e_t, axis=1),
+        after=after,
         deviation=math.sqrt(cache[best_log][0]),
-        deviation_before=math.sqrt(float(np.sum(weights * (before - target) ** 2))),
+        deviation_before=math.sqrt(float(np.sum(weights * (before - targets) ** 2))),
         fan=fan,
         fan_before=fan_before,
         fan_after=fan_after,
+        targets=targets,
+        bounded=bounded,
     )

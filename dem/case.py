@@ -211,7 +211,7 @@ class ContactSpec:
     stiffness: float | None
     tangential_stiffness_ratio: float | None
     limit_force: bool = False
-    tangential: str = "coulomb"
+    tangential: str = "impact"
     tangential_damping_ratio: float | None = None
     wall_lever_arm: str = "surface"
 
@@ -579,7 +579,7 @@ def _read_material(t: Table) -> MaterialSpec:
 def _read_contact(t: Table) -> ContactSpec:
     t.check_known(_CONTACT_KEYS)
     model = t.choice("model", CONTACT_MODELS, "hertz_mindlin")
-    tangential = t.choice("tangential", TANGENTIAL_CONVENTIONS, "coulomb")
+    tangential = t.choice("tangential", TANGENTIAL_CONVENTIONS, "impact")
     # Coefficients the chosen model does not use are refused rather than silently ignored.
     foreign = {
         ("hertz_mindlin", "coulomb"): ("stiffness",),

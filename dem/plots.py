@@ -256,10 +256,17 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
 
     theta = cal.impacts[:, 0]
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-    ax.plot(cal.fan, cal.fan_before, "-", color="C7", lw=1, label="before (case as given)")
-    ax.plot(cal.fan, cal.fan_after, "-", color="C0", label=f"after (k_t / k_n = {cal.kappa:.4g})")
-    ax.plot(theta, cal.before, "o", mfc="none", color="C7", ms=7)
+    if cal.fitted:
+        ax.plot(cal.fan, cal.fan_before, "-", color="C7", lw=1, label="before (case as given)")
+        after = f"after (k_t / k_n = {cal.kappa:.4g})"
+        ax.plot(theta, cal.before, "o", mfc="none", color="C7", ms=7)
+    else:
+        after = "impact-aware law (nothing to fit)"
+    ax.plot(cal.fan, cal.fan_after, "-", color="C0", label=after)
     ax.plot(theta, cal.after, "o", color="C0", label="landings of the point mass")
+    if cal.bounded.any():
+        ax.plot(theta[cal.bounded], cal.targets[cal.bounded], "x", color="C2", ms=8,
+                label="friction-bound landings: reachable value")  # fmt: skip
     ax.axhline(cal.target, color="C3", lw=1, label=f"target eps_t = {cal.target:g}")
     grid = np.linspace(5.0, 89.0, 200)
     bound = 1.0 - friction / np.tan(np.radians(grid))

@@ -244,7 +244,11 @@ def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
     case_dir = tmp_path / "one"
     shutil.copytree("cases/single-sphere", case_dir)
     toml = case_dir / "case.toml"
-    toml.write_text(toml.read_text().replace("throw_number = 0.6", "throw_number = 1.8"))
+    toml.write_text(
+        toml.read_text()
+        .replace("throw_number = 0.6", "throw_number = 1.8")
+        .replace('tangential = "impact"', 'tangential = "coulomb"')
+    )
     before = toml.read_text()
     plot = tmp_path / "cal.png"
     assert main(["calibrate", str(case_dir), "--dry-run", "--plot", str(plot)]) == 0
@@ -264,9 +268,41 @@ def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):
     case_dir = tmp_path / "one"
     shutil.copytree("cases/single-sphere", case_dir)
     toml = case_dir / "case.toml"
-    toml.write_text(toml.read_text().replace('tangential = "coulomb"', 'tangential = "liggghts"'))
+    toml.write_text(toml.read_text().replace('tangential = "impact"', 'tangential = "liggghts"'))
     assert main(["calibrate", str(case_dir)]) == 2
     assert "contact.tangential" in capsys.readouterr().err
+
+
+def test_calibrate_of_the_impact_law_measures_and_changes_nothing(tmp_path, capsys):
+    import shutil
+
+    case_dir = tmp_path / "one"
+    shutil.copytree("cases/single-sphere", case_dir)
+    toml = case_dir / "case.toml"
+    toml.write_text(toml.read_text().replace("throw_number = 0.6", "throw_number = 1.8"))
+    before = toml.read_text()
+    code, out, _ = run(capsys, "calibrate", str(case_dir), "--plot", str(tmp_path / "c.png"))
+    assert code == 0 and "nothing to fit" in out and toml.read_text() == before
+    assert not (case_dir / "case.toml.orig").exists()
+
+
+def test_calibrate_writes_the_closest_fit_and_fails_only_when_strict(tmp_path, capsys):
+    """Gamma 4.2, a period-2 orbit: its landings at 21 and 42 deg take different eps_t from one
+    Coulomb spring (0.756 and 0.819 at best), yet calibrate answers (exit 0) unless --strict."""
+    import shutil
+
+    case_dir = tmp_path / "one"
+    shutil.copytree("cases/single-sphere", case_dir)
+    toml = case_dir / "case.toml"
+    toml.write_text(
+        toml.read_text()
+        .replace("throw_number = 0.6", "throw_number = 4.2")
+        .replace('tangential = "impact"', 'tangential = "coulomb"')
+    )
+    plot = str(tmp_path / "c.png")
+    code, out, err = run(capsys, "calibrate", str(case_dir), "--dry-run", "--plot", plot)
+    assert code == 0 and "residual" in out and "within 0.02" in err and "--strict" in err
+    assert run(capsys, "calibrate", str(case_dir), "--dry-run", "--strict", "--plot", plot)[0] == 1
 
 
 def test_export_of_an_auto_settle_case_asks_for_the_settle_cycles(capsys, tmp_path):

@@ -194,12 +194,19 @@ def _fmt(x: float) -> str:
 
 def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]:
     """Return the property/global lines, the model string and the model settings."""
-    contact, material = case.contact, case.material
-    limit = "on" if contact.limit_force else "off"
-    mu = _fmt(material.friction)
     lines = [
         "# grains are atom type 1, walls type 2; one material for both",
     ]
+    if case.contact.tangential == "impact":
+        lines.append(
+            "# NOTE: the case's impact-aware tangential law ([contact] tangential = 'impact': "
+            "eps_t per impact, then a rigid stick) has no LIGGGHTS equivalent; this deck uses "
+            "LIGGGHTS's history law, as dem's tangential = 'liggghts'"
+        )
+        case = case.with_tangential("liggghts")
+    contact, material = case.contact, case.material
+    limit = "on" if contact.limit_force else "off"
+    mu = _fmt(material.friction)
     if contact.tangential == "coulomb":
         lines.append(
             "# NOTE: the case caps the total tangential force at mu F_n ([contact] tangential = "
