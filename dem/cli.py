@@ -181,6 +181,17 @@ def _add_material(p: argparse.ArgumentParser, *, angle_required: bool = True) ->
 def _add_restitution(p: argparse.ArgumentParser) -> None:
     p.add_argument("--eps-t", type=_number, default=0.8, help=_ALLOWED["--eps-t"])
     p.add_argument("--eps-n", type=_number, default=0.0, help=_ALLOWED["--eps-n"])
+    _add_impact(p)
+
+
+def _add_impact(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--impact",
+        choices=("paper", "coulomb"),
+        default="paper",
+        help="landing law: 'paper' (Eq. 12: v_t times eps_t) or 'coulomb' (that change capped "
+        "at mu (1 + eps_n) v_n, as any friction contact: the DEM's reference)",
+    )
 
 
 def _cmd_thresholds(args) -> int:
@@ -211,8 +222,9 @@ def _cmd_velocity(args) -> int:
 
     _check_numbers(args)
     r = pointmass.velocity(
-        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n
-    )
+        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n,
+        impact=args.impact,
+    )  # fmt: skip
     result = r.as_dict()
     if args.frequency is not None:
         result["frequency"] = args.frequency
@@ -227,6 +239,7 @@ def _cmd_velocity(args) -> int:
     if args.frequency is not None:
         print(f"velocity       {result['velocity']:.6g} m/s at {args.frequency:g} Hz")
     print(f"regime         {r.regime}")
+    print(f"impact         {r.impact}")
     if r.periodic:
         print(f"periodic       yes, period {r.period} cycle(s), settled after {r.cycles}")
     else:
@@ -250,7 +263,7 @@ def _cmd_sweep(args) -> int:
     }
     if args.out:
         _writable_path("--out", args.out, folder=False)
-    result = sweep(**values)
+    result = sweep(**values, impact=args.impact)
     if args.out:
         with open(args.out, "w", encoding="utf-8") as stream:
             write_csv(result, stream)
@@ -286,6 +299,7 @@ def _cmd_optimum(args) -> int:
         eps_t=args.eps_t,
         eps_n=args.eps_n,
         bounds=bounds,
+        impact=args.impact,
     )
     if plot is not None:
         from dem.plots import optimum_figure
@@ -296,7 +310,9 @@ def _cmd_optimum(args) -> int:
         _print_json(o.as_dict(with_curve=args.curve))
         return 0
     unit = "deg" if args.over == "angle" else ""
-    held = ", ".join(f"{k} = {v:g}" for k, v in o.held.items())
+    held = ", ".join(
+        f"{k} = {v:g}" if isinstance(v, int | float) else f"{k} = {v}" for k, v in o.held.items()
+    )
     print(f"optimum {args.over}: {o.value:.3f} {unit}  (holding {args.hold}; {held})")
     print(f"maximises      {o.objective}")
     print(f"velocity       {o.velocity:.5g} m/s   velocity_norm {o.velocity_norm:.5f}")
@@ -340,6 +356,7 @@ def _pointmass_parser(sub) -> None:
     p.add_argument("--inclination", default="0", help="alpha values, degrees")
     p.add_argument("--eps-t", default="0.8", help="eps_t values")
     p.add_argument("--eps-n", default="0", help="eps_n values")
+    _add_impact(p)
     p.add_argument("--out", help="CSV file (default: standard output)")
     p.set_defaults(func=_cmd_sweep)
 
@@ -396,6 +413,7 @@ def _cmd_run(args) -> int:
         "mean_velocity_stderr",
         "mean_velocity_norm",
         "pointmass_velocity_norm",
+        "pointmass_bounded_velocity_norm",
         "mass_flow_rate",
         "particle_steps_per_s",
     )

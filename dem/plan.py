@@ -217,7 +217,9 @@ def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
 def _allocated_bytes(case, spheres: int, grains: int, threads: int) -> int:
     """The bytes of the state's arrays, allocated for ``grains`` grains of ``spheres``."""
     from dem.state import Bodies, PairList, Spheres
+    from dem.timestep import ContactLaw
 
+    width = ContactLaw.from_case(case).history_width
     total = 0
     if case.particles.shape == "sphere":
         s = Spheres.create(np.zeros((spheres, 3)), case.particles.radius, case.material.density)
@@ -227,9 +229,10 @@ def _allocated_bytes(case, spheres: int, grains: int, threads: int) -> int:
         q[:, 0] = 1.0
         b, s = Bodies.create(case.particles.grain, np.zeros((grains, 3)), q)
         arrays = [s, b]
+    s.set_history_width(width)
     if case.trough.mesh is not None:
         s.use_mesh()  # the mesh contact slots (the triangles themselves are not counted)
-    pairs = PairList.for_spheres(spheres)
+    pairs = PairList.for_spheres(spheres, width)
     if threads > 1:
         pairs.ensure_inbox()
     arrays.append(pairs)

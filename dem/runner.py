@@ -82,6 +82,23 @@ def _set_threads(threads: int | None) -> int:
     return n
 
 
+def _pointmass_bounded(case) -> float | None:
+    """The Coulomb-bounded point mass (the DEM's reference) on a line drive; None otherwise.
+
+    It differs from the paper's model where Eq. 12 asks a landing for more tangential impulse
+    than friction can give (:data:`dem.pointmass.model.IMPACT_LAWS`).
+    """
+    from dem import pointmass
+
+    if case.drive.second_amplitude > 0.0:
+        return None
+    m = case.material
+    return pointmass.velocity(
+        case.drive.throw_number, case.drive.angle, m.friction, case.trough.inclination,
+        m.restitution_tangential, m.restitution_normal, impact="coulomb",
+    ).velocity_norm  # fmt: skip
+
+
 def _pointmass(case) -> tuple[float, str]:
     """The point mass's v / (velocity scale) on the case's drive, and the method that gave it.
 
@@ -883,6 +900,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "feeder": feeder,
         "pointmass_velocity_norm": pm_norm,
         "pointmass_method": pm_method,
+        "pointmass_bounded_velocity_norm": _pointmass_bounded(case),
         "dem_version": provenance["versions"]["dem"],
         "git_commit": provenance["git_commit"],
         "provenance": provenance,

@@ -80,11 +80,16 @@ class ContactLaw:
         """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
         p = self.params
         out = {"tangential": self.tangential}
-        if self.tangential == "coulomb" or self.model == "linear":
+        if self.tangential == "coulomb" or (self.model == "linear" and self.tangential != "impact"):
             out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
         if self.tangential == "coulomb":
             out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
             out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+        if self.tangential == "impact":
+            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+            out["stick_rate"] = float(p[contacts.P_STICK_RATE])
+            out["stick_damping_ratio"] = float(p[contacts.P_STICK_ZETA])
+            out["normal_law_restitution"] = float(p[contacts.P_NORMAL_E])
         f_w = float(p[contacts.P_WALL_ARM])
         out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
         return out

@@ -168,7 +168,11 @@ def test_linear_contact(tmp_path):
     )
     contact = load_case(write_case(tmp_path, tables)).contact
     assert contact.stiffness == 2000.0 and contact.youngs_modulus is None
-    # "coulomb" (default) derives k_t from eps_t when the ratio is not given
+    # "impact" is the default and takes no tangential spring
+    assert contact.tangential == "impact" and contact.tangential_stiffness_ratio is None
+    tables["contact"]["tangential"] = "coulomb"
+    contact = load_case(write_case(tmp_path, tables)).contact
+    # "coulomb" derives k_t from eps_t when the ratio is not given
     assert contact.tangential == "coulomb" and contact.tangential_stiffness_ratio is None
     tables["contact"]["tangential"] = "liggghts"
     contact = load_case(write_case(tmp_path, tables)).contact
@@ -176,12 +180,16 @@ def test_linear_contact(tmp_path):
 
 
 def test_tangential_keys(tmp_path):
-    tables = with_changes(
-        {"contact.tangential_stiffness_ratio": 0.5, "contact.tangential_damping_ratio": 0.2}
-    )
-    contact = load_case(write_case(tmp_path, tables)).contact
+    keys = {"contact.tangential_stiffness_ratio": 0.5, "contact.tangential_damping_ratio": 0.2}
+    contact = load_case(
+        write_case(tmp_path, with_changes({**keys, "contact.tangential": "coulomb"}))
+    ).contact
     assert (contact.tangential, contact.tangential_stiffness_ratio) == ("coulomb", 0.5)
     assert contact.tangential_damping_ratio == 0.2
+    # the default impact-aware law has no tangential spring: its keys are refused, not ignored
+    for key in keys:
+        with pytest.raises(InputError, match=f"{key}.*tangential = 'impact'; remove it"):
+            load_case(write_case(tmp_path, with_changes({key: keys[key]})))
 
 
 def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_path):
@@ -407,13 +415,13 @@ BAD = [
     ("tangential-word", {"contact.tangential": "mindlin"}, "contact.tangential", "coulomb"),
     (
         "damping-negative",
-        {"contact.tangential_damping_ratio": -0.1},
+        {"contact.tangential": "coulomb", "contact.tangential_damping_ratio": -0.1},
         "contact.tangential_damping_ratio",
         "0 <= value <= 10",
     ),
     (
         "et-1-derives-no-spring",
-        {"material.restitution_tangential": 1.0},
+        {"contact.tangential": "coulomb", "material.restitution_tangential": 1.0},
         "material.restitution_tangential",
         "< eps_t < 1",
     ),

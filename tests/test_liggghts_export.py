@@ -161,7 +161,7 @@ def _restitution_of_linear_dashpot(k: float, m: float, gamma: float) -> float:
 
 @pytest.mark.parametrize("e", [0.0, 0.3, 0.8])
 def test_linear_deck_damping_gives_the_restitution(tmp_path, e):
-    case = load_case(CASES_DIR / "single-sphere")
+    case = load_case(CASES_DIR / "single-sphere").with_tangential("coulomb")
     case = dataclasses.replace(
         case, material=dataclasses.replace(case.material, restitution_normal=e)
     )
@@ -269,11 +269,25 @@ def test_screw_deck_neighbour_skin_and_linear_damping_use_clump_values(tmp_path)
 
 
 def test_coulomb_case_deck_says_liggghts_caps_the_spring_alone(tmp_path):
-    case = load_case(CASES_DIR / "single-sphere")
+    case = load_case(CASES_DIR / "single-sphere").with_tangential("coulomb")
     text = write_deck(case, tmp_path / "c", timestep=2e-6, steps=10).read_text()
     assert "NOTE: the case caps the total tangential force" in text
     text = write_deck(case.with_tangential("liggghts"), tmp_path / "l", timestep=2e-6, steps=10)
     assert "NOTE: the case caps" not in text.read_text()
+
+
+def test_impact_case_deck_is_the_liggghts_law_and_says_so(tmp_path):
+    """LIGGGHTS cannot express the impact-aware law: the deck is that of tangential =
+    "liggghts" (k_t = 2/7 k_n, gamma_t = gamma_n for the linear law), with a note."""
+    case = load_case(CASES_DIR / "single-sphere")
+    assert case.contact.tangential == "impact"
+    deck = write_deck(case, tmp_path / "i", timestep=2e-6, steps=10)
+    same = write_deck(case.with_tangential("liggghts"), tmp_path / "l", timestep=2e-6, steps=10)
+    text = deck.read_text()
+    assert "NOTE: the case's impact-aware tangential law" in text
+    c = parse(deck)
+    assert float(fix(c, "m_kt")[6]) == pytest.approx(2 / 7 * case.contact.stiffness)
+    assert fix(c, "m_gt") == fix(parse(same), "m_gt")
 
 
 # --- mesh troughs ---------------------------------------------------------------------------

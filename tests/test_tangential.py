@@ -1,4 +1,5 @@
-"""Tangential restitution: the mapping of dem.tangential, virtual impacts, calibration."""
+"""Tangential restitution of the ``"coulomb"`` spring law: the mapping of dem.tangential, virtual
+impacts, calibration. The impact-aware default law is tested in test_impact_law.py."""
 
 import dataclasses
 import math
@@ -24,7 +25,9 @@ def _sphere_case(
         material=dataclasses.replace(
             case.material, restitution_normal=e_n, restitution_tangential=e_t, friction=mu
         ),
-        contact=dataclasses.replace(case.contact, limit_force=limit_force, **contact),
+        contact=dataclasses.replace(
+            case.contact, limit_force=limit_force, **{"tangential": "coulomb", **contact}
+        ),
         particles=dataclasses.replace(case.particles, rotation=rotation),
     )
 
@@ -94,7 +97,7 @@ def test_mapping_inverts_and_refuses_what_sticking_cannot_reach():
 
 
 def test_eps_t_moves_the_dem_impact_as_asked():
-    """Default law (limit_force off, mu = 0.35) at a landing of conveying (34 deg): eps_t = 0.2,
+    """The spring law (limit_force off, mu = 0.35) at a landing of conveying (34 deg): eps_t = 0.2,
     0.5, 0.8 give ordered, distinct outcomes."""
     out = [calibrate.virtual_impact(_sphere_case(e_t=e), 34.0, 0.1).eps_t for e in (0.2, 0.5, 0.8)]
     assert out[0] < out[1] < out[2]

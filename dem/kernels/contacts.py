@@ -125,7 +125,8 @@ P_IMPACT_RATIO = 15  #: "impact": (1 - eps_t) / (1 + e_n), e_n the normal law's 
 P_STICK_RATE = 16  #: "impact": alpha, the stick's angular frequency times dt (rad per step)
 P_STICK_ZETA = 17  #: "impact": damping ratio of the stick
 P_IMPACT_CAP = 18  #: "impact": the largest c, min(mu, mu (1 + eps_n) / (1 + e_n))
-N_PARAMS = 19
+P_NORMAL_E = 19  #: "impact": e_n, the normal law's own restitution (:func:`normal_law_restitution`)
+N_PARAMS = 20
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
@@ -251,6 +252,7 @@ def make_params(
         e_n = normal_law_restitution(MODELS[model], p[P_BETA])
         p[P_IMPACT_RATIO] = (1.0 - restitution_tangential) / (1.0 + e_n)
         p[P_IMPACT_CAP] = min(friction, friction * (1.0 + restitution) / (1.0 + e_n))
+        p[P_NORMAL_E] = e_n
         p[P_STICK_RATE] = stick_rate
         p[P_STICK_ZETA] = stick_damping_ratio
     p[P_COULOMB_DAMP_T] = (

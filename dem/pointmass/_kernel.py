@@ -230,11 +230,13 @@ def _contact_mode(theta, u, b_f, a_f, b_b, a_b):
 def advance(theta, theta_end, mode, u, w, z, params, out_time):
     """Integrate from phase ``theta`` to ``theta_end`` (<= 2 pi) through every phase change.
 
-    ``params = (Gamma, tan phi, tan alpha, mu, eps_t, eps_n)``. ``out_time[mode]`` accumulates
+    ``params = (Gamma, tan phi, tan alpha, mu, eps_t, eps_n, bounded)``; ``bounded`` 1.0 caps a
+    landing's tangential change at mu (1 + eps_n) times its normal speed (Coulomb, the DEM's
+    reference), 0.0 is the paper's Eq. 12. ``out_time[mode]`` accumulates
     the phase time spent in each mode. Returns ``(mode, u, w, z, dx, events)`` where dx is the
     relative tangential displacement (units A cos phi) over the span.
     """
-    gamma, tphi, talpha, mu, eps_t, eps_n = params
+    gamma, tphi, talpha, mu, eps_t, eps_n, bounded = params
     inv_g = 1.0 / gamma
     c = tphi * talpha * inv_g
     m = mu * tphi
@@ -283,7 +285,16 @@ def advance(theta, theta_end, mode, u, w, z, params, out_time):
                 break
             w_in = w - inv_g * span + t1
             z = 0.0
-            u *= eps_t
+            if bounded != 0.0 and w_in < 0.0:
+                # u and w are in units of A omega cos(phi) and A omega sin(phi): the normal
+                # impulse (1 + eps_n) m |v_n| allows |du| <= mu (1 + eps_n) |w_in| tan(phi)
+                du = (1.0 - eps_t) * u
+                cap = m * (1.0 + eps_n) * -w_in
+                if abs(du) > cap:
+                    du = cap if du > 0.0 else -cap
+                u -= du
+            else:
+                u *= eps_t
             w = -eps_n * min(w_in, 0.0)
             s = math.sin(theta)
             if w > PM_BOUNCE_SETTLE:
@@ -291,8 +302,15 @@ def advance(theta, theta_end, mode, u, w, z, params, out_time):
             if w_in < 0.0 and eps_n > 0.0:
                 # The bounces that remain form a Zeno sequence: infinitely many impacts in a
                 # finite time, each multiplying u by eps_t, so the literal impact law (Eq. 12)
-                # leaves no tangential relative velocity when the bouncing ends.
-                u *= 0.0 if eps_t < 1.0 else 1.0
+                # leaves no tangential relative velocity when the bouncing ends. Bounded by
+                # Coulomb, they take at most mu tan(phi) times their normal impulses,
+                # (1 + e) w (1 + e + e^2 + ...) = (1 + e) w / (1 - e).
+                if eps_t < 1.0:
+                    if bounded != 0.0:
+                        cap = m * (1.0 + eps_n) * w / (1.0 - eps_n)
+                        u = u - cap if u > cap else (u + cap if u < -cap else 0.0)
+                    else:
+                        u = 0.0
             w = 0.0
             if can_fly and s - inv_g > 1e-14:
                 continue  # landed while the floor pulls away: flight goes on from rest
@@ -445,7 +463,7 @@ def mean_velocity_many(
     out_status,
     out_time,
 ):
-    """``mean_velocity`` for each row of ``params`` (n, 6) in parallel; results into out_*."""
+    """``mean_velocity`` for each row of ``params`` (n, 7) in parallel; results into out_*."""
     n = params.shape[0]
     for i in prange(n):
         v, p, k, st = mean_velocity(
@@ -456,6 +474,7 @@ def mean_velocity_many(
                 params[i, 3],
                 params[i, 4],
                 params[i, 5],
+                params[i, 6],
             ),
             start_phases[i],
             max_cycles,

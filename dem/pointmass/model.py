@@ -51,6 +51,7 @@ class VelocityResult:
         velocity_min, velocity_max: range over starting phases (equal when periodic).
         stick, slide_forward, slide_backward, flight: fractions of the cycle in each phase.
         cycles: drive cycles integrated until the orbit closed (or the limit).
+        impact: the landing law, ``"paper"`` or ``"coulomb"`` (:data:`IMPACT_LAWS`).
 
     """
 
@@ -72,6 +73,7 @@ class VelocityResult:
     slide_backward: float
     flight: float
     cycles: int
+    impact: str = "paper"
 
     def drive_velocity(self, frequency: float) -> float:
         """A omega cos(phi) in m/s at ``frequency`` (Hz), the amplitude following from Gamma."""
@@ -123,6 +125,21 @@ def _regime_codes(stick, forward, backward, flight, periodic):
     return codes
 
 
+#: Landing laws: ``"paper"`` multiplies the relative tangential velocity by eps_t at every
+#: landing (Eq. 12); ``"coulomb"`` caps that change at mu (1 + eps_n) times the landing's
+#: normal speed, since no friction can take more: the reference of the DEM, whose contacts obey
+#: Coulomb. The two differ only at grazing landings (Gamma about 1.1-1.55 and 4.55-4.7 at
+#: phi 25 deg, mu 0.35) and at low eps_t.
+IMPACT_LAWS = {"paper": 0.0, "coulomb": 1.0}
+
+
+def check_impact(impact: str) -> str:
+    """Return ``impact`` if it names a landing law (:data:`IMPACT_LAWS`), else ValueError."""
+    if impact not in IMPACT_LAWS:
+        raise ValueError(f"impact must be one of {sorted(IMPACT_LAWS)}, got {impact!r}")
+    return impact
+
+
 def velocities(
     throw_number,
     angle,
@@ -130,8 +147,11 @@ def velocities(
     inclination=0.0,
     eps_t: float | np.ndarray = 0.8,
     eps_n: float | np.ndarray = 0.0,
+    impact: str = "paper",
 ) -> dict[str, np.ndarray]:
     """Vectorised :func:`velocity`: inputs broadcast together; returns a dict of flat arrays.
+
+    ``impact`` is a key of :data:`IMPACT_LAWS`.
 
     Keys: the six inputs, ``velocity_norm``, ``periodic``, ``period``, ``spread``,
     ``velocity_min``, ``velocity_max``, ``regime_code`` (index into :data:`REGIMES`), the phase
@@ -152,8 +172,9 @@ def velocities(
     ):
         for value in np.unique(values):
             check(float(value), key)
+    bounded = np.full(g.shape, IMPACT_LAWS[check_impact(impact)])
     params = np.column_stack(
-        [g, np.tan(np.radians(phi)), np.tan(np.radians(alpha)), mu, et, en]
+        [g, np.tan(np.radians(phi)), np.tan(np.radians(alpha)), mu, et, en, bounded]
     ).astype(np.float64)
     n = params.shape[0]
     run = _run_batch(params, np.zeros(n))
@@ -233,8 +254,11 @@ def velocity(
     inclination: float = 0.0,
     eps_t: float = 0.8,
     eps_n: float = 0.0,
+    impact: str = "paper",
 ) -> VelocityResult:
     """Mean conveying velocity of a point mass (the paper's model), normalised.
+
+    ``impact = "coulomb"`` bounds each landing by Coulomb (:data:`IMPACT_LAWS`).
 
     Args:
         throw_number: Gamma = A omega^2 sin(phi) / (g cos(alpha)), > 0.
@@ -254,7 +278,7 @@ def velocity(
     check_inclination(inclination)
     check_restitution(eps_t, "eps_t")
     check_restitution(eps_n, "eps_n")
-    r = velocities(throw_number, angle, friction, inclination, eps_t, eps_n)
+    r = velocities(throw_number, angle, friction, inclination, eps_t, eps_n, impact)
     return VelocityResult(
         throw_number=float(throw_number),
         angle=float(angle),
@@ -274,4 +298,5 @@ def velocity(
         slide_backward=float(r["slide_backward"][0]),
         flight=float(r["flight"][0]),
         cycles=int(r["cycles"][0]),
+        impact=impact,
     )

@@ -57,6 +57,7 @@ _COLUMNS = SWEEPABLE + (
     "slide_forward",
     "slide_backward",
     "flight",
+    "impact",
 )
 
 
@@ -72,8 +73,12 @@ def sweep(
     inclination=0.0,
     eps_t=0.8,
     eps_n=0.0,
+    impact="paper",
 ) -> dict[str, np.ndarray]:
     """Velocities over the Cartesian product of the given values (scalars or 1-D sequences).
+
+    ``impact``: the landing law, ``"paper"`` or ``"coulomb"``
+    (:data:`dem.pointmass.model.IMPACT_LAWS`), also written as a column.
 
     Returns flat arrays keyed like :func:`dem.pointmass.velocities`, plus ``regime`` (labels),
     ordered with the first varying input slowest.
@@ -93,8 +98,9 @@ def sweep(
             f"({sizes}): sweep fewer values, or in parts",
         )  # fmt: skip
     grid = np.meshgrid(*axes, indexing="ij")
-    result = velocities(*(g.ravel() for g in grid))
+    result = velocities(*(g.ravel() for g in grid), impact=impact)
     result["regime"] = np.array([REGIMES[c] for c in result["regime_code"]])
+    result["impact"] = np.full(result["regime"].shape, impact)
     return result
 
 
@@ -203,8 +209,9 @@ def _velocity_along(over, hold, x, fixed):
     """Objective, velocities and drive along x: (objective, result, Gamma, phi, A, f)."""
     gamma, phi, amp, f = _drive(over, hold, x, fixed)
     r = velocities(
-        gamma, phi, fixed["friction"], fixed["inclination"], fixed["eps_t"], fixed["eps_n"]
-    )
+        gamma, phi, fixed["friction"], fixed["inclination"], fixed["eps_t"], fixed["eps_n"],
+        impact=fixed.get("impact", "paper"),
+    )  # fmt: skip
     r["velocity"] = r["velocity_norm"] * drive.drive_velocity(amp, f, phi)
     return r[_objective(over, hold)], r, gamma, phi, amp, f
 
@@ -225,6 +232,7 @@ def optimum(
     eps_n: float = 0.0,
     bounds: tuple[float, float] | None = None,
     points: int = 321,
+    impact: str = "paper",
 ) -> Optimum:
     """Optimum vibration angle (``over="angle"``) or throw number (``over="throw_number"``).
 
@@ -243,6 +251,7 @@ def optimum(
         "inclination": inclination,
         "eps_t": eps_t,
         "eps_n": eps_n,
+        "impact": impact,
         "frequency": check_positive(frequency, "frequency"),
     }
     needs = {
