@@ -335,6 +335,60 @@ def grain_length(case) -> float:
 # --- the plan -----------------------------------------------------------------------------------
 
 
+#: The conditions the speed-accuracy study measured under (validation/speed_accuracy: each kind's
+#: shipped case of the time), where its data file does not record them: the tangential law and
+#: the drive and material. Its error figures hold there and nowhere else.
+STUDY_CONDITIONS = {
+    "sphere-bed": {"tangential": "coulomb", "throw_number": 3.06, "angle": 25.0,
+                   "friction": 0.35, "inclination": 0.0, "restitution_tangential": 0.8,
+                   "restitution_normal": 0.0},
+    "screw-trough": {"tangential": "coulomb", "throw_number": 1.8, "angle": 25.0,
+                     "friction": 0.35, "inclination": 0.0, "restitution_tangential": 0.8,
+                     "restitution_normal": 0.0},
+}  # fmt: skip
+#: How far a case's drive and material may be from the study's and still share its figures.
+SAME_CONDITIONS = {"throw_number": 0.05, "angle": 1.0, "friction": 0.01, "inclination": 0.5,
+                   "restitution_tangential": 0.01, "restitution_normal": 0.01}  # fmt: skip
+
+
+def unmeasured(case, data: dict, kind: str) -> list[str]:
+    """Where the case leaves the conditions the study measured: "key = value (study: value)".
+
+    The tangential law must be the study's; the drive and material within
+    :data:`SAME_CONDITIONS` (the throw number relative, the rest absolute). Stiffness, time step
+    and section are not here: the study's series cover them, with their own range warnings.
+    """
+    study = data.get("conditions") or STUDY_CONDITIONS.get(kind, {})
+    have = {
+        "tangential": case.contact.tangential,
+        "throw_number": case.drive.throw_number,
+        "angle": case.drive.angle,
+        "friction": case.material.friction,
+        "inclination": case.trough.inclination,
+        "restitution_tangential": case.material.restitution_tangential,
+        "restitution_normal": case.material.restitution_normal,
+    }
+    tables = {"tangential": "contact", "throw_number": "drive", "angle": "drive",
+              "inclination": "trough"}  # fmt: skip
+    out = []
+    for key, value in have.items():
+        if key not in study:
+            continue
+        ref = study[key]
+        if key == "tangential":
+            differs = value != ref
+        elif key == "throw_number":
+            differs = abs(value / ref - 1.0) > SAME_CONDITIONS[key]
+        else:
+            differs = abs(value - ref) > SAME_CONDITIONS[key]
+        if differs:
+            name = f"{tables.get(key, 'material')}.{key}"
+            shown = repr(value) if isinstance(value, str) else f"{value:.4g}"
+            study_shown = repr(ref) if isinstance(ref, str) else f"{ref:.4g}"
+            out.append(f"{name} = {shown} (study: {study_shown})")
+    return out
+
+
 def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan:
     """The plan of a :class:`dem.case.Case` (no fill, no dynamics)."""
     data_all = study_data()
@@ -359,7 +413,21 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     particle_steps = float(spheres) * steps
     speed, source = rate(case, threads, data)
     advice: list[Advice] = []
-    if data and grains > 1:
+    away = unmeasured(case, data, kind) if data else []
+    if data and away:
+        expected, parts = math.nan, {}
+        measure = (
+            f"dem run {case.directory} compares one grain with the point mass "
+            "(pointmass_bounded_velocity_norm in summary.json)"
+            if grains == 1
+            else f"dem sweep {case.directory} --set contact.youngs_modulus=A,B,C (and "
+            "run.timestep, trough.length, run.seed) measures it"
+        )
+        error_source = f"not measured under this case's {'; '.join(away)}: {measure}"
+        text = ("the speed-accuracy study measured other conditions: none of its error figures "
+                "or advice on stiffness, step and section is claimed for this case")  # fmt: skip
+        advice.append(Advice("note", away[0].split(" =")[0], text))
+    elif data and grains > 1:
         expected, parts, error_source = _expected_error(case, data, kind, step, cycles, advice)
     elif data:  # one grain: the bed study says nothing of its error; the ladder does
         expected, parts = math.nan, {}

@@ -38,6 +38,8 @@ def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
                    "point mass wall_time_s": 1e-3, "one grain wall_time_s": 1.0},
         "cheapest": {"youngs_modulus": 3e7, "timestep_fraction": 0.6,
                      "section_length_grains": 12.0, "section_width_grains": 5.0},
+        # measured under the default law (only the keys given are compared)
+        "conditions": {"tangential": "impact"},
     }  # fmt: skip
     return {"cases": {"sphere-bed": kind, "screw-trough": kind}}
 
@@ -74,7 +76,12 @@ def test_plan_on_every_shipped_case(directory, capsys):
     per = 1400 if case.trough.mesh is None else 1700
     assert 0 < out["memory_bytes"] < per * out["spheres"] + 8000  # and 8 kB fixed
     assert out["wall_time_s"] > 0
-    if case.particles.count > 1:  # a bed: the study's error; one grain: the point mass's
+    if plan.unmeasured(case, plan.study_data()["cases"][plan.study_kind(case)],
+                       plan.study_kind(case)):  # fmt: skip
+        # the study ran the "coulomb" law at its own drives: nothing is claimed elsewhere
+        assert math.isnan(out["expected_error"]) and "not measured" in out["error_source"]
+        assert ("dem run" if case.particles.count == 1 else "dem sweep") in out["error_source"]
+    elif case.particles.count > 1:  # a bed: the study's error; one grain: the point mass's
         assert 0 <= out["expected_error"] < 1
     else:
         assert math.isnan(out["expected_error"]) and "point mass" in out["error_source"]
@@ -165,3 +172,21 @@ def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["plan"] == json.loads(
         json.dumps(p)
     )
+
+
+def test_plan_claims_only_what_was_measured(tmp_path):
+    """The study's figures hold under its law and drive: elsewhere plan says "not measured"
+    and names the command that measures it; at the study's own conditions it gives a number."""
+    data = plan.study_data()
+    assert data is not None
+    case = load_case(CASES_DIR / "screw-trough")
+    assert case.contact.tangential == "impact"
+    p = plan.plan(case)
+    assert math.isnan(p.expected_error) and "not measured" in p.error_source
+    assert "contact.tangential = 'impact' (study: 'coulomb')" in p.error_source
+    assert "expected error    not estimated: not measured" in p.text()
+    studied = case.with_tangential("coulomb")
+    assert math.isfinite(plan.plan(studied).expected_error)
+    other_drive = studied.with_drive(throw_number=1.3)
+    p = plan.plan(other_drive)
+    assert math.isnan(p.expected_error) and "drive.throw_number = 1.3" in p.error_source

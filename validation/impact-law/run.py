@@ -1,0 +1,365 @@
+"""The impact-aware tangential law: virtual impacts, and one grain against the point mass.
+
+Regenerates the CSV files, provenance.json and figures of this folder (README.md shows them):
+
+    .venv/bin/python validation/impact-law/run.py impacts    # eps_t vs incidence/speed, ~2 min
+    .venv/bin/python validation/impact-law/run.py sliding    # 24 drives x 6 stiffnesses, ~6 min
+    .venv/bin/python validation/impact-law/run.py hopping    # Figs. 6 and 7, sphere and screw
+    .venv/bin/python validation/impact-law/run.py all
+    .venv/bin/python validation/impact-law/run.py figures    # redraw from the CSV files
+
+Every run uses the library's defaults for the law (``[contact] tangential = "impact"``, no
+calibration, no per-drive setting): the grains are cases/single-sphere (r = 2 mm steel, rotation
+locked unless stated) and the screw of cases/screw-trough (2.5 g, 8 spheres, laid along the
+trough on head and tip, rotation locked), placed by dem.setup.from_grains and measured by
+dem.simulation.measure_cycles. The reference is the Coulomb-bounded point mass
+(``dem.pointmass.velocity(..., impact="coulomb")``), which equals the paper's model except at
+landings where Eq. 12 asks for more tangential impulse than friction gives.
+"""
+
+import argparse
+import csv
+import dataclasses
+import importlib.util
+import json
+import sys
+import time
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from dem import calibrate, pointmass, provenance, setup
+from dem.case import load_case
+from dem.fill import random_orientations
+from dem.measure import conveying_velocity
+from dem.simulation import measure_cycles
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+SETTLE, CYCLES = 30, 20
+#: (model, stiffness) of the sliding map: Hertz from the bed's 5e7 Pa up 100x; linear from the
+#: single sphere's shipped 1.6e7 N/m down 100x (above it the step gets too short to sweep)
+STIFFNESSES = [("hertz_mindlin", 5e7), ("hertz_mindlin", 5e8), ("hertz_mindlin", 5e9),
+               ("linear", 1.6e5), ("linear", 1.6e6), ("linear", 1.6e7)]  # fmt: skip
+
+
+def _single_screw_module():
+    path = HERE.parent / "single-screw" / "run.py"
+    spec = importlib.util.spec_from_file_location("single_screw", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def sphere_case(model="linear", stiffness=1.6e7, *, rotation=False, eps_t=0.8, **drive):
+    case = load_case(ROOT / "cases" / "single-sphere")
+    contact = dataclasses.replace(
+        case.contact, model=model, tangential="impact", tangential_stiffness_ratio=None,
+        tangential_damping_ratio=None,
+        youngs_modulus=stiffness if model == "hertz_mindlin" else None,
+        stiffness=stiffness if model == "linear" else None,
+    )  # fmt: skip
+    case = dataclasses.replace(
+        case,
+        contact=contact,
+        material=dataclasses.replace(case.material, restitution_tangential=eps_t),
+        particles=dataclasses.replace(case.particles, rotation=rotation),
+    )
+    return _with_drive(case, **drive)
+
+
+def screw_case(model="linear", stiffness=4.0e7, *, eps_t=0.8, **drive):
+    base = load_case(ROOT / "cases" / "screw-trough")
+    case = dataclasses.replace(
+        base,
+        contact=dataclasses.replace(
+            base.contact, model=model, tangential="impact",
+            youngs_modulus=stiffness if model == "hertz_mindlin" else None,
+            stiffness=stiffness if model == "linear" else None,
+        ),
+        material=dataclasses.replace(base.material, restitution_tangential=eps_t),
+        particles=dataclasses.replace(base.particles, count=1, rotation=False),
+        run=dataclasses.replace(base.run, timestep=None),
+    )  # fmt: skip
+    return _with_drive(case, **drive)
+
+
+def _with_drive(case, throw_number=None, angle=None, friction=None, inclination=None):
+    if throw_number is not None:
+        case = case.with_drive(angle=angle, throw_number=throw_number)
+    if friction is not None:
+        case = dataclasses.replace(
+            case, material=dataclasses.replace(case.material, friction=friction)
+        )
+    if inclination is not None:
+        case = dataclasses.replace(
+            case, trough=dataclasses.replace(case.trough, inclination=inclination)
+        )
+    return case
+
+
+def reference(case, impact="coulomb"):
+    d, m = case.drive, case.material
+    return pointmass.velocity(
+        d.throw_number, d.angle, m.friction, case.trough.inclination,
+        m.restitution_tangential, m.restitution_normal, impact=impact,
+    ).velocity_norm  # fmt: skip
+
+
+def grain_velocity(job):
+    """One grain on the job's drive: a row with the DEM value and both point-mass values."""
+    grain, model, stiffness, drive, eps_t = job
+    t0 = time.perf_counter()
+    if grain == "sphere":
+        case = sphere_case(model, stiffness, eps_t=eps_t, **drive)
+        r = case.particles.radius
+        sim = setup.from_grains(case, [[0.5 * case.trough.length, 0.0, r]])
+    else:
+        case = screw_case(model, stiffness, eps_t=eps_t, **drive)
+        sim = _single_screw_module().lying_simulation(case, "auto")
+    per_cycle = measure_cycles(sim, CYCLES, settle_cycles=SETTLE)
+    d = case.drive
+    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
+    return {
+        "grain": grain, "model": model, "stiffness": stiffness,
+        "throw_number": d.throw_number, "angle": d.angle, "friction": case.material.friction,
+        "inclination": case.trough.inclination, "eps_t": eps_t,
+        "dem_velocity_norm": v.norm, "dem_stderr": v.norm_stderr,
+        "bounded_velocity_norm": reference(case), "paper_velocity_norm": reference(case, "paper"),
+        "timestep": sim.dt, "wall_time_s": round(time.perf_counter() - t0, 2),
+    }  # fmt: skip
+
+
+def impact_row(job):
+    grain, model, stiffness, rotation, incidence, speed, quat = job
+    if grain == "sphere":
+        case = sphere_case(model, stiffness, rotation=rotation)
+    else:
+        case = screw_case(model, stiffness)
+        case = dataclasses.replace(
+            case, particles=dataclasses.replace(case.particles, rotation=rotation)
+        )
+    r = calibrate.virtual_impact(case, incidence, speed, quat)
+    target = float(calibrate.bounded_targets(0.8, 0.0, case.material.friction, incidence))
+    return {
+        "grain": grain, "model": model, "stiffness": stiffness, "rotation": rotation,
+        "incidence": incidence, "speed": speed, "eps_t": r.eps_t, "eps_n": r.eps_n,
+        "target": target, "friction_bound": target > 0.8,
+    }  # fmt: skip
+
+
+def write_csv(rows, name):
+    path = HERE / name
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    print(f"wrote {path}")
+
+
+def read_csv(name):
+    with open(HERE / name) as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        for k, v in r.items():
+            try:
+                r[k] = float(v)
+            except ValueError:
+                r[k] = {"True": True, "False": False}.get(v, v)
+    return rows
+
+
+def pool_map(func, jobs, processes=2):
+    # spawn: the parent may already run OpenMP threads (the point mass), which fork would break
+    with get_context("spawn").Pool(processes) as pool:
+        return pool.map(func, jobs, chunksize=1)
+
+
+def impacts():
+    jobs = []
+    for model, stiffnesses in (("linear", (4e5, 4e6, 4e7)), ("hertz_mindlin", (5e7, 5e8, 5e9))):
+        for k in stiffnesses:
+            for rotation in (False, True):
+                for inc in range(5, 90, 10):
+                    for speed in (0.05, 0.3, 1.0):
+                        jobs.append(("sphere", model, k, rotation, float(inc), speed, None))
+    quats = random_orientations(8, np.random.default_rng(1))
+    for rotation in (False, True):
+        for inc in range(5, 90, 10):
+            for q in quats:
+                jobs.append(("screw", "hertz_mindlin", 5e8, rotation, float(inc), 0.3, q))
+    write_csv(pool_map(impact_row, jobs), "impacts.csv")
+
+
+def sliding():
+    """24 drives drawn at random over the sliding map (none of them tuned on), 6 stiffnesses."""
+    rng = np.random.default_rng(25)
+    drives = []
+    while len(drives) < 24:
+        d = {
+            "throw_number": float(np.round(rng.uniform(0.1, 0.95), 3)),
+            "angle": float(np.round(rng.uniform(10.0, 60.0), 1)),
+            "inclination": float(np.round(rng.uniform(-5.0, 5.0), 1)),
+            "friction": float(np.round(rng.uniform(0.2, 0.6), 2)),
+        }
+        pm = pointmass.velocity(d["throw_number"], d["angle"], d["friction"], d["inclination"])
+        if abs(pm.velocity_norm) > 0.02 and pm.flight == 0.0:  # moves, and never leaves the floor
+            drives.append(d)
+    jobs = [("sphere", m, k, d, 0.8) for m, k in STIFFNESSES for d in drives]
+    jobs += [("screw", "linear", 4e7, d, 0.8) for d in drives]
+    write_csv(pool_map(grain_velocity, jobs), "sliding.csv")
+
+
+def hopping():
+    gammas = [float(g) for g in np.round(np.arange(1.1, 5.01, 0.3), 2)]
+    jobs = []
+    for grain, model, k in (("sphere", "linear", 1.6e7), ("screw", "linear", 4e7)):
+        for e in (0.2, 0.5, 0.8):
+            jobs += [(grain, model, k, {"throw_number": g, "angle": 25.0, "friction": 0.35}, e)
+                     for g in gammas]  # fmt: skip
+        for mu in (0.25, 0.35, 0.6):
+            jobs += [(grain, model, k, {"throw_number": 1.8, "angle": float(a), "friction": mu},
+                      0.8) for a in range(10, 71, 10)]  # fmt: skip
+    write_csv(pool_map(grain_velocity, jobs), "hopping.csv")
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def figures():
+    plt = _plt()
+    if (HERE / "impacts.csv").exists():
+        rows = read_csv("impacts.csv")
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4), dpi=120, sharey=True)
+        for ax, grain in zip(axes, ("sphere", "screw"), strict=True):
+            for rotation, marker, alpha in ((False, "o", 0.6), (True, "x", 0.35)):
+                sel = [r for r in rows if r["grain"] == grain and r["rotation"] == rotation]
+                label = f"rotation {'free' if rotation else 'locked'}"
+                ax.plot([r["incidence"] for r in sel], [r["eps_t"] for r in sel], marker, ms=4,
+                        alpha=alpha, label=label)  # fmt: skip
+            grid = np.linspace(2, 88, 200)
+            ax.plot(grid, calibrate.bounded_targets(0.8, 0.0, 0.35, grid), "k-", lw=1,
+                    label="target: 0.8, or the Coulomb bound 1 - mu cot(theta)")  # fmt: skip
+            ax.set_xlabel("incidence theta (deg from the floor normal)")
+            ax.set_title(
+                f"{grain}: eps_t = 0.8, mu = 0.35, eps_n = 0 ("
+                + (
+                    "linear and Hertz, 3 stiffnesses each, 0.05-1 m/s)"
+                    if grain == "sphere"
+                    else "Hertz 5e8 Pa, 8 random orientations, 0.3 m/s)"
+                ),
+                fontsize=8,
+            )
+            ax.set_ylim(0.6, 1.05)
+            ax.grid(alpha=0.3)
+        axes[0].set_ylabel("eps_t (centre of mass, after / before)")
+        axes[0].legend(fontsize=7)
+        axes[1].text(
+            6,
+            0.62,
+            "a rotating screw's centre turns normal into tangential speed:\n"
+            "off the plot at small incidence (geometry, not the contact law)",
+            fontsize=7,
+        )
+        fig.tight_layout()
+        fig.savefig(HERE / "impacts.png")
+        print(f"wrote {HERE / 'impacts.png'}")
+    if (HERE / "sliding.csv").exists():
+        rows = read_csv("sliding.csv")
+        fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
+        for model, marker in (("hertz_mindlin", "o"), ("linear", "s")):
+            sel = [r for r in rows if r["grain"] == "sphere" and r["model"] == model]
+            ks = sorted({r["stiffness"] for r in sel})
+            err = [[100 * abs(r["dem_velocity_norm"] / r["bounded_velocity_norm"] - 1)
+                    for r in sel if r["stiffness"] == k] for k in ks]  # fmt: skip
+            ax.plot(ks, [np.median(e) for e in err], marker + "-", label=f"{model}: median")
+            ax.plot(ks, [np.max(e) for e in err], marker + "--", label=f"{model}: worst")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("stiffness (Pa for Hertz, N/m for linear)")
+        ax.set_ylabel("|v_DEM / v_point mass - 1| (%)")
+        ax.set_title("sphere, rotation locked, 24 sliding drives", fontsize=9)
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(HERE / "sliding.png")
+        print(f"wrote {HERE / 'sliding.png'}")
+    if (HERE / "hopping.csv").exists():
+        _hopping_figure(plt, read_csv("hopping.csv"))
+
+
+def _hopping_figure(plt, rows):
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), dpi=120)
+    ax = axes[0]
+    g = np.linspace(0.2, 5.0, 400)
+    for i, e in enumerate((0.2, 0.5, 0.8)):
+        paper = pointmass.velocities(g, 25.0, 0.35, 0.0, e, 0.0)["velocity_norm"]
+        bounded = pointmass.velocities(g, 25.0, 0.35, 0.0, e, 0.0, impact="coulomb")
+        bounded = bounded["velocity_norm"]
+        ax.plot(g, paper, ":", color=f"C{i}", lw=1)
+        ax.plot(g, bounded, "-", color=f"C{i}", lw=1, label=f"bounded point mass, eps_t {e}")
+        ax.fill_between(g, paper, bounded, where=np.abs(bounded - paper) > 1e-3,
+                        color=f"C{i}", alpha=0.12)  # fmt: skip
+        for grain, marker in (("sphere", "o"), ("screw", "^")):
+            sel = [r for r in rows if r["grain"] == grain and r["eps_t"] == e
+                   and r["angle"] == 25.0 and r["friction"] == 0.35]  # fmt: skip
+            ax.plot([r["throw_number"] for r in sel], [r["dem_velocity_norm"] for r in sel],
+                    marker, color=f"C{i}", mfc="none", ms=5)  # fmt: skip
+    ax.set_xlabel("throw number Gamma")
+    ax.set_ylabel("v / (A omega cos phi)")
+    ax.set_title("Fig. 6: phi 25 deg, mu 0.35 (dotted: paper's Eq. 12; shaded: it breaks "
+                 "Coulomb; o sphere, ^ screw)", fontsize=8)  # fmt: skip
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    phi = np.linspace(5.0, 75.0, 300)
+    for i, mu in enumerate((0.25, 0.35, 0.6)):
+        paper = pointmass.velocities(1.8, phi, mu, 0.0, 0.8, 0.0)["velocity_norm"]
+        bounded = pointmass.velocities(1.8, phi, mu, 0.0, 0.8, 0.0, impact="coulomb")
+        bounded = bounded["velocity_norm"]
+        ax.plot(phi, paper, ":", color=f"C{i}", lw=1)
+        ax.plot(phi, bounded, "-", color=f"C{i}", lw=1, label=f"bounded point mass, mu {mu}")
+        ax.fill_between(phi, paper, bounded, where=np.abs(bounded - paper) > 1e-3,
+                        color=f"C{i}", alpha=0.12)  # fmt: skip
+        for grain, marker in (("sphere", "o"), ("screw", "^")):
+            sel = [r for r in rows if r["grain"] == grain and r["friction"] == mu
+                   and r["throw_number"] == 1.8 and r["eps_t"] == 0.8]  # fmt: skip
+            ax.plot([r["angle"] for r in sel], [r["dem_velocity_norm"] for r in sel], marker,
+                    color=f"C{i}", mfc="none", ms=5)  # fmt: skip
+    ax.set_xlabel("vibration angle phi (deg)")
+    ax.set_ylabel("v / (A omega cos phi)")
+    ax.set_title("Fig. 7: Gamma 1.8, eps_t 0.8 (o sphere, ^ screw)", fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(HERE / "hopping.png")
+    print(f"wrote {HERE / 'hopping.png'}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("part", choices=("impacts", "sliding", "hopping", "all", "figures"))
+    args = parser.parse_args()
+    parts = ("impacts", "sliding", "hopping") if args.part == "all" else (args.part,)
+    record = {}
+    if (HERE / "provenance.json").exists():
+        record = json.loads((HERE / "provenance.json").read_text())
+    for part in parts:
+        if part != "figures":
+            t0 = time.perf_counter()
+            globals()[part]()
+            record[part] = {**provenance.record(), "command": " ".join(sys.argv),
+                            "wall_time_s": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    (HERE / "provenance.json").write_text(json.dumps(record, indent=2, default=str) + "\n")
+    figures()
+
+
+if __name__ == "__main__":
+    main()
