@@ -128,8 +128,9 @@ def discharge_figure(
 
 
 def pointmass_comparison_figure(
-    labels, dem_norm, dem_stderr, pointmass_norm, path: str | Path, *, xlabel: str = ""
-) -> Path:
+    labels, dem_norm, dem_stderr, pointmass_norm, path: str | Path, *, xlabel: str = "",
+    bounded_norm=None,
+) -> Path:  # fmt: skip
     """DEM normalised velocity v / (A omega cos phi) with +-1 s.e. bars beside the point mass.
 
     Args:
@@ -139,10 +140,17 @@ def pointmass_comparison_figure(
         pointmass_norm: Point-mass prediction per run, (R,) (nan: not available).
         path: PNG file.
         xlabel: Axis label (for numeric labels).
+        bounded_norm: The Coulomb-bounded point mass per run, (R,) (the DEM's reference), drawn
+            where it differs from ``pointmass_norm`` (the paper's Eq. 12) by more than 1e-3.
 
     """
     import numpy as np
 
+    bounded = np.full(len(dem_norm), np.nan)
+    if bounded_norm is not None:
+        bounded = np.asarray(bounded_norm, float)
+    differs = np.isfinite(bounded) & (np.abs(bounded - np.asarray(pointmass_norm, float)) > 1e-3)
+    bounded = np.where(differs, bounded, np.nan)
     y = np.asarray(dem_norm, float)
     e = np.nan_to_num(np.asarray(dem_stderr, float))
     pm = np.asarray(pointmass_norm, float)
@@ -153,13 +161,19 @@ def pointmass_comparison_figure(
         order = np.argsort(x)
         ax.errorbar(x[order], y[order], yerr=e[order], fmt="o-", capsize=3, label="DEM")
         if np.any(np.isfinite(pm)):
-            ax.plot(x[order], pm[order], "s--", color="C1", label="point mass")
+            ax.plot(x[order], pm[order], "s--", color="C1", label="point mass (paper, Eq. 12)")
+        if np.any(np.isfinite(bounded)):
+            ax.plot(x[order], bounded[order], "^:", color="C2",
+                    label="point mass, landings bounded by Coulomb")  # fmt: skip
         ax.set_xlabel(xlabel)
     else:
         x = np.arange(len(y))
         w = 0.38
         ax.bar(x - w / 2, y, w, yerr=e, capsize=4, color="C0", label="DEM (+-1 s.e.)")
-        ax.bar(x + w / 2, np.nan_to_num(pm), w, color="C1", label="point mass")
+        ax.bar(x + w / 2, np.nan_to_num(pm), w, color="C1", label="point mass (paper, Eq. 12)")
+        if np.any(np.isfinite(bounded)):
+            ax.plot(x + w / 2, bounded, "^", color="C2", ms=8,
+                    label="point mass, landings bounded by Coulomb")  # fmt: skip
         for xi, p in zip(x, pm, strict=True):
             if not np.isfinite(p):
                 ax.text(xi + w / 2, 0.0, "n/a", ha="center", va="bottom", fontsize=8)

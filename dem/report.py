@@ -53,6 +53,7 @@ COMPARISON_COLUMNS = (
     "mean_velocity_norm",
     "mean_velocity_norm_stderr",
     "pointmass_velocity_norm",
+    "pointmass_bounded_velocity_norm",
     "dem_over_pointmass",
     "mass_flow_rate",
     "particle_steps_per_s",
@@ -303,10 +304,16 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
         scale = _num(summary, "mean_velocity") / dem_norm if dem_norm else math.nan
         dem_err = _num(summary, "mean_velocity_stderr") / scale if scale else math.nan
     pm = _num(summary, "pointmass_velocity_norm")
+    bounded = _num(summary, "pointmass_bounded_velocity_norm")
     files.append(
         plots.pointmass_comparison_figure(
-            [label], [dem_norm], [dem_err], [pm], dest / "pointmass_comparison.png"
-        )
+            [label],
+            [dem_norm],
+            [dem_err],
+            [pm],
+            dest / "pointmass_comparison.png",
+            bounded_norm=[bounded],
+        )  # fmt: skip
     )
 
     feeder = summary.get("feeder")
@@ -406,6 +413,7 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
         f"v/(A w cos phi) {_fmt(g('mean_velocity_norm'))} +- {_fmt(dem_err)}",
         f"point mass      {_fmt(g('pointmass_velocity_norm'))}  (DEM / point mass = "
         f"{_fmt(ratio, '.3f')})",
+        *_bounded_lines(g("pointmass_velocity_norm"), g("pointmass_bounded_velocity_norm")),
         f"mass flow       {_fmt(g('mass_flow_rate'))} kg/s "
         f"({_fmt(g('mass_flow_rate_per_width'))} kg/(s m))",
         *_feeder_lines(g("feeder")),
@@ -466,8 +474,21 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
         [_as_float(r.get("pointmass_velocity_norm")) for r in rows],
         dest / "comparison.png",
         xlabel=xlabel,
+        bounded_norm=[_as_float(r.get("pointmass_bounded_velocity_norm")) for r in rows],
     )
     return [csv_path, txt_path, png]
+
+
+def _bounded_lines(paper, bounded) -> list[str]:
+    """The Coulomb-bounded point mass, where it differs from the paper's model."""
+    if not isinstance(bounded, int | float) or not isinstance(paper, int | float):
+        return []
+    if abs(bounded - paper) <= 1e-3:
+        return []
+    return [
+        f"bounded p. mass {_fmt(bounded)}  (landings capped by Coulomb: the DEM's reference; "
+        "the paper's Eq. 12 asks for more tangential impulse than friction gives here)"
+    ]
 
 
 def _as_float(v) -> float:

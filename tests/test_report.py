@@ -131,3 +131,15 @@ def test_missing_summary_is_named(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(FileNotFoundError, match="summary.json"):
         make_report([tmp_path / "empty"])
+
+
+def test_report_shows_the_bounded_point_mass_where_it_differs(tmp_path):
+    out = _run_folder(tmp_path / "run", with_h5=False)
+    s = json.loads((out / "summary.json").read_text())
+    (out / "summary.json").write_text(json.dumps({**s, "pointmass_bounded_velocity_norm": 0.55}))
+    make_report([out])
+    text = (out / "report" / "report.txt").read_text()
+    assert "bounded p. mass 0.55" in text and "Coulomb" in text
+    (out / "summary.json").write_text(json.dumps({**s, "pointmass_bounded_velocity_norm": 0.42}))
+    make_report([out])
+    assert "bounded p. mass" not in (out / "report" / "report.txt").read_text()

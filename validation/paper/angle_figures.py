@@ -46,6 +46,14 @@ def angle_figure(path, angle, families, fixed_label, title):
             ax.plot(angle, fam[key], color=f"C{k}", lw=1.3, label=fam[f"label_{key}"])
             ax.axvspan(*opt["plateau_90"], color=f"C{k}", alpha=0.08)
             ax.plot([opt["optimum_angle"]], [fam[f"best_{key}"]], "o", color=f"C{k}", ms=5)
+        if "bounded_norm" in fam:  # the Gamma-held panel: the Coulomb-bounded landings
+            breaks = np.abs(fam["bounded_norm"] - fam["norm"]) > 1e-3
+            if breaks.any():
+                axes[0].plot(angle, np.where(breaks, fam["bounded_norm"], np.nan), "--",
+                             color=f"C{k}", lw=1.0)  # fmt: skip
+                axes[0].fill_between(angle, fam["norm"], fam["bounded_norm"], where=breaks,
+                                     color=f"C{k}", alpha=0.15, lw=0)  # fmt: skip
+    axes[0].plot([], [], "k--", lw=1.0, label="landings bounded by Coulomb")
     axes[0].set_ylabel("v / (A omega cos phi)")
     axes[0].set_title("Gamma held, v_norm = v / (A omega cos phi)", fontsize=9)
     axes[1].set_ylabel("v / (A omega)")
@@ -88,6 +96,7 @@ def fig7(g: dict, out: Path, meta: dict) -> dict:
         fam = {}
         r = sweep(gamma0, angle, mu)
         fam["norm"] = r["velocity_norm"]
+        fam["bounded_norm"] = sweep(gamma0, angle, mu, impact="coulomb")["velocity_norm"]
         fam["drive"] = r["velocity_norm"] * np.cos(np.radians(angle))
         for name, (hold, value) in {
             "amp": ("amplitude", amp_fixed),

@@ -216,8 +216,15 @@ def fig6(g: dict, out: Path, meta: dict) -> dict:
     fig, (ax, bx) = plt.subplots(
         2, 1, figsize=(7.5, 6.5), dpi=130, sharex=True, gridspec_kw={"height_ratios": [3, 1.3]}
     )
+    rb = sweep(gamma, p["angle"], p["friction"], 0.0, p["eps_t"], p["eps_n"], impact="coulomb")
+    vb = rb["velocity_norm"].reshape(shape)
     for k, et in enumerate(p["eps_t"]):
         ax.plot(gamma, v[:, k], color=f"C{k}", lw=1.2, label=f"eps_t = {et}")
+        breaks = np.abs(vb[:, k] - v[:, k]) > 1e-3
+        if breaks.any():
+            ax.plot(gamma, np.where(breaks, vb[:, k], np.nan), "--", color=f"C{k}", lw=1.0)
+            ax.fill_between(gamma, v[:, k], vb[:, k], where=breaks, color=f"C{k}", alpha=0.15,
+                            lw=0)  # fmt: skip
         bad = ~periodic[:, k]
         if bad.any():
             ax.errorbar(
@@ -226,6 +233,8 @@ def fig6(g: dict, out: Path, meta: dict) -> dict:
         bx.plot(gamma, back[:, k], color=f"C{k}", lw=1.0)
     n_bad = int((~periodic).sum())
     ax.plot([], [], "kx", label=f"non-periodic (bar: spread), {n_bad} points")
+    ax.plot([], [], "k--", lw=1.0, label="landings bounded by Coulomb (--impact coulomb)")
+    ax.fill_between([], [], [], color="0.5", alpha=0.15, label="Eq. 12 asks more than mu J_n")
     for x, label in ((1.0, "Gamma = 1"), (GAMMA_DOUBLING, "period 2, sqrt(4 + pi^2)")):
         ax.axvline(x, color="0.5", ls=":", lw=1)
         ax.text(
