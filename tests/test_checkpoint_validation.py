@@ -206,3 +206,21 @@ def test_the_untouched_checkpoint_passes_and_resumes(interrupted, tmp_path, caps
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary["per_cycle_velocity"]) == 2
     assert np.isfinite(summary["mean_velocity"])
+
+
+def test_a_checkpoint_of_another_tangential_law_is_refused(interrupted, tmp_path, capsys):
+    """The history width is the law's: "impact" keeps 5 floats a contact, "coulomb" 3. A
+    checkpoint cut to 3 columns is a valid file of another law, refused against this case."""
+
+    def change(s, lp):
+        for key in ("nb.hist", "nb.scratch_hist", "sph.wall_hist", "sph.mesh_hist"):
+            s[key] = np.ascontiguousarray(s[key][:, :3])
+
+    _refused(interrupted, tmp_path, capsys, change, "3 floats of contact history", "'impact'")
+
+
+def test_a_history_width_of_no_law_is_refused(interrupted, tmp_path, capsys):
+    def change(s, lp):
+        s["nb.hist"] = np.zeros((s["nb.hist"].shape[0], 4))
+
+    _refused(interrupted, tmp_path, capsys, change, "nb.hist", "history width")
