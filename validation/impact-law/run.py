@@ -86,16 +86,18 @@ def screw_case(model="linear", stiffness=4.0e7, *, eps_t=0.8, **drive):
 
 
 def _with_drive(case, throw_number=None, angle=None, friction=None, inclination=None):
-    if throw_number is not None:
-        case = case.with_drive(angle=angle, throw_number=throw_number)
-    if friction is not None:
-        case = dataclasses.replace(
-            case, material=dataclasses.replace(case.material, friction=friction)
-        )
+    """The case on another drive; the incline first: the amplitude of a throw number depends on
+    it (Gamma = A omega^2 sin(phi) / (g cos(alpha)))."""
     if inclination is not None:
         case = dataclasses.replace(
             case, trough=dataclasses.replace(case.trough, inclination=inclination)
         )
+    if friction is not None:
+        case = dataclasses.replace(
+            case, material=dataclasses.replace(case.material, friction=friction)
+        )
+    if throw_number is not None:
+        case = case.with_drive(angle=angle, throw_number=throw_number)
     return case
 
 
