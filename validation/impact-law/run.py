@@ -5,6 +5,7 @@ Regenerates the CSV files, provenance.json and figures of this folder (README.md
     .venv/bin/python validation/impact-law/run.py impacts    # eps_t vs incidence/speed, ~2 min
     .venv/bin/python validation/impact-law/run.py sliding    # 24 drives x 6 stiffnesses, ~6 min
     .venv/bin/python validation/impact-law/run.py hopping    # Figs. 6 and 7, sphere and screw
+    .venv/bin/python validation/impact-law/run.py sliding_before  # the same under "coulomb"
     .venv/bin/python validation/impact-law/run.py all
     .venv/bin/python validation/impact-law/run.py figures    # redraw from the CSV files
 
@@ -52,10 +53,15 @@ def _single_screw_module():
     return module
 
 
+#: The tangential law every run uses: "impact" (the default); ``--before`` runs "coulomb", the
+#: previous default, with k_t / k_n from eps_t (no per-drive calibration), for the comparison.
+LAW = {"tangential": "impact"}
+
+
 def sphere_case(model="linear", stiffness=1.6e7, *, rotation=False, eps_t=0.8, **drive):
     case = load_case(ROOT / "cases" / "single-sphere")
     contact = dataclasses.replace(
-        case.contact, model=model, tangential="impact", tangential_stiffness_ratio=None,
+        case.contact, model=model, tangential=LAW["tangential"], tangential_stiffness_ratio=None,
         tangential_damping_ratio=None,
         youngs_modulus=stiffness if model == "hertz_mindlin" else None,
         stiffness=stiffness if model == "linear" else None,
@@ -74,7 +80,7 @@ def screw_case(model="linear", stiffness=4.0e7, *, eps_t=0.8, **drive):
     case = dataclasses.replace(
         base,
         contact=dataclasses.replace(
-            base.contact, model=model, tangential="impact",
+            base.contact, model=model, tangential=LAW["tangential"],
             youngs_modulus=stiffness if model == "hertz_mindlin" else None,
             stiffness=stiffness if model == "linear" else None,
         ),
@@ -111,7 +117,8 @@ def reference(case, impact="coulomb"):
 
 def grain_velocity(job):
     """One grain on the job's drive: a row with the DEM value and both point-mass values."""
-    grain, model, stiffness, drive, eps_t = job
+    grain, model, stiffness, drive, eps_t = job[:5]
+    LAW["tangential"] = job[5] if len(job) > 5 else "impact"
     t0 = time.perf_counter()
     if grain == "sphere":
         case = sphere_case(model, stiffness, eps_t=eps_t, **drive)
@@ -124,7 +131,7 @@ def grain_velocity(job):
     d = case.drive
     v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
     return {
-        "grain": grain, "model": model, "stiffness": stiffness,
+        "grain": grain, "model": model, "stiffness": stiffness, "tangential": LAW["tangential"],
         "throw_number": d.throw_number, "angle": d.angle, "friction": case.material.friction,
         "inclination": case.trough.inclination, "eps_t": eps_t,
         "dem_velocity_norm": v.norm, "dem_stderr": v.norm_stderr,
@@ -194,8 +201,9 @@ def impacts():
     write_csv(pool_map(impact_row, jobs), "impacts.csv")
 
 
-def sliding():
-    """24 drives drawn at random over the sliding map (none of them tuned on), 6 stiffnesses."""
+def sliding(before=False):
+    """24 drives drawn at random over the sliding map (none of them tuned on), 6 stiffnesses;
+    ``before``: the same drives under "coulomb" at the Hertz stiffnesses, for comparison."""
     rng = np.random.default_rng(25)
     drives = []
     while len(drives) < 24:
@@ -208,9 +216,17 @@ def sliding():
         pm = pointmass.velocity(d["throw_number"], d["angle"], d["friction"], d["inclination"])
         if abs(pm.velocity_norm) > 0.02 and pm.flight == 0.0:  # moves, and never leaves the floor
             drives.append(d)
+    if before:
+        jobs = [("sphere", m, k, d, 0.8, "coulomb") for m, k in STIFFNESSES[:3] for d in drives]
+        write_csv(pool_map(grain_velocity, jobs), "sliding_coulomb.csv")
+        return
     jobs = [("sphere", m, k, d, 0.8) for m, k in STIFFNESSES for d in drives]
     jobs += [("screw", "linear", 4e7, d, 0.8) for d in drives]
     write_csv(pool_map(grain_velocity, jobs), "sliding.csv")
+
+
+def sliding_before():
+    sliding(before=True)
 
 
 def hopping():
@@ -347,7 +363,9 @@ def _hopping_figure(plt, rows):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("part", choices=("impacts", "sliding", "hopping", "all", "figures"))
+    parser.add_argument(
+        "part", choices=("impacts", "sliding", "sliding_before", "hopping", "all", "figures")
+    )
     args = parser.parse_args()
     parts = ("impacts", "sliding", "hopping") if args.part == "all" else (args.part,)
     record = {}
