@@ -5,7 +5,6 @@ key), the value and what is allowed; nothing is computed before the inputs are c
 """
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -157,7 +156,9 @@ def _writable_path(key: str, path: str | Path, *, folder: bool) -> Path:
 
 
 def _print_json(obj) -> None:
-    print(json.dumps(obj, indent=2, default=_json_default))
+    from dem.io.files import json_text
+
+    print(json_text(obj, indent=2, default=_json_default))
 
 
 def _json_default(value):

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.files import json_text, replace_text
 
 #: What can be scanned, and what may be held fixed for each (as ``dem pointmass optimum``).
 OVER = {"drive.angle": ("throw_number", "amplitude"), "drive.throw_number": ("frequency",)}
@@ -288,7 +289,7 @@ def bulk_optimum(
         "samples": [dict(zip(("x", "fill", "value", "stderr"), s, strict=True))
                     for s in result.samples],
     }  # fmt: skip
-    (out / "optimum.json").write_text(json.dumps(summary, indent=2) + "\n")
+    replace_text(out / "optimum.json", json_text(summary, indent=2) + "\n")
     _write_csv(out / "optimum.csv", result.samples, over, objective)
     _plot(out / "optimum.png", result, pm, over, objective, case.name)
     return summary

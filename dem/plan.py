@@ -615,5 +615,8 @@ def _advise_ladder(case, data, kind, advice) -> None:
 def write_study_data(path: Path, data: dict) -> None:
     """Write the study's summary where :func:`study_data` reads it (run_all.py calls this)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+    from dem.io.files import finite_or_none
+
+    text = json.dumps(finite_or_none(data), indent=1, sort_keys=True, allow_nan=False)
+    path.write_text(text + "\n")
     study_data.cache_clear()

@@ -190,3 +190,14 @@ def test_plan_claims_only_what_was_measured(tmp_path):
     other_drive = studied.with_drive(throw_number=1.3)
     p = plan.plan(other_drive)
     assert math.isnan(p.expected_error) and "drive.throw_number = 1.3" in p.error_source
+
+
+def test_plan_json_is_strict_json_with_null_for_what_was_not_measured(capsys):
+    """'not measured' is NaN in Python and null in the JSON (NaN is not JSON)."""
+
+    def refuse(name):
+        raise ValueError(f"not JSON: {name}")
+
+    assert main(["plan", str(CASES_DIR / "screw-trough"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out, parse_constant=refuse)
+    assert out["expected_error"] is None and "not measured" in out["error_source"]
