@@ -85,3 +85,15 @@ def stop_mid_frame(case, out: Path, monkeypatch, check: int, timestep: float) ->
     into = (step - drive_start) % steps_per_frame
     assert into != 0  # stopped mid-frame
     return into
+
+
+def run_cli(capsys, *argv):
+    """``dem`` with ``argv`` (any values, as strings): (exit status, stdout, stderr)."""
+    from dem.cli import main
+
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err

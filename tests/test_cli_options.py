@@ -5,8 +5,7 @@ the option, the value and the range, before anything is computed or written."""
 import shutil
 
 import pytest
-
-from dem.cli import main
+from small_case import run_cli as run
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -15,15 +14,6 @@ OPTIMUM = ["pointmass", "optimum", "--over", "angle", "--hold", "throw_number",
            "--throw-number", "1.5", "--friction", "0.3"]  # fmt: skip
 THRESHOLDS = ["pointmass", "thresholds", "--angle", "25", "--friction", "0.3"]
 SWEEP = ["pointmass", "sweep", "--throw-number", "1.5", "--angle", "25", "--friction", "0.3"]
-
-
-def run(capsys, *argv):
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.mark.parametrize(

@@ -7,20 +7,10 @@ import json
 
 import h5py
 import pytest
+from small_case import run_cli as run
 from test_report import _run_folder, _summary
 
-from dem.cli import main
-
 GOOD = json.dumps(_summary())
-
-
-def run(capsys, *argv):
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _with(**changes) -> str:

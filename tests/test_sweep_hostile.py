@@ -10,8 +10,8 @@ import time
 
 import pytest
 from small_case import SMALL_CASE, write_case
+from small_case import run_cli as run
 
-from dem.cli import main
 from dem.runner import SUMMARY
 
 pytest.importorskip("distributed")
@@ -20,15 +20,6 @@ pytest.importorskip("distributed")
 TINY = SMALL_CASE.replace("count = 120", "count = 30").replace(
     "settle_cycles = 2", "settle_cycles = 1"
 )
-
-
-def run(capsys, *argv):
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def one_line(err: str) -> bool:

@@ -363,6 +363,16 @@ def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
     return ftx, fty, ftz, sx, sy, sz
 
 
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt):
+    """Spring ``hist[k]`` plus v_t dt, projected onto the tangent plane of n: (s_x, s_y, s_z)."""
+    sx = hist[k, 0] + vtx * dt
+    sy = hist[k, 1] + vty * dt
+    sz = hist[k, 2] + vtz * dt
+    sn = sx * nx + sy * ny + sz * nz
+    return sx - sn * nx, sy - sn * ny, sz - sn * nz
+
+
 @numba.njit(**NUMBA_OPTIONS)
 def _impact_tangential(p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt):
     """Tangential force of the impact-aware law; updates ``hist[k]`` (5 floats) in place.
@@ -432,13 +442,7 @@ def _impact_tangential(p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff,
         hist[k, 3] = -1.0
         return ftx, fty, ftz
     # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
-    sx = hist[k, 0] + vtx * dt
-    sy = hist[k, 1] + vty * dt
-    sz = hist[k, 2] + vtz * dt
-    sn = sx * nx + sy * ny + sz * nz
-    sx -= sn * nx
-    sy -= sn * ny
-    sz -= sn * nz
+    sx, sy, sz = _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt)
     ftx, fty, ftz, sx, sy, sz = _coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
     hist[k, 0] = sx
     hist[k, 1] = sy
@@ -492,13 +496,7 @@ def contact_force(
         return _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj,
                        r_eff)  # fmt: skip
     # tangential spring: increment, then project onto the current tangent plane
-    sx = hist[k, 0] + vtx * dt
-    sy = hist[k, 1] + vty * dt
-    sz = hist[k, 2] + vtz * dt
-    sn = sx * nx + sy * ny + sz * nz
-    sx -= sn * nx
-    sy -= sn * ny
-    sz -= sn * nz
+    sx, sy, sz = _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt)
     f_max = p[P_MU] * abs(fn)
     if p[P_TANGENTIAL] != 0.0:
         ftx, fty, ftz, sx, sy, sz = _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz)

@@ -313,49 +313,50 @@ def figures():
         _hopping_figure(plt, read_csv("hopping.csv"))
 
 
+def _panel(ax, x, curves, points, xkey):
+    """Bounded point mass (solid), the paper's (dotted), shaded between, DEM markers.
+
+    ``curves``: (label, paper v_norm, bounded v_norm) per family; ``points``: the DEM rows of
+    each family, drawn against ``xkey``.
+    """
+    for i, ((label, paper, bounded), sel) in enumerate(zip(curves, points, strict=True)):
+        ax.plot(x, paper, ":", color=f"C{i}", lw=1)
+        ax.plot(x, bounded, "-", color=f"C{i}", lw=1, label=f"bounded point mass, {label}")
+        ax.fill_between(x, paper, bounded, where=np.abs(bounded - paper) > 1e-3,
+                        color=f"C{i}", alpha=0.12)  # fmt: skip
+        for grain, marker in (("sphere", "o"), ("screw", "^")):
+            mine = [r for r in sel if r["grain"] == grain]
+            ax.plot([r[xkey] for r in mine], [r["dem_velocity_norm"] for r in mine], marker,
+                    color=f"C{i}", mfc="none", ms=5)  # fmt: skip
+    ax.set_ylabel("v / (A omega cos phi)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def _hopping_figure(plt, rows):
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), dpi=120)
-    ax = axes[0]
+
+    def v(*args):
+        paper = pointmass.velocities(*args)["velocity_norm"]
+        return paper, pointmass.velocities(*args, impact="coulomb")["velocity_norm"]
+
     g = np.linspace(0.2, 5.0, 400)
-    for i, e in enumerate((0.2, 0.5, 0.8)):
-        paper = pointmass.velocities(g, 25.0, 0.35, 0.0, e, 0.0)["velocity_norm"]
-        bounded = pointmass.velocities(g, 25.0, 0.35, 0.0, e, 0.0, impact="coulomb")
-        bounded = bounded["velocity_norm"]
-        ax.plot(g, paper, ":", color=f"C{i}", lw=1)
-        ax.plot(g, bounded, "-", color=f"C{i}", lw=1, label=f"bounded point mass, eps_t {e}")
-        ax.fill_between(g, paper, bounded, where=np.abs(bounded - paper) > 1e-3,
-                        color=f"C{i}", alpha=0.12)  # fmt: skip
-        for grain, marker in (("sphere", "o"), ("screw", "^")):
-            sel = [r for r in rows if r["grain"] == grain and r["eps_t"] == e
-                   and r["angle"] == 25.0 and r["friction"] == 0.35]  # fmt: skip
-            ax.plot([r["throw_number"] for r in sel], [r["dem_velocity_norm"] for r in sel],
-                    marker, color=f"C{i}", mfc="none", ms=5)  # fmt: skip
-    ax.set_xlabel("throw number Gamma")
-    ax.set_ylabel("v / (A omega cos phi)")
-    ax.set_title("Fig. 6: phi 25 deg, mu 0.35 (dotted: paper's Eq. 12; shaded: it breaks "
-                 "Coulomb; o sphere, ^ screw)", fontsize=8)  # fmt: skip
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    ax = axes[1]
+    fig6 = [r for r in rows if r["angle"] == 25.0 and r["friction"] == 0.35]
+    _panel(
+        axes[0], g, [(f"eps_t {e}", *v(g, 25.0, 0.35, 0.0, e, 0.0)) for e in (0.2, 0.5, 0.8)],
+        [[r for r in fig6 if r["eps_t"] == e] for e in (0.2, 0.5, 0.8)], "throw_number",
+    )  # fmt: skip
+    axes[0].set_xlabel("throw number Gamma")
+    axes[0].set_title("Fig. 6: phi 25 deg, mu 0.35 (dotted: paper's Eq. 12; shaded: it breaks "
+                      "Coulomb; o sphere, ^ screw)", fontsize=8)  # fmt: skip
     phi = np.linspace(5.0, 75.0, 300)
-    for i, mu in enumerate((0.25, 0.35, 0.6)):
-        paper = pointmass.velocities(1.8, phi, mu, 0.0, 0.8, 0.0)["velocity_norm"]
-        bounded = pointmass.velocities(1.8, phi, mu, 0.0, 0.8, 0.0, impact="coulomb")
-        bounded = bounded["velocity_norm"]
-        ax.plot(phi, paper, ":", color=f"C{i}", lw=1)
-        ax.plot(phi, bounded, "-", color=f"C{i}", lw=1, label=f"bounded point mass, mu {mu}")
-        ax.fill_between(phi, paper, bounded, where=np.abs(bounded - paper) > 1e-3,
-                        color=f"C{i}", alpha=0.12)  # fmt: skip
-        for grain, marker in (("sphere", "o"), ("screw", "^")):
-            sel = [r for r in rows if r["grain"] == grain and r["friction"] == mu
-                   and r["throw_number"] == 1.8 and r["eps_t"] == 0.8]  # fmt: skip
-            ax.plot([r["angle"] for r in sel], [r["dem_velocity_norm"] for r in sel], marker,
-                    color=f"C{i}", mfc="none", ms=5)  # fmt: skip
-    ax.set_xlabel("vibration angle phi (deg)")
-    ax.set_ylabel("v / (A omega cos phi)")
-    ax.set_title("Fig. 7: Gamma 1.8, eps_t 0.8 (o sphere, ^ screw)", fontsize=8)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    fig7 = [r for r in rows if r["throw_number"] == 1.8 and r["eps_t"] == 0.8]
+    _panel(
+        axes[1], phi, [(f"mu {mu}", *v(1.8, phi, mu, 0.0, 0.8, 0.0)) for mu in (0.25, 0.35, 0.6)],
+        [[r for r in fig7 if r["friction"] == mu] for mu in (0.25, 0.35, 0.6)], "angle",
+    )  # fmt: skip
+    axes[1].set_xlabel("vibration angle phi (deg)")
+    axes[1].set_title("Fig. 7: Gamma 1.8, eps_t 0.8 (o sphere, ^ screw)", fontsize=8)
     fig.tight_layout()
     fig.savefig(HERE / "hopping.png")
     print(f"wrote {HERE / 'hopping.png'}")
