@@ -28,7 +28,9 @@ def optimum_figure(opt, path: str | Path) -> Path:
     ax.axvspan(*opt.plateau, color="C0", alpha=0.12, label="within 90%")
     ax.set_xlabel("vibration angle phi (deg)" if opt.over == "angle" else "throw number Gamma")
     ax.set_ylabel("v / (A omega cos phi)" if opt.objective == "velocity_norm" else "v (m/s)")
-    held = ", ".join(f"{k}={v:g}" for k, v in opt.held.items())
+    held = ", ".join(
+        f"{k}={v:g}" if isinstance(v, int | float) else f"{k}={v}" for k, v in opt.held.items()
+    )
     ax.set_title(f"holding {opt.hold}: {held}", fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
