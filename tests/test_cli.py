@@ -236,19 +236,26 @@ def test_export_refuses_to_replace_a_deck_without_overwrite(capsys, tmp_path):
     assert code == 2 and "OUT_DIR" in err and "this is a file" in err
 
 
-def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
+def _single_sphere_copy(tmp_path, throw_number=None, tangential=None):
+    """A copy of cases/single-sphere at another throw number or tangential law: (dir, toml)."""
     import shutil
-
-    from dem.case import load_case
 
     case_dir = tmp_path / "one"
     shutil.copytree("cases/single-sphere", case_dir)
     toml = case_dir / "case.toml"
-    toml.write_text(
-        toml.read_text()
-        .replace("throw_number = 0.6", "throw_number = 1.8")
-        .replace('tangential = "impact"', 'tangential = "coulomb"')
-    )
+    text = toml.read_text()
+    if throw_number is not None:
+        text = text.replace("throw_number = 0.6", f"throw_number = {throw_number}")
+    if tangential is not None:
+        text = text.replace('tangential = "impact"', f'tangential = "{tangential}"')
+    toml.write_text(text)
+    return case_dir, toml
+
+
+def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
+    from dem.case import load_case
+
+    case_dir, toml = _single_sphere_copy(tmp_path, 1.8, "coulomb")
     before = toml.read_text()
     plot = tmp_path / "cal.png"
     assert main(["calibrate", str(case_dir), "--dry-run", "--plot", str(plot)]) == 0
@@ -263,23 +270,13 @@ def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
 
 
 def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):
-    import shutil
-
-    case_dir = tmp_path / "one"
-    shutil.copytree("cases/single-sphere", case_dir)
-    toml = case_dir / "case.toml"
-    toml.write_text(toml.read_text().replace('tangential = "impact"', 'tangential = "liggghts"'))
+    case_dir, _ = _single_sphere_copy(tmp_path, tangential="liggghts")
     assert main(["calibrate", str(case_dir)]) == 2
     assert "contact.tangential" in capsys.readouterr().err
 
 
 def test_calibrate_of_the_impact_law_measures_and_changes_nothing(tmp_path, capsys):
-    import shutil
-
-    case_dir = tmp_path / "one"
-    shutil.copytree("cases/single-sphere", case_dir)
-    toml = case_dir / "case.toml"
-    toml.write_text(toml.read_text().replace("throw_number = 0.6", "throw_number = 1.8"))
+    case_dir, toml = _single_sphere_copy(tmp_path, 1.8)
     before = toml.read_text()
     code, out, _ = run(capsys, "calibrate", str(case_dir), "--plot", str(tmp_path / "c.png"))
     assert code == 0 and "nothing to fit" in out and toml.read_text() == before
@@ -289,16 +286,7 @@ def test_calibrate_of_the_impact_law_measures_and_changes_nothing(tmp_path, caps
 def test_calibrate_writes_the_closest_fit_and_fails_only_when_strict(tmp_path, capsys):
     """Gamma 4.2, a period-2 orbit: its landings at 21 and 42 deg take different eps_t from one
     Coulomb spring (0.756 and 0.819 at best), yet calibrate answers (exit 0) unless --strict."""
-    import shutil
-
-    case_dir = tmp_path / "one"
-    shutil.copytree("cases/single-sphere", case_dir)
-    toml = case_dir / "case.toml"
-    toml.write_text(
-        toml.read_text()
-        .replace("throw_number = 0.6", "throw_number = 4.2")
-        .replace('tangential = "impact"', 'tangential = "coulomb"')
-    )
+    case_dir, _ = _single_sphere_copy(tmp_path, 4.2, "coulomb")
     plot = str(tmp_path / "c.png")
     code, out, err = run(capsys, "calibrate", str(case_dir), "--dry-run", "--plot", plot)
     assert code == 0 and "residual" in out and "within 0.02" in err and "--strict" in err
