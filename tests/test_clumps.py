@@ -24,7 +24,9 @@ SCREW_MASS = 2.5e-3
 
 
 def _linear(kn=1.0e5, e=0.3, mu=0.35):
-    return ContactLaw("linear", contacts.make_params(stiffness=kn, restitution=e, friction=mu))
+    return ContactLaw(
+        "linear", contacts.make_params(model="linear", stiffness=kn, restitution=e, friction=mu)
+    )
 
 
 def _screw():

@@ -38,7 +38,8 @@ def _law(model, c):
     return ContactLaw(
         model,
         contacts.make_params(
-            stiffness=c["kn"], tangential_stiffness_ratio=c["kt_ratio"], youngs_modulus=c["E"],
+            model=model, stiffness=c["kn"], tangential_stiffness_ratio=c["kt_ratio"],
+            youngs_modulus=c["E"],
             poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
             rolling_friction=c["mu_roll"], limit_force=c["limit"], tangential=c["tangential"],
             tangential_damping_ratio=c["zeta_t"], tangential_mass_factor=c["f_t"],
@@ -141,7 +142,7 @@ def _head_on(law, radius, density, speed, dt):
 def test_linear_head_on_restitution_and_contact_time_are_exact(e):
     """Linear law: e and t_c = pi / sqrt(k/m* - (gamma/2m*)^2) hold exactly (to O(dt))."""
     kn, radius, density = 1.0e4, 1.0e-3, 2500.0
-    law = ContactLaw("linear", contacts.make_params(stiffness=kn, restitution=e))
+    law = ContactLaw("linear", contacts.make_params(model="linear", stiffness=kn, restitution=e))
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
     t_c = contacts.linear_collision_time(kn, m_eff, contacts.damping_beta(e))
     e_sim, t_sim = _head_on(law, radius, density, 0.5, t_c / 2000)
@@ -154,7 +155,9 @@ def test_hertz_head_on_contact_time_is_hertzian():
     youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
     law = ContactLaw(
         "hertz_mindlin",
-        contacts.make_params(youngs_modulus=youngs, poisson_ratio=nu, restitution=1.0),
+        contacts.make_params(
+            model="hertz_mindlin", youngs_modulus=youngs, poisson_ratio=nu, restitution=1.0
+        ),
     )
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
     ystar = youngs / (2 * (1 - nu**2))
@@ -175,7 +178,9 @@ def test_hertz_head_on_restitution_follows_liggghts_beta(e):
     youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
     law = ContactLaw(
         "hertz_mindlin",
-        contacts.make_params(youngs_modulus=youngs, poisson_ratio=nu, restitution=e),
+        contacts.make_params(
+            model="hertz_mindlin", youngs_modulus=youngs, poisson_ratio=nu, restitution=e
+        ),
     )
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
     t_h = contacts.hertz_collision_time(youngs / (2 * (1 - nu**2)), radius / 2, m_eff, speed)

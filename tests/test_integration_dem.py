@@ -25,7 +25,11 @@ def _linear(kn=1.0e5, e=0.0, mu=0.35, ratio=2 / 7):
     return ContactLaw(
         "linear",
         contacts.make_params(
-            stiffness=kn, restitution=e, friction=mu, tangential_stiffness_ratio=ratio
+            model="linear",
+            stiffness=kn,
+            restitution=e,
+            friction=mu,
+            tangential_stiffness_ratio=ratio,
         ),
     )
 

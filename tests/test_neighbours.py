@@ -15,7 +15,9 @@ def _sim(n, length, width, seed, capacity=None):
     x = np.column_stack(
         [rng.uniform(0, length, n), rng.uniform(-width / 2, width / 2, n), rng.uniform(0, 0.02, n)]
     )
-    law = ContactLaw("linear", contacts.make_params(stiffness=1e3, restitution=0.5, friction=0.3))
+    law = ContactLaw(
+        "linear", contacts.make_params(model="linear", stiffness=1e3, restitution=0.5, friction=0.3)
+    )
     sim = Simulation(Spheres.create(x, r, 2500.0), Trough(length, width), law, 1e-6)
     if capacity is not None:
         sim.pairs = PairList(n, capacity=capacity, cell_capacity=2)

@@ -35,7 +35,11 @@ def _linear(kn=1.0e5, e=0.0, mu=0.35):
     return ContactLaw(
         "linear",
         contacts.make_params(
-            stiffness=kn, restitution=e, friction=mu, tangential_stiffness_ratio=2 / 7
+            model="linear",
+            stiffness=kn,
+            restitution=e,
+            friction=mu,
+            tangential_stiffness_ratio=2 / 7,
         ),
     )
 
@@ -95,7 +99,7 @@ def test_no_warning_below_the_accuracy_bound():
 
 def test_hertz_suggests_a_youngs_modulus():
     params = contacts.make_params(
-        youngs_modulus=5e7, poisson_ratio=0.3, restitution=0.0, friction=0.35
+        model="hertz_mindlin", youngs_modulus=5e7, poisson_ratio=0.3, restitution=0.0, friction=0.35
     )
     law = ContactLaw("hertz_mindlin", params)
     spheres = Spheres.create(np.array([[0.01, 0.0, 0.8 * RADIUS]]), RADIUS, DENSITY)

@@ -54,8 +54,7 @@ def test_virtual_impact_restitution_matches_linear_formula(e):
 def test_no_rebound_at_and_beyond_critical_damping(beta):
     """eps_n = 0 maps to critical damping; over-critical damping does not rebound either."""
     radius, density, kn = 0.002, 7800.0, 4.0e6
-    params = contacts.make_params(stiffness=kn, restitution=0.0, friction=0.35)
-    params[contacts.P_BETA] = beta
+    params = contacts.make_params(model="linear", stiffness=kn, friction=0.35, beta=beta)
     spheres = Spheres.create(np.array([[0.01, 0.0, radius + 1e-9]]), radius, density)
     spheres.v[0] = [0.1, 0.0, -0.4]
     mass = spheres.mass[0]

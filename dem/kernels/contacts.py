@@ -114,19 +114,22 @@ P_BETA = 4  #: damping parameter beta (<= 0)
 P_MU = 5  #: Coulomb friction coefficient mu
 P_MU_ROLL = 6  #: rolling resistance coefficient mu_r (0: off)
 P_LIMIT_FORCE = 7  #: 1.0 keeps F_n >= 0 (LIGGGHTS limitForce), else 0.0
-P_HERTZ_DAMP_N = 8  #: -2 sqrt(5/6) beta sqrt(2 Y*): gamma_n = this sqrt(m* sqrt(R* delta))
-P_HERTZ_DAMP_T = 9  #: -2 sqrt(5/6) beta sqrt(8 G*): gamma_t = this sqrt(m* sqrt(R* delta))
+P_KN_COEF = 8  #: normal sub-model: C_kn, k_n = C_kn a (:func:`law_coefficients`)
+P_DAMP_N = 9  #: damping sub-model: C_dn, gamma_n = C_dn sqrt(B_n a m*)
 P_TANGENTIAL = 10  #: tangential convention: 0.0 "coulomb", 1.0 "liggghts" (:data:`TANGENTIAL`)
 P_ZETA_T = 11  #: "coulomb": tangential damping ratio zeta_t
-P_MASS_T = 12  #: "coulomb": tangential mass factor f_t (tangential effective mass f_t m*)
-P_COULOMB_DAMP_T = 13  #: "coulomb", Hertz: 2 zeta_t sqrt(2 kappa Y* f_t): gamma_t = this q
+P_MASS_T = 12  #: "coulomb", "impact": tangential mass factor f_t (effective mass f_t m*)
+P_DAMP_N_SCALE = 13  #: damping sub-model: B_n
 P_WALL_ARM = 14  #: f_w: a wall contact's lever arm is r - f_w delta (:data:`WALL_LEVER_ARMS`)
 P_IMPACT_RATIO = 15  #: "impact": (1 - eps_t) / (1 + e_n), e_n the normal law's own restitution
 P_STICK_RATE = 16  #: "impact": alpha, the stick's angular frequency times dt (rad per step)
 P_STICK_ZETA = 17  #: "impact": damping ratio of the stick
 P_IMPACT_CAP = 18  #: "impact": the largest c, min(mu, mu (1 + eps_n) / (1 + e_n))
 P_NORMAL_E = 19  #: "impact": e_n, the normal law's own restitution (:func:`normal_law_restitution`)
-N_PARAMS = 20
+P_KT_COEF = 20  #: tangential spring: C_kt, k_t = C_kt a
+P_DAMP_T = 21  #: tangential dashpot: C_dt, gamma_t = C_dt sqrt(B_t a m*)
+P_DAMP_T_SCALE = 22  #: tangential dashpot: B_t
+N_PARAMS = 23
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
@@ -194,6 +197,7 @@ def normal_law_restitution(model: int, beta: float) -> float:
 
 def make_params(
     *,
+    model: str,
     stiffness: float = 0.0,
     tangential_stiffness_ratio: float = 2.0 / 7.0,
     youngs_modulus: float = 0.0,
@@ -209,18 +213,22 @@ def make_params(
     restitution_tangential: float = 0.8,
     stick_rate: float = DEM_STICK_RATE,
     stick_damping_ratio: float = DEM_STICK_DAMPING_RATIO,
-    model: str = "",
+    beta: float | None = None,
 ) -> np.ndarray:
-    """Pack contact coefficients into the ``params`` array of the kernels, shape (N_PARAMS,).
+    """Pack a law's sub-model coefficients into the kernels' ``params`` array, (N_PARAMS,).
 
-    Both laws' entries are filled; the law id chosen separately selects which are used.
+    ``model`` is the normal law (a key of :data:`MODELS`), ``tangential`` the tangential law
+    (a key of :data:`TANGENTIAL`); each sub-model fills its own entries (:func:`_normal_params`,
+    :func:`_damping_params`, :func:`_tangential_params`; rolling is mu_r alone).
     ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
-    ``tangential_damping_ratio`` zeta_t and ``tangential_mass_factor`` f_t are used by
-    ``tangential = "coulomb"`` only (module docstring). ``wall_lever_arm`` is a key of
-    :data:`WALL_LEVER_ARMS`. ``tangential = "impact"`` uses ``restitution_tangential`` eps_t,
-    the normal law's own restitution (:func:`normal_law_restitution` of ``model``, which it
-    then needs), ``stick_rate`` alpha, ``stick_damping_ratio`` and ``tangential_mass_factor``.
+    ``tangential_damping_ratio`` zeta_t is used by "coulomb" only, ``tangential_mass_factor`` f_t
+    by "coulomb" and "impact"; "impact" uses ``restitution_tangential`` eps_t, ``stick_rate``
+    alpha and ``stick_damping_ratio``. ``beta`` overrides the damping parameter derived from
+    ``restitution`` (over-critical damping, beta < -1, for studies). ``wall_lever_arm`` is a key
+    of :data:`WALL_LEVER_ARMS`.
     """
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {sorted(MODELS)}, got {model!r}")
     if wall_lever_arm not in WALL_LEVER_ARMS:
         raise ValueError(
             f"wall_lever_arm must be one of {sorted(WALL_LEVER_ARMS)}, got {wall_lever_arm!r}"
@@ -233,86 +241,127 @@ def make_params(
     p[P_KT_RATIO] = tangential_stiffness_ratio
     p[P_YSTAR] = youngs_modulus / (2.0 * (1.0 - nu * nu))
     p[P_GSTAR] = youngs_modulus / (4.0 * (2.0 - nu) * (1.0 + nu))
-    p[P_BETA] = damping_beta(restitution)
+    p[P_BETA] = damping_beta(restitution) if beta is None else beta
     p[P_MU] = friction
     p[P_MU_ROLL] = rolling_friction
     p[P_LIMIT_FORCE] = 1.0 if limit_force else 0.0
-    damp = -2.0 * _SQRT_5_6 * p[P_BETA]
-    p[P_HERTZ_DAMP_N] = damp * math.sqrt(2.0 * p[P_YSTAR])
-    p[P_HERTZ_DAMP_T] = damp * math.sqrt(8.0 * p[P_GSTAR])
     p[P_TANGENTIAL] = TANGENTIAL[tangential]
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
     p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
+    _normal_params(p, model)
+    _damping_params(p, model)
+    _tangential_params(p, model, tangential)
     if tangential == "impact":
-        if model not in MODELS:
-            raise ValueError(f"tangential 'impact' needs the normal model, got {model!r}")
-        if not 0.0 <= restitution_tangential <= 1.0:
-            raise ValueError(f"eps_t must lie in [0, 1], got {restitution_tangential}")
-        e_n = normal_law_restitution(MODELS[model], p[P_BETA])
-        p[P_IMPACT_RATIO] = (1.0 - restitution_tangential) / (1.0 + e_n)
-        p[P_IMPACT_CAP] = min(friction, friction * (1.0 + restitution) / (1.0 + e_n))
-        p[P_NORMAL_E] = e_n
-        p[P_STICK_RATE] = stick_rate
-        p[P_STICK_ZETA] = stick_damping_ratio
-    p[P_COULOMB_DAMP_T] = (
-        2.0
-        * tangential_damping_ratio
-        * math.sqrt(2.0 * tangential_stiffness_ratio * p[P_YSTAR] * tangential_mass_factor)
-    )
+        _impact_params(p, model, restitution, restitution_tangential, stick_rate,
+                       stick_damping_ratio)  # fmt: skip
     return p
 
 
-@numba.njit(**NUMBA_OPTIONS)
-def _linear_law(delta, m_eff, r_eff, p):
-    """Linear: k_n, gamma_n = -2 beta sqrt(k_n m*), k_t = kappa k_n, gamma_t by convention.
+def _normal_params(p: np.ndarray, model: str) -> None:
+    """Normal sub-model: C_kn = k_n (linear) or 4/3 Y* (Hertz), k_n = C_kn a."""
+    p[P_KN_COEF] = p[P_KN] if model == "linear" else (4.0 / 3.0) * p[P_YSTAR]
 
-    "liggghts": gamma_t = gamma_n; "coulomb": gamma_t = 2 zeta_t sqrt(k_t f_t m*).
+
+def _damping_params(p: np.ndarray, model: str) -> None:
+    """Damping sub-model from beta: gamma_n = C_dn sqrt(B_n a m*) (:func:`law_coefficients`).
+
+    Linear: gamma_n = -2 beta sqrt(k_n m*); Hertz (LIGGGHTS, Tsuji et al. 1992):
+    gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*), S_n = 2 Y* a.
     """
-    kn = p[P_KN]
-    gn = -2.0 * p[P_BETA] * math.sqrt(kn * m_eff)
-    kt = p[P_KT_RATIO] * kn
-    if p[P_TANGENTIAL] != 0.0:
-        return kn, gn, kt, gn
-    return kn, gn, kt, 2.0 * p[P_ZETA_T] * math.sqrt(kt * p[P_MASS_T] * m_eff)
+    if model == "linear":
+        p[P_DAMP_N] = -2.0 * p[P_BETA]
+        p[P_DAMP_N_SCALE] = p[P_KN]
+    else:
+        p[P_DAMP_N] = -2.0 * _SQRT_5_6 * p[P_BETA] * math.sqrt(2.0 * p[P_YSTAR])
+        p[P_DAMP_N_SCALE] = 1.0
 
 
-@numba.njit(**NUMBA_OPTIONS)
-def _hertz_law(delta, m_eff, r_eff, p):
-    """Hertz-Mindlin: normal part from S_n = 2 Y* sqrt(R* d); tangential part by convention.
+def _tangential_params(p: np.ndarray, model: str, tangential: str) -> None:
+    """Tangential spring-dashpot of "coulomb" and "liggghts": C_kt, C_dt, B_t.
 
-    "liggghts": k_t = S_t = 8 G* sqrt(R* d), gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*);
-    "coulomb": k_t = kappa S_n, gamma_t = 2 zeta_t sqrt(k_t f_t m*). Every damping is a constant
-    times q = sqrt(m* sqrt(R* d)), the constants precomputed: two square roots per contact.
+    "liggghts": linear k_t = kappa k_n, gamma_t = gamma_n; Hertz (Mindlin, as LIGGGHTS codes it)
+    k_t = S_t = 8 G* a, gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*). "coulomb": k_t = kappa S_n,
+    gamma_t = 2 zeta_t sqrt(k_t f_t m*). "impact" has no material spring (C_kt = C_dt = 0; B_t = B_n
+    so that no square root is spent on it).
     """
-    root = math.sqrt(r_eff * delta)
-    q = math.sqrt(m_eff * root)
-    if p[P_TANGENTIAL] != 0.0:
-        return (
-            (4.0 / 3.0) * p[P_YSTAR] * root,
-            p[P_HERTZ_DAMP_N] * q,
-            8.0 * p[P_GSTAR] * root,
-            p[P_HERTZ_DAMP_T] * q,
-        )
-    return (
-        (4.0 / 3.0) * p[P_YSTAR] * root,
-        p[P_HERTZ_DAMP_N] * q,
-        2.0 * p[P_KT_RATIO] * p[P_YSTAR] * root,
-        p[P_COULOMB_DAMP_T] * q,
-    )
+    kappa, zeta_t, f_t = p[P_KT_RATIO], p[P_ZETA_T], p[P_MASS_T]
+    if tangential == "impact":
+        p[P_DAMP_T_SCALE] = p[P_DAMP_N_SCALE]
+        return
+    if model == "linear":
+        p[P_KT_COEF] = kappa * p[P_KN]
+        if tangential == "liggghts":
+            p[P_DAMP_T], p[P_DAMP_T_SCALE] = p[P_DAMP_N], p[P_DAMP_N_SCALE]
+        else:
+            p[P_DAMP_T], p[P_DAMP_T_SCALE] = 2.0 * zeta_t, p[P_KT_COEF] * f_t
+        return
+    p[P_DAMP_T_SCALE] = 1.0
+    if tangential == "liggghts":
+        p[P_KT_COEF] = 8.0 * p[P_GSTAR]
+        p[P_DAMP_T] = -2.0 * _SQRT_5_6 * p[P_BETA] * math.sqrt(8.0 * p[P_GSTAR])
+    else:
+        p[P_KT_COEF] = 2.0 * kappa * p[P_YSTAR]
+        p[P_DAMP_T] = 2.0 * zeta_t * math.sqrt(2.0 * kappa * p[P_YSTAR] * f_t)
+
+
+def _impact_params(p, model, restitution, restitution_tangential, stick_rate, stick_zeta) -> None:
+    """Tangential sub-model "impact": the force ratio, its cap, e_n and the stick's alpha, zeta."""
+    if not 0.0 <= restitution_tangential <= 1.0:
+        raise ValueError(f"eps_t must lie in [0, 1], got {restitution_tangential}")
+    e_n = normal_law_restitution(MODELS[model], p[P_BETA])
+    friction = p[P_MU]
+    p[P_IMPACT_RATIO] = (1.0 - restitution_tangential) / (1.0 + e_n)
+    p[P_IMPACT_CAP] = min(friction, friction * (1.0 + restitution) / (1.0 + e_n))
+    p[P_NORMAL_E] = e_n
+    p[P_STICK_RATE] = stick_rate
+    p[P_STICK_ZETA] = stick_zeta
+
+
+# --- sub-models: scalars in, scalars out (the same functions can run in GPU kernels) -------------
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def normal_scale(normal, delta, r_eff):
+    """Normal sub-model: the contact-size factor a that every coefficient scales with.
+
+    Linear: a = 1 (k_n constant). Hertz: a = sqrt(R* delta), the radius of the contact patch
+    over sqrt(R*), so that k_n = 4/3 Y* a and the tangent stiffness S_n = 2 Y* a.
+    """
+    if normal == HERTZ:
+        return math.sqrt(r_eff * delta)
+    return 1.0
 
 
 @numba.njit(**NUMBA_OPTIONS)
 def law_coefficients(model, delta, m_eff, r_eff, p):
-    """Dispatch to the law with id ``model``: returns (k_n, gamma_n, k_t, gamma_t)."""
-    if model == HERTZ:
-        return _hertz_law(delta, m_eff, r_eff, p)
-    return _linear_law(delta, m_eff, r_eff, p)
+    """(k_n, gamma_n, k_t, gamma_t) of normal law ``model`` at overlap delta.
+
+    Every coefficient is a constant of the sub-models (:func:`make_params`) times the normal
+    sub-model's size factor a (:func:`normal_scale`):
+
+        k_n = C_kn a,  gamma_n = C_dn sqrt(B_n a m*),  k_t = C_kt a,  gamma_t = C_dt sqrt(B_t a m*)
+
+    linear: C_kn = k_n, C_dn = -2 beta, B_n = k_n, C_kt = kappa k_n; "liggghts" C_dt = C_dn,
+    B_t = B_n (gamma_t = gamma_n); "coulomb" C_dt = 2 zeta_t, B_t = k_t f_t. Hertz: C_kn = 4/3 Y*,
+    C_dn = -2 sqrt(5/6) beta sqrt(2 Y*), B_n = 1 (gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*));
+    "liggghts" C_kt = 8 G*, C_dt = -2 sqrt(5/6) beta sqrt(8 G*); "coulomb" C_kt = 2 kappa Y*,
+    C_dt = 2 zeta_t sqrt(2 kappa Y* f_t); B_t = 1. The tangential dashpot shares the normal
+    one's square root where B_t = B_n: two square roots per contact.
+    """
+    a = normal_scale(model, delta, r_eff)
+    kn = p[P_KN_COEF] * a
+    qn = math.sqrt(p[P_DAMP_N_SCALE] * a * m_eff)
+    gn = p[P_DAMP_N] * qn
+    kt = p[P_KT_COEF] * a
+    if p[P_DAMP_T_SCALE] == p[P_DAMP_N_SCALE]:
+        return kn, gn, kt, p[P_DAMP_T] * qn
+    return kn, gn, kt, p[P_DAMP_T] * math.sqrt(p[P_DAMP_T_SCALE] * a * m_eff)
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
-    """Total tangential force capped at f_max = mu |F_n|, spring reset to match.
+def coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Tangential sub-model "coulomb": total force capped at f_max = mu |F_n|, spring reset.
 
     Returns (F_t, s) as six floats.
     """
@@ -333,8 +382,8 @@ def _coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
-    """Spring force capped at f_max = mu |F_n| (spring reset), dashpot added only while sticking.
+def liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Tangential sub-model "liggghts": spring capped at f_max, dashpot only while sticking.
 
     Returns (F_t, s) as six floats.
     """
@@ -364,92 +413,104 @@ def _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt):
-    """Spring ``hist[k]`` plus v_t dt, projected onto the tangent plane of n: (s_x, s_y, s_z)."""
-    sx = hist[k, 0] + vtx * dt
-    sy = hist[k, 1] + vty * dt
-    sz = hist[k, 2] + vtz * dt
+def spring_step(s0, s1, s2, vtx, vty, vtz, nx, ny, nz, dt):
+    """Spring s plus v_t dt, projected onto the tangent plane of n: (s_x, s_y, s_z)."""
+    sx = s0 + vtx * dt
+    sy = s1 + vty * dt
+    sz = s2 + vtz * dt
     sn = sx * nx + sy * ny + sz * nz
     return sx - sn * nx, sy - sn * ny, sz - sn * nz
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _impact_tangential(p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt):
-    """Tangential force of the impact-aware law; updates ``hist[k]`` (5 floats) in place.
+def impact_tangential(
+    impact_ratio, impact_cap, mu, mass_t, stick_rate, stick_zeta,
+    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4,
+):  # fmt: skip
+    """Tangential sub-model "impact" (module docstring): force and the contact's new history.
 
-    History: ``hist[k, 3]`` is the phase (0 a new contact, 1 + theta an impact, theta the
-    radians of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring),
-    ``hist[k, 4]`` the normal velocity v_n = v_r . n of the previous step, ``hist[k, 0:3]`` the
-    impact's force ratio vector c (impact) or the stick's spring s (enduring).
+    History (5 floats): h3 is the phase (0 a new contact, 1 + theta an impact, theta the radians
+    of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring), h4 the
+    normal velocity v_n = v_r . n of the previous step, (h0, h1, h2) the impact's force ratio
+    vector c (impact) or the stick's spring s (enduring). Parameters: ``impact_ratio``
+    (1 - eps_t) / (1 + e_n), ``impact_cap`` the largest c, ``mu``, ``mass_t`` f_t,
+    ``stick_rate`` alpha and ``stick_zeta`` of the stick.
 
-    Returns (F_t,) as three floats.
+    Returns (F_t, h) as eight floats.
     """
     fnp = fn if fn > 0.0 else 0.0
-    f_max = p[P_MU] * fnp
-    phase = hist[k, 3]
+    f_max = mu * fnp
+    phase = h3
     if phase == 0.0:
         # first touch: an approach makes an impact that takes (1 - eps_t) of the slip velocity
         # through a tangential force c F_n, c = (1 - eps_t) |v_t| / ((1 + e_n) |v_n|), capped
         # where the rigid impact's Coulomb bound mu (1 + eps_n) m |v_n| is reached
         vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
-        hist[k, 0] = 0.0
-        hist[k, 1] = 0.0
-        hist[k, 2] = 0.0
+        h0 = 0.0
+        h1 = 0.0
+        h2 = 0.0
         if vn < 0.0:
             phase = 1.0
             if vt > 0.0:
-                ratio = p[P_IMPACT_RATIO] * vt / -vn
-                if ratio > p[P_IMPACT_CAP]:
-                    ratio = p[P_IMPACT_CAP]
-                hist[k, 0] = ratio * vtx / vt
-                hist[k, 1] = ratio * vty / vt
-                hist[k, 2] = ratio * vtz / vt
+                ratio = impact_ratio * vt / -vn
+                if ratio > impact_cap:
+                    ratio = impact_cap
+                h0 = ratio * vtx / vt
+                h1 = ratio * vty / vt
+                h2 = ratio * vtz / vt
         else:
             phase = -1.0
-    m_t = p[P_MASS_T] * m_eff
-    alpha = p[P_STICK_RATE]
-    ks = m_t * alpha * alpha / (dt * dt)
-    gs = 2.0 * p[P_STICK_ZETA] * alpha * m_t / dt
+    m_t = mass_t * m_eff
+    ks = m_t * stick_rate * stick_rate / (dt * dt)
+    gs = 2.0 * stick_zeta * stick_rate * m_t / dt
     if phase > 0.0:
         # impact: F_t = -F_n c, c projected onto the tangent plane; ends when the separating
         # speed stops growing (the contact force is back to the external load), when the slip
         # along c has stopped, or after IMPACT_MAX_PHASE
-        cx = hist[k, 0]
-        cy = hist[k, 1]
-        cz = hist[k, 2]
-        cn = cx * nx + cy * ny + cz * nz
-        cx -= cn * nx
-        cy -= cn * ny
-        cz -= cn * nz
+        cn = h0 * nx + h1 * ny + h2 * nz
+        cx = h0 - cn * nx
+        cy = h1 - cn * ny
+        cz = h2 - cn * nz
         ftx = -fnp * cx
         fty = -fnp * cy
         ftz = -fnp * cz
         theta = phase - 1.0 + dt * math.sqrt(kn / m_eff)
         slip = vtx * cx + vty * cy + vtz * cz
-        over = vn > 0.0 and vn <= hist[k, 4]
+        over = vn > 0.0 and vn <= h4
         stuck = slip <= 0.0 and cx * cx + cy * cy + cz * cz > 0.0
-        hist[k, 4] = vn
         if not (over or stuck or theta > IMPACT_MAX_PHASE):
-            hist[k, 0] = cx
-            hist[k, 1] = cy
-            hist[k, 2] = cz
-            hist[k, 3] = 1.0 + theta
-            return ftx, fty, ftz
+            return ftx, fty, ftz, cx, cy, cz, 1.0 + theta, vn
         # switch to the enduring stick, its spring set so that the force is continuous
-        hist[k, 0] = -(ftx + gs * vtx) / ks
-        hist[k, 1] = -(fty + gs * vty) / ks
-        hist[k, 2] = -(ftz + gs * vtz) / ks
-        hist[k, 3] = -1.0
-        return ftx, fty, ftz
+        return (ftx, fty, ftz, -(ftx + gs * vtx) / ks, -(fty + gs * vty) / ks,
+                -(ftz + gs * vtz) / ks, -1.0, vn)  # fmt: skip
     # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
-    sx, sy, sz = _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt)
-    ftx, fty, ftz, sx, sy, sz = _coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
-    hist[k, 0] = sx
-    hist[k, 1] = sy
-    hist[k, 2] = sz
-    hist[k, 3] = -1.0
-    hist[k, 4] = vn
-    return ftx, fty, ftz
+    sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)
+    ftx, fty, ftz, sx, sy, sz = coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
+    return ftx, fty, ftz, sx, sy, sz, -1.0, vn
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def rolling_cdt(mu_roll, fn, r_eff, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ti, tj):
+    """Rolling sub-model (LIGGGHTS ``cdt``): the torques ``ti`` on i and ``tj`` on j plus its own.
+
+    tau_i -= mu_r |F_n| R* w_r / |w_r|, tau_j += the same, with w_r = omega_i - omega_j
+    without its normal part; nothing when mu_r = 0 or w_r = 0. ``ti`` and ``tj`` are 3-tuples;
+    returns the two updated 3-tuples.
+    """
+    if mu_roll > 0.0:
+        rx = wix - wjx
+        ry = wiy - wjy
+        rz = wiz - wjz
+        rn = rx * nx + ry * ny + rz * nz
+        rx -= rn * nx
+        ry -= rn * ny
+        rz -= rn * nz
+        r_mag = math.sqrt(rx * rx + ry * ry + rz * rz)
+        if r_mag > 0.0:
+            scale = mu_roll * abs(fn) * r_eff / r_mag
+            ti = (ti[0] - scale * rx, ti[1] - scale * ry, ti[2] - scale * rz)
+            tj = (tj[0] + scale * rx, tj[1] + scale * ry, tj[2] + scale * rz)
+    return ti, tj
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -459,8 +520,12 @@ def contact_force(
 ):  # fmt: skip
     """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
 
+    The array-facing wrapper of the sub-models: it reads the parameters and the contact's
+    history row, calls the scalar sub-models (normal, damping, tangential, rolling) and writes
+    the history back.
+
     Args:
-        model: Law id (:data:`MODELS`).
+        model: Normal law id (:data:`MODELS`).
         p: Contact parameters, shape (N_PARAMS,).
         nx, ny, nz: Unit normal from j to i.
         delta: Overlap > 0, m.
@@ -468,7 +533,7 @@ def contact_force(
         wix, wiy, wiz, wjx, wjy, wjz: Spins of i and j, rad/s.
         ci, cj: Lever arms from the centres to the contact point, m.
         m_eff, r_eff: m*, kg, and R*, m.
-        hist: Tangential elongations, shape (n, 3), m; row k belongs to this contact.
+        hist: Contact history, shape (n, width) (:data:`HISTORY_WIDTH`); row k is this contact.
         k: Row of ``hist``.
         dt: Time step, s.
 
@@ -489,68 +554,37 @@ def contact_force(
     vtx = vrx - vn * nx - (wy * nz - wz * ny)
     vty = vry - vn * ny - (wz * nx - wx * nz)
     vtz = vrz - vn * nz - (wx * ny - wy * nx)
-    if p[P_TANGENTIAL] == IMPACT:
-        ftx, fty, ftz = _impact_tangential(
-            p, hist, k, nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt
-        )
-        return _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj,
-                       r_eff)  # fmt: skip
-    # tangential spring: increment, then project onto the current tangent plane
-    sx, sy, sz = _spring_step(hist, k, vtx, vty, vtz, nx, ny, nz, dt)
-    f_max = p[P_MU] * abs(fn)
-    if p[P_TANGENTIAL] != 0.0:
-        ftx, fty, ftz, sx, sy, sz = _liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz)
+    tangential = p[P_TANGENTIAL]
+    if tangential == IMPACT:
+        ftx, fty, ftz, h0, h1, h2, h3, h4 = impact_tangential(
+            p[P_IMPACT_RATIO], p[P_IMPACT_CAP], p[P_MU], p[P_MASS_T], p[P_STICK_RATE],
+            p[P_STICK_ZETA], nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt,
+            hist[k, 0], hist[k, 1], hist[k, 2], hist[k, 3], hist[k, 4],
+        )  # fmt: skip
+        hist[k, 3] = h3
+        hist[k, 4] = h4
     else:
-        ftx, fty, ftz, sx, sy, sz = _coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz)
-    hist[k, 0] = sx
-    hist[k, 1] = sy
-    hist[k, 2] = sz
-    return _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj, r_eff)
-
-
-@numba.njit(inline="always", **NUMBA_OPTIONS)
-def _finish(p, fn, ftx, fty, ftz, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ci, cj, r_eff):
-    """Force on i, torques -c n x F_t on i and j plus rolling resistance, and F_n (10 floats)."""
-    # torques -c n x F_t
+        # tangential spring: increment, then project onto the current tangent plane
+        sx, sy, sz = spring_step(hist[k, 0], hist[k, 1], hist[k, 2], vtx, vty, vtz, nx, ny, nz, dt)
+        f_max = p[P_MU] * abs(fn)
+        if tangential != 0.0:
+            ftx, fty, ftz, h0, h1, h2 = liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
+                                                            vtz)  # fmt: skip
+        else:
+            ftx, fty, ftz, h0, h1, h2 = coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
+                                                           vtz)  # fmt: skip
+    hist[k, 0] = h0
+    hist[k, 1] = h1
+    hist[k, 2] = h2
+    # torques -c n x F_t, plus rolling resistance
     cx = ny * ftz - nz * fty
     cy = nz * ftx - nx * ftz
     cz = nx * fty - ny * ftx
-    tix = -ci * cx
-    tiy = -ci * cy
-    tiz = -ci * cz
-    tjx = -cj * cx
-    tjy = -cj * cy
-    tjz = -cj * cz
-    mu_roll = p[P_MU_ROLL]
-    if mu_roll > 0.0:
-        rx = wix - wjx
-        ry = wiy - wjy
-        rz = wiz - wjz
-        rn = rx * nx + ry * ny + rz * nz
-        rx -= rn * nx
-        ry -= rn * ny
-        rz -= rn * nz
-        r_mag = math.sqrt(rx * rx + ry * ry + rz * rz)
-        if r_mag > 0.0:
-            scale = mu_roll * abs(fn) * r_eff / r_mag
-            tix -= scale * rx
-            tiy -= scale * ry
-            tiz -= scale * rz
-            tjx += scale * rx
-            tjy += scale * ry
-            tjz += scale * rz
-    return (
-        fn * nx + ftx,
-        fn * ny + fty,
-        fn * nz + ftz,
-        tix,
-        tiy,
-        tiz,
-        tjx,
-        tjy,
-        tjz,
-        fn,
-    )
+    ti, tj = rolling_cdt(
+        p[P_MU_ROLL], fn, r_eff, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz,
+        (-ci * cx, -ci * cy, -ci * cz), (-cj * cx, -cj * cy, -cj * cz),
+    )  # fmt: skip
+    return fn * nx + ftx, fn * ny + fty, fn * nz + ftz, ti[0], ti[1], ti[2], tj[0], tj[1], tj[2], fn
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
