@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dem.errors import InputError
+from dem.laws import TANGENTIAL_LAWS
 from dem.pointmass import elliptic
 from dem.pointmass.stepped import step_motion, step_point_mass
 
@@ -333,16 +334,20 @@ def calibrate(
     ``tangential = "impact"`` leaves nothing to fit: its impacts are measured and reported as
     they are (``fitted`` False).
 
+    What a law leaves to fit, and whether it may be calibrated, is its registry row's
+    (:data:`dem.laws.TANGENTIAL_LAWS`).
+
     Raises:
-        InputError: ``contact.tangential`` is "liggghts".
+        InputError: the law refuses calibration ("liggghts").
 
     """
-    if case.contact.tangential == "liggghts":
+    row = TANGENTIAL_LAWS[case.contact.tangential]
+    if row.calibration_refused:
+        allowed = [k for k, r in TANGENTIAL_LAWS.items() if not r.calibration_refused]
         raise InputError(
             "contact.tangential",
             case.contact.tangential,
-            "'impact' or 'coulomb' (the 'liggghts' convention takes k_t from Mindlin, not from "
-            "eps_t)",
+            f"one of {allowed} ({row.calibration})",
             source=str(case.source),
         )
     from dem.kernels import contacts
@@ -377,7 +382,7 @@ def calibrate(
     bounded = targets > target
     fan = np.arange(5.0, 86.0, 10.0)
     fan_impacts = np.column_stack([fan, np.full(fan.size, np.mean(impacts[:, 1]))])
-    if case.contact.tangential == "impact":
+    if not row.calibrates:
         e_t, e_n = _measure(case, impacts, quats)
         after = np.nanmean(e_t, axis=1)
         fan_values = _nanmean_rows(_measure(case, fan_impacts, quats, strict=False)[0])

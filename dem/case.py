@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from dem import drive, tangential
+from dem import drive, laws, tangential
 from dem.errors import InputError
 from dem.tomltable import Table, suggest
 
@@ -580,20 +580,8 @@ def _read_contact(t: Table) -> ContactSpec:
     t.check_known(_CONTACT_KEYS)
     model = t.choice("model", CONTACT_MODELS, "hertz_mindlin")
     tangential = t.choice("tangential", TANGENTIAL_CONVENTIONS, "impact")
-    # Coefficients the chosen model does not use are refused rather than silently ignored.
-    foreign = {
-        ("hertz_mindlin", "coulomb"): ("stiffness",),
-        ("hertz_mindlin", "liggghts"): ("stiffness", "tangential_stiffness_ratio"),
-        ("linear", "coulomb"): ("youngs_modulus",),
-        ("linear", "liggghts"): ("youngs_modulus",),
-        ("hertz_mindlin", "impact"): ("stiffness",),
-        ("linear", "impact"): ("youngs_modulus",),
-    }[model, tangential]
-    if tangential == "impact":
-        foreign += ("tangential_stiffness_ratio", "tangential_damping_ratio")
-    if tangential == "liggghts":
-        foreign += ("tangential_damping_ratio",)
-    for key in foreign:
+    # Coefficients the chosen laws do not read are refused rather than silently ignored.
+    for key in laws.foreign_keys(model, tangential):
         if key in t.data:
             raise t.error(
                 key,

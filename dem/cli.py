@@ -565,6 +565,7 @@ def _cmd_calibrate(args) -> int:
 
     from dem.calibrate import calibrate
     from dem.case import CASE_FILE, load_case, set_contact_keys
+    from dem.laws import TANGENTIAL_LAWS
     from dem.plots import calibration_figure
 
     case = load_case(args.case_dir)
@@ -591,8 +592,8 @@ def _cmd_calibrate(args) -> int:
     strict_fail = args.strict and not cal.reachable
     if not cal.fitted:
         print(
-            f"nothing to fit     contact.tangential = 'impact' delivers eps_t by construction "
-            f"(capped by Coulomb); weighted rms residual {cal.deviation:.4f}"
+            f"nothing to fit     {TANGENTIAL_LAWS[case.contact.tangential].calibration}; "
+            f"weighted rms residual {cal.deviation:.4f}"
         )
     else:
         print(

@@ -11,98 +11,16 @@ validation scripts and ``dem run`` agree on dt before any grain is placed.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
-from dem import config, fill, tangential
+from dem import config, fill
 from dem.errors import InputError
 from dem.kernels import contacts
+from dem.laws import ContactLaw
 
-
-@dataclass(frozen=True)
-class ContactLaw:
-    """A contact law selector with its kernel parameters.
-
-    Attributes:
-        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
-        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
-
-    """
-
-    model: str
-    params: np.ndarray
-
-    @classmethod
-    def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
-
-        With ``tangential = "coulomb"`` the tangential mass factor follows the grain (a rolling
-        sphere 2/7, rotation locked 1, a clump its contact mass over its mass) and an omitted
-        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
-        """
-        c, m = case.contact, case.material
-        ratio, zeta_t, factor = c.tangential_stiffness_ratio, 0.0, 1.0
-        if c.tangential == "coulomb":
-            ratio, zeta_t, factor = tangential.resolve(c, m, case.particles)
-        elif c.tangential == "impact":
-            factor = tangential.tangential_mass_factor(
-                case.particles.shape, case.particles.rotation, case.particles.grain
-            )
-        return cls(
-            model=c.model,
-            params=contacts.make_params(
-                stiffness=c.stiffness or 0.0,
-                tangential_stiffness_ratio=ratio or 0.0,
-                youngs_modulus=c.youngs_modulus or 0.0,
-                poisson_ratio=c.poisson_ratio,
-                restitution=m.restitution_normal,
-                friction=m.friction,
-                rolling_friction=m.rolling_friction,
-                limit_force=c.limit_force,
-                tangential=c.tangential,
-                tangential_damping_ratio=zeta_t,
-                tangential_mass_factor=factor,
-                wall_lever_arm=c.wall_lever_arm,
-                restitution_tangential=m.restitution_tangential,
-                model=c.model,
-            ),
-        )
-
-    @property
-    def tangential(self) -> str:
-        """Tangential convention, ``"coulomb"`` or ``"liggghts"``."""
-        code = self.params[contacts.P_TANGENTIAL]
-        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
-
-    def tangential_coefficients(self) -> dict:
-        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
-        p = self.params
-        out = {"tangential": self.tangential}
-        if self.tangential == "coulomb" or (self.model == "linear" and self.tangential != "impact"):
-            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
-        if self.tangential == "coulomb":
-            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
-            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
-        if self.tangential == "impact":
-            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
-            out["stick_rate"] = float(p[contacts.P_STICK_RATE])
-            out["stick_damping_ratio"] = float(p[contacts.P_STICK_ZETA])
-            out["normal_law_restitution"] = float(p[contacts.P_NORMAL_E])
-        f_w = float(p[contacts.P_WALL_ARM])
-        out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
-        return out
-
-    @property
-    def history_width(self) -> int:
-        """Floats of contact history per contact (:data:`dem.kernels.contacts.HISTORY_WIDTH`)."""
-        return contacts.HISTORY_WIDTH[self.tangential]
-
-    @property
-    def model_id(self) -> int:
-        """Integer id used by the kernels."""
-        return contacts.MODELS[self.model]
+__all__ = ["ContactLaw", "Timestep", "impact_speed_for", "timestep_for", "timestep_limits"]
 
 
 def timestep_limits(
@@ -138,33 +56,28 @@ def timestep_limits(
         mass = density * 4.0 / 3.0 * math.pi * radius**3
     beta = p[contacts.P_BETA]
     tangential_factor = 3.5 if rotation else 1.0
-    liggghts = law.tangential == "liggghts"
+    row = law.row
     contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
     limit = math.inf
     auto = math.inf
     for m_eff, r_eff in contacts_list:
         if law.model == "linear":
             kn = p[contacts.P_KN]
-            kt = p[contacts.P_KT_RATIO] * kn
+            root = 1.0
             zeta = -beta
             auto = min(auto, contacts.linear_collision_time(kn, m_eff, beta))
         else:
             delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
             root = math.sqrt(r_eff * delta)
             kn = 2.0 * p[contacts.P_YSTAR] * root
-            kt = 8.0 * p[contacts.P_GSTAR] * root if liggghts else p[contacts.P_KT_RATIO] * kn
             zeta = -math.sqrt(5.0 / 6.0) * beta
             auto = min(
                 auto,
                 contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
             )
-        kt_eff = tangential_factor * kt
-        if liggghts:
-            zeta_t = zeta * math.sqrt(kt / kt_eff) if kt > 0 else 0.0
-        else:
-            zeta_t = p[contacts.P_ZETA_T]
+        kt_eff, zeta_t = row.step_spring(p, law.model, kn, root, zeta, tangential_factor)
         limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
-        if kt > 0:
+        if kt_eff > 0:
             limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
     limit *= config.DEM_DT_STABILITY_FRACTION
     if law.model == "linear":

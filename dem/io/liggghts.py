@@ -109,6 +109,7 @@ from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.feeder import grain_mass as grain_mass_of
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
+from dem.laws import NORMAL_LAWS, TANGENTIAL_LAWS
 from dem.mesh import load_mesh
 from dem.shapes import write_clump
 from dem.timestep import ContactLaw
@@ -197,23 +198,17 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
     lines = [
         "# grains are atom type 1, walls type 2; one material for both",
     ]
-    if case.contact.tangential == "impact":
-        lines.append(
-            "# NOTE: the case's impact-aware tangential law ([contact] tangential = 'impact': "
-            "eps_t per impact, then a rigid stick) has no LIGGGHTS equivalent; this deck uses "
-            "LIGGGHTS's history law, as dem's tangential = 'liggghts'"
-        )
-        case = case.with_tangential("liggghts")
+    row = TANGENTIAL_LAWS[case.contact.tangential]
+    if row.liggghts_as != row.name:
+        note = row.liggghts_note
+        if case.contact.model != "linear" and row.name == "coulomb":
+            note += ", with Mindlin's k_t = 8 G* sqrt(R* d)"
+        lines.append("# NOTE: " + note)
+        if row.name != "coulomb":  # "coulomb" keeps its own k_t / k_n and zeta_t (below)
+            case = case.with_tangential(row.liggghts_as)
     contact, material = case.contact, case.material
     limit = "on" if contact.limit_force else "off"
     mu = _fmt(material.friction)
-    if contact.tangential == "coulomb":
-        lines.append(
-            "# NOTE: the case caps the total tangential force at mu F_n ([contact] tangential = "
-            "'coulomb'); LIGGGHTS caps the spring alone and adds the dashpot while sticking, as "
-            "dem's tangential = 'liggghts'"
-            + ("" if contact.model == "linear" else ", with Mindlin's k_t = 8 G* sqrt(R* d)")
-        )
     if contact.wall_lever_arm == "surface":
         lines.append(
             "# NOTE: the case's wall contacts act at r - delta (contact.wall_lever_arm = "
@@ -237,7 +232,7 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
             f"fix m_e all property/global coefficientRestitution peratomtypepair 2 "
             f"{es} {es} {es} {es}",
         ]
-        model = "model hertz tangential history"
+        model = NORMAL_LAWS[contact.model].liggghts
         settings = f"limitForce {limit} tangential_damping on"
     else:
         law = ContactLaw.from_case(case)
@@ -261,7 +256,7 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
             "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(_fmt, gn)),
             "fix m_gt all property/global gammat_abs peratomtypepair 2 " + " ".join(map(_fmt, gt)),
         ]
-        model = "model hooke/stiffness tangential history"
+        model = NORMAL_LAWS[contact.model].liggghts
         settings = f"absolute_damping on limitForce {limit} tangential_damping on"
     if material.rolling_friction > 0.0:
         mr = _fmt(material.rolling_friction)

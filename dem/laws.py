@@ -1,0 +1,287 @@
+"""The contact-law registry: one row per sub-model, and a case's law resolved once.
+
+A contact law is a normal law (``[contact] model``) with a tangential law (``[contact]
+tangential``), a damping law that follows from eps_n, and rolling resistance (``[material]
+rolling_friction``), as LAMMPS's ``pair granular`` composes its sub-models. Each row of
+:data:`NORMAL_LAWS` and :data:`TANGENTIAL_LAWS` says everything the rest of dem asks of a law:
+
+- the case keys it reads (the keys of another law are refused at load, :mod:`dem.case`);
+- its parameter builder (the keyword arguments of :func:`dem.kernels.contacts.make_params`);
+- the floats of contact history it needs (the contact's width is the sum over its sub-models);
+- the stiffness the time step must resolve (:func:`dem.timestep.timestep_limits`);
+- its LIGGGHTS mapping: the deck's law, or the nearest one with the note the deck carries;
+- whether ``dem calibrate`` applies, and what it fits.
+
+The kernels' side of the same sub-models (scalar functions) is :mod:`dem.kernels.contacts`.
+A new tangential law is a function there and one row here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from dem import tangential as tangential_fit
+from dem.kernels import contacts
+
+
+@dataclass(frozen=True)
+class NormalLaw:
+    """One normal law (with its damping sub-model, which follows from eps_n).
+
+    Attributes:
+        name: The ``[contact] model`` value.
+        keys: ``[contact]`` keys it reads.
+        history_width: Floats of contact history it needs (0: none).
+        liggghts: The LIGGGHTS ``pair_style gran`` model it maps to.
+
+    """
+
+    name: str
+    keys: tuple[str, ...]
+    history_width: int
+    liggghts: str
+
+
+@dataclass(frozen=True)
+class TangentialLaw:
+    """One tangential law.
+
+    Attributes:
+        name: The ``[contact] tangential`` value.
+        keys: ``[contact]`` keys it reads, by normal law.
+        history_width: Floats of contact history it needs.
+        coefficients: Its parameter builder: (case) -> keyword arguments of
+            :func:`dem.kernels.contacts.make_params` that it decides.
+        step_spring: The tangential spring the time step must resolve: (params, normal law,
+            tangent normal stiffness S_n, size factor a, normal damping ratio zeta_n, rotation
+            factor) -> (effective k_t, N/m, its damping ratio); k_t = 0 when it has none.
+        liggghts_as: The tangential law of the exported LIGGGHTS deck (itself when exact).
+        liggghts_note: The note the deck carries when ``liggghts_as`` is another law.
+        calibrates: ``[contact]`` keys ``dem calibrate`` fits (empty: nothing to fit).
+        calibration: Why it fits nothing, or why calibration is refused (empty when it fits).
+        calibration_refused: True: ``dem calibrate`` refuses the law (InputError).
+
+    """
+
+    name: str
+    keys: dict[str, tuple[str, ...]]
+    history_width: int
+    coefficients: Callable[[object], dict]
+    step_spring: Callable[..., tuple[float, float]]
+    liggghts_as: str
+    liggghts_note: str = ""
+    calibrates: tuple[str, ...] = ()
+    calibration: str = ""
+    calibration_refused: bool = False
+
+
+NORMAL_LAWS = {
+    "hertz_mindlin": NormalLaw(
+        "hertz_mindlin", ("youngs_modulus", "poisson_ratio"), 0, "model hertz tangential history"
+    ),
+    "linear": NormalLaw(
+        "linear", ("stiffness", "poisson_ratio"), 0, "model hooke/stiffness tangential history"
+    ),
+}
+
+
+def _coulomb_coefficients(case) -> dict:
+    """kappa, zeta_t and f_t from eps_t and the grain (:func:`dem.tangential.resolve`)."""
+    ratio, zeta_t, factor = tangential_fit.resolve(case.contact, case.material, case.particles)
+    return {
+        "tangential_stiffness_ratio": ratio or 0.0,
+        "tangential_damping_ratio": zeta_t,
+        "tangential_mass_factor": factor,
+    }
+
+
+def _liggghts_coefficients(case) -> dict:
+    """The given kappa (linear); LIGGGHTS's own damping (gamma_t = gamma_n, or Mindlin's)."""
+    return {
+        "tangential_stiffness_ratio": case.contact.tangential_stiffness_ratio or 0.0,
+        "tangential_damping_ratio": 0.0,
+        "tangential_mass_factor": 1.0,
+    }
+
+
+def _impact_coefficients(case) -> dict:
+    """f_t of the grain; the impact ratio and the stick follow from eps_n, eps_t and dt."""
+    pt = case.particles
+    factor = tangential_fit.tangential_mass_factor(pt.shape, pt.rotation, pt.grain)
+    return {
+        "tangential_stiffness_ratio": 0.0,
+        "tangential_damping_ratio": 0.0,
+        "tangential_mass_factor": factor,
+    }
+
+
+def _spring_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
+    """k_t = kappa S_n (kappa k_n linear) times the rotation factor, damping ratio zeta_t."""
+    kt = p[contacts.P_KT_RATIO] * s_n
+    return rotation_factor * kt, float(p[contacts.P_ZETA_T])
+
+
+def _liggghts_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
+    """Linear kappa k_n; Hertz Mindlin's S_t = 8 G* a; the normal damping rescaled to k_t."""
+    if model == "linear":
+        kt = p[contacts.P_KT_RATIO] * s_n
+    else:
+        kt = 8.0 * p[contacts.P_GSTAR] * a
+    kt_eff = rotation_factor * kt
+    return kt_eff, (zeta_n * math.sqrt(kt / kt_eff) if kt > 0 else 0.0)
+
+
+def _impact_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
+    """None: the stick spring is sized by the step itself (alpha = stick_rate rad a step)."""
+    return 0.0, 0.0
+
+
+_SPRING_KEYS = ("tangential_stiffness_ratio", "tangential_damping_ratio")
+
+TANGENTIAL_LAWS = {
+    "impact": TangentialLaw(
+        "impact",
+        keys={"hertz_mindlin": (), "linear": ()},
+        history_width=contacts.HISTORY_WIDTH["impact"],
+        coefficients=_impact_coefficients,
+        step_spring=_impact_step,
+        liggghts_as="liggghts",
+        liggghts_note=(
+            "the case's impact-aware tangential law ([contact] tangential = 'impact': "
+            "eps_t per impact, then a rigid stick) has no LIGGGHTS equivalent; this deck uses "
+            "LIGGGHTS's history law, as dem's tangential = 'liggghts'"
+        ),
+        calibration=(
+            "contact.tangential = 'impact' delivers eps_t by construction (each impact "
+            "takes the impulse eps_t asks for, capped by Coulomb); it has no spring to fit"
+        ),
+    ),
+    "coulomb": TangentialLaw(
+        "coulomb",
+        keys={"hertz_mindlin": _SPRING_KEYS, "linear": _SPRING_KEYS},
+        history_width=contacts.HISTORY_WIDTH["coulomb"],
+        coefficients=_coulomb_coefficients,
+        step_spring=_spring_step,
+        liggghts_as="liggghts",
+        liggghts_note=(
+            "the case caps the total tangential force at mu F_n ([contact] tangential = "
+            "'coulomb'); LIGGGHTS caps the spring alone and adds the dashpot while sticking, as "
+            "dem's tangential = 'liggghts'"
+        ),
+        calibrates=("tangential_stiffness_ratio",),
+    ),
+    "liggghts": TangentialLaw(
+        "liggghts",
+        keys={"hertz_mindlin": (), "linear": ("tangential_stiffness_ratio",)},
+        history_width=contacts.HISTORY_WIDTH["liggghts"],
+        coefficients=_liggghts_coefficients,
+        step_spring=_liggghts_step,
+        liggghts_as="liggghts",
+        calibration=(
+            "a tangential law for deck equivalence: its tangential spring is LIGGGHTS's (Hertz: "
+            "Mindlin's k_t; linear: the given k_t / k_n); calibrate under 'coulomb'"
+        ),
+        calibration_refused=True,
+    ),
+}
+
+#: Every tangential key some law reads (the others of the case's law are refused).
+TANGENTIAL_KEYS = ("tangential_stiffness_ratio", "tangential_damping_ratio")
+#: Every normal-law key some law reads.
+NORMAL_KEYS = ("youngs_modulus", "stiffness", "poisson_ratio")
+
+
+def foreign_keys(model: str, tangential: str) -> tuple[str, ...]:
+    """``[contact]`` keys of other laws, which a case with this law must not set."""
+    own = set(NORMAL_LAWS[model].keys) | set(TANGENTIAL_LAWS[tangential].keys[model])
+    return tuple(k for k in (*NORMAL_KEYS, *TANGENTIAL_KEYS) if k not in own)
+
+
+def history_width(tangential: str, model: str = "hertz_mindlin") -> int:
+    """Floats of contact history per contact: the sum over the law's sub-models."""
+    return NORMAL_LAWS[model].history_width + TANGENTIAL_LAWS[tangential].history_width
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """A contact law selector with its kernel parameters.
+
+    Attributes:
+        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
+        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
+
+    """
+
+    model: str
+    params: np.ndarray
+
+    @classmethod
+    def from_case(cls, case) -> ContactLaw:
+        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
+
+        The tangential law's row (:data:`TANGENTIAL_LAWS`) decides its coefficients: with
+        ``"coulomb"`` the tangential mass factor follows the grain (a rolling sphere 2/7,
+        rotation locked 1, a clump its contact mass over its mass) and an omitted
+        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
+        """
+        c, m = case.contact, case.material
+        return cls(
+            model=c.model,
+            params=contacts.make_params(
+                model=c.model,
+                stiffness=c.stiffness or 0.0,
+                youngs_modulus=c.youngs_modulus or 0.0,
+                poisson_ratio=c.poisson_ratio,
+                restitution=m.restitution_normal,
+                friction=m.friction,
+                rolling_friction=m.rolling_friction,
+                limit_force=c.limit_force,
+                tangential=c.tangential,
+                wall_lever_arm=c.wall_lever_arm,
+                restitution_tangential=m.restitution_tangential,
+                **TANGENTIAL_LAWS[c.tangential].coefficients(case),
+            ),
+        )
+
+    @property
+    def tangential(self) -> str:
+        """Tangential law, a key of :data:`TANGENTIAL_LAWS`."""
+        code = self.params[contacts.P_TANGENTIAL]
+        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
+
+    @property
+    def row(self) -> TangentialLaw:
+        """The tangential law's registry row."""
+        return TANGENTIAL_LAWS[self.tangential]
+
+    def tangential_coefficients(self) -> dict:
+        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
+        p = self.params
+        out = {"tangential": self.tangential}
+        if self.tangential == "coulomb" or (self.model == "linear" and self.tangential != "impact"):
+            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
+        if self.tangential == "coulomb":
+            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
+            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+        if self.tangential == "impact":
+            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+            out["stick_rate"] = float(p[contacts.P_STICK_RATE])
+            out["stick_damping_ratio"] = float(p[contacts.P_STICK_ZETA])
+            out["normal_law_restitution"] = float(p[contacts.P_NORMAL_E])
+        f_w = float(p[contacts.P_WALL_ARM])
+        out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
+        return out
+
+    @property
+    def history_width(self) -> int:
+        """Floats of contact history per contact (:func:`history_width`)."""
+        return history_width(self.tangential, self.model)
+
+    @property
+    def model_id(self) -> int:
+        """Integer id used by the kernels."""
+        return contacts.MODELS[self.model]
