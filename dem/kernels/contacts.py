@@ -1,4 +1,10 @@
-"""Contact laws: each law is one small function of the overlap; one contact routine uses them.
+"""Contact laws as sub-models (normal, damping, tangential, rolling); one contact routine uses them.
+
+Each sub-model is a small ``@njit`` function of scalars that returns scalars (the contact's
+history goes in and comes out as numbers), so the same functions can run inside GPU kernels;
+:func:`contact_force` is the thin wrapper that reads the parameter array and the history row.
+What the rest of dem asks of a law (case keys, time step, export, calibration) is its row in
+:mod:`dem.laws`.
 
 A contact between sphere i and sphere j (or a wall, j = wall) is described by
 
@@ -66,8 +72,9 @@ Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directiona
 w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
 tau_j += the same.
 
-Laws (the registry is :data:`MODELS`; a new law is a new function and one entry there). The
-normal part is that of LIGGGHTS; the tangential part depends on the convention:
+Laws (kernel ids :data:`MODELS` and :data:`TANGENTIAL`; a new tangential law is a new function
+here and one row in :data:`dem.laws.TANGENTIAL_LAWS`). The normal part is that of LIGGGHTS; the
+tangential part depends on the convention:
 
 - linear spring-dashpot (LIGGGHTS ``hooke/stiffness`` with a restitution-derived damping):
   k_n given, gamma_n = -2 beta sqrt(k_n m*); k_t = kappa k_n with kappa =

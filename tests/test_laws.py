@@ -1,0 +1,141 @@
+"""The contact-law registry (dem.laws) and the scalar sub-models of dem.kernels.contacts."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dem import laws
+from dem.case import load_case
+from dem.errors import InputError
+from dem.kernels import contacts
+
+SPHERE_BED = Path(__file__).resolve().parents[1] / "cases" / "sphere-bed"
+
+
+def test_every_kernel_law_has_one_row_and_back():
+    assert set(laws.TANGENTIAL_LAWS) == set(contacts.TANGENTIAL)
+    assert set(laws.NORMAL_LAWS) == set(contacts.MODELS)
+    for name, row in laws.TANGENTIAL_LAWS.items():
+        assert row.name == name
+        assert set(row.keys) == set(laws.NORMAL_LAWS)
+        assert row.liggghts_as in laws.TANGENTIAL_LAWS
+        # a law either fits something, or says why it fits nothing
+        assert bool(row.calibrates) != bool(row.calibration)
+
+
+@pytest.mark.parametrize("model", sorted(laws.NORMAL_LAWS))
+@pytest.mark.parametrize("tangential", sorted(laws.TANGENTIAL_LAWS))
+def test_history_width_is_the_sum_over_the_sub_models(model, tangential):
+    width = laws.history_width(tangential, model)
+    assert width == laws.NORMAL_LAWS[model].history_width + (
+        laws.TANGENTIAL_LAWS[tangential].history_width
+    )
+    assert width == contacts.HISTORY_WIDTH[tangential]
+
+
+@pytest.mark.parametrize("model", sorted(laws.NORMAL_LAWS))
+@pytest.mark.parametrize("tangential", sorted(laws.TANGENTIAL_LAWS))
+def test_a_key_of_another_law_is_refused_at_load_and_its_own_accepted(model, tangential):
+    own = {
+        "hertz_mindlin": {"contact.youngs_modulus": 5.0e7, "contact.stiffness": None},
+        "linear": {"contact.youngs_modulus": None, "contact.stiffness": 4.0e3},
+    }[model]
+    base = {"contact.model": model, "contact.tangential": tangential, **own}
+    case = load_case(SPHERE_BED, base)
+    assert (case.contact.model, case.contact.tangential) == (model, tangential)
+    foreign = laws.foreign_keys(model, tangential)
+    for key in laws.TANGENTIAL_LAWS[tangential].keys[model]:
+        assert key not in foreign
+        load_case(SPHERE_BED, {**base, f"contact.{key}": 0.3})
+    for key in foreign:
+        with pytest.raises(InputError, match=key):
+            load_case(SPHERE_BED, {**base, f"contact.{key}": 0.3})
+
+
+def test_calibration_refusal_comes_from_the_row():
+    from dem.calibrate import calibrate
+
+    case = load_case(SPHERE_BED, {"contact.tangential": "liggghts"})
+    assert laws.TANGENTIAL_LAWS["liggghts"].calibration_refused
+    with pytest.raises(InputError, match="contact.tangential"):
+        calibrate(case)
+
+
+def test_the_time_step_resolves_the_row_spring():
+    """A law with a material tangential spring has a limit set by it; "impact" sizes its stick
+    by the step itself, so its limit is the normal one."""
+    from dem.timestep import timestep_for
+
+    limits = {}
+    for tangential in laws.TANGENTIAL_LAWS:
+        case = load_case(SPHERE_BED, {"contact.tangential": tangential})
+        limits[tangential] = timestep_for(case).limit
+    assert limits["impact"] >= limits["coulomb"]
+    assert limits["impact"] >= limits["liggghts"]
+
+
+def _random_contact(rng):
+    n = rng.normal(size=3)
+    n /= np.linalg.norm(n)
+    return n, rng.normal(0.0, 0.2, 3)
+
+
+@pytest.mark.parametrize("model", ["linear", "hertz_mindlin"])
+@pytest.mark.parametrize("tangential", ["coulomb", "liggghts", "impact"])
+def test_coefficients_are_the_formulas_of_the_docstring(model, tangential):
+    """law_coefficients against the textbook forms, written out here independently."""
+    kn0, youngs, nu, e, kappa, zeta_t, f_t = 4.0e3, 5.0e7, 0.3, 0.4, 0.3, 0.6, 2.0 / 7.0
+    p = contacts.make_params(
+        model=model, stiffness=kn0, youngs_modulus=youngs, poisson_ratio=nu, restitution=e,
+        tangential=tangential, tangential_stiffness_ratio=kappa,
+        tangential_damping_ratio=zeta_t, tangential_mass_factor=f_t, friction=0.3,
+    )  # fmt: skip
+    beta = math.log(e) / math.sqrt(math.log(e) ** 2 + math.pi**2)
+    y_star = youngs / (2.0 * (1.0 - nu * nu))
+    g_star = youngs / (4.0 * (2.0 - nu) * (1.0 + nu))
+    for delta, m_eff, r_eff in [(1e-6, 1e-4, 1e-3), (3e-5, 2e-3, 2e-3)]:
+        kn, gn, kt, gt = contacts.law_coefficients(contacts.MODELS[model], delta, m_eff, r_eff, p)
+        if model == "linear":
+            want_kn, s_n = kn0, kn0
+            want_gn = -2.0 * beta * math.sqrt(kn0 * m_eff)
+            want_kt = kappa * kn0 if tangential != "impact" else 0.0
+            want_gt = {
+                "coulomb": 2.0 * zeta_t * math.sqrt(want_kt * f_t * m_eff),
+                "liggghts": want_gn,
+            }.get(tangential, 0.0)
+        else:
+            a = math.sqrt(r_eff * delta)
+            want_kn, s_n = 4.0 / 3.0 * y_star * a, 2.0 * y_star * a
+            want_gn = -2.0 * math.sqrt(5.0 / 6.0) * beta * math.sqrt(s_n * m_eff)
+            s_t = 8.0 * g_star * a
+            want_kt = {"coulomb": kappa * s_n, "liggghts": s_t}.get(tangential, 0.0)
+            want_gt = {
+                "coulomb": 2.0 * zeta_t * math.sqrt(kappa * s_n * f_t * m_eff),
+                "liggghts": -2.0 * math.sqrt(5.0 / 6.0) * beta * math.sqrt(s_t * m_eff),
+            }.get(tangential, 0.0)
+        assert (kn, gn, kt, gt) == pytest.approx((want_kn, want_gn, want_kt, want_gt), rel=1e-12)
+
+
+def test_the_impact_core_is_a_function_of_scalars():
+    """impact_tangential runs as plain Python on floats (as in numba's CUDA simulator) and gives
+    the compiled result bit for bit over a random sequence of contact states."""
+    p = contacts.make_params(
+        model="hertz_mindlin", youngs_modulus=5e7, restitution=0.0, friction=0.35,
+        tangential="impact", tangential_mass_factor=1.0,
+    )  # fmt: skip
+    args = (p[contacts.P_IMPACT_RATIO], p[contacts.P_IMPACT_CAP], p[contacts.P_MU],
+            p[contacts.P_MASS_T], p[contacts.P_STICK_RATE], p[contacts.P_STICK_ZETA])  # fmt: skip
+    rng = np.random.default_rng(5)
+    compiled = python = (0.0, 0.0, 0.0, 0.0, 0.0)
+    for _ in range(200):
+        n, vt = _random_contact(rng)
+        vn, fn = rng.normal(0.0, 0.3), abs(rng.normal(0.0, 2.0))
+        state = (*n, vn, fn, *vt, 3e5, 1e-4, 1e-6)
+        a = contacts.impact_tangential(*args, *state, *compiled)
+        b = contacts.impact_tangential.py_func(*args, *state, *python)
+        assert a == b
+        compiled, python = a[3:], b[3:]
+        if rng.random() < 0.1:  # the contact breaks: its history is reset
+            compiled = python = (0.0, 0.0, 0.0, 0.0, 0.0)
