@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -109,6 +110,97 @@ def correlated_stderr(samples: np.ndarray) -> tuple[float, float]:
         return math.nan, 0.5
     tau = integrated_autocorrelation_time(u)
     return float(np.std(u, ddof=1) * math.sqrt(2.0 * tau / u.size)), tau
+
+
+_Z95 = 1.959963984540054  # two-sided 95 % quantile of the normal distribution
+
+
+class Pooled(NamedTuple):
+    """Replicas pooled: the estimate, its standard error and its 95 % interval.
+
+    Attributes:
+        mean: Pooled mean.
+        stderr: Its standard error, the 95 % half-width over 1.96 (fill-to-fill spread
+            included when there are replicas).
+        half_width: Half-width of the 95 % interval.
+        between: tau, the fill-to-fill standard deviation estimated beyond the runs' own errors
+            (0 when the replicas agree within their errors; nan for N = 1).
+        replicas: N.
+
+    """
+
+    mean: float
+    stderr: float
+    half_width: float
+    between: float
+    replicas: int
+
+
+def pooled(means, stderrs) -> Pooled:
+    """Pool N independent runs (replicas: other fills) of one case into one estimate.
+
+    A random-effects model: run i measures mu + b_i + e_i, b_i the fill's own offset (variance
+    tau^2, the fill-to-fill spread), e_i its within-run error (variance s_i^2, the run's
+    autocorrelated standard error, :func:`correlated_stderr`). tau^2 is the DerSimonian-Laird
+    moment estimate (DerSimonian and Laird 1986, Control. Clin. Trials 7: 177),
+    tau^2 = max(0, (Q - (N - 1)) / (S1 - S2 / S1)), Q = sum w_i (m_i - m_w)^2, w_i = 1 / s_i^2,
+    S1 = sum w_i, S2 = sum w_i^2; the pooled mean weighs run i by w*_i = 1 / (s_i^2 + tau^2).
+    The 95 % interval is the wider of the model's, 1.96 sqrt(1 / sum w*_i), and the
+    Hartung-Knapp-Sidik-Jonkman interval, t_{N-1} sqrt(sum w*_i (m_i - m)^2 / ((N - 1) sum w*_i))
+    (Student's t with N - 1 degrees of freedom): the plain DerSimonian-Laird interval covers
+    too little for few replicas, the HKSJ one alone too little when they agree by chance
+    (IntHout, Ioannidis and Borm 2014, BMC Med. Res. Methodol. 14: 25; Roever, Knapp and Friede
+    2015, ibid. 15: 99). ``stderr`` is its half-width over 1.96. On synthetic replicas (2-10
+    runs, spread 0-4 times the runs' errors) it covers the true mean in 94.5-99.3 % of sets
+    (tests/test_measure.py). One run: its own error, 1.96 s_1,
+    which excludes the fill-to-fill spread. Runs without a finite error (one cycle) count with
+    the spread of the others alone (s_i = 0).
+    """
+    m = np.asarray(means, dtype=np.float64).ravel()
+    s = np.asarray(stderrs, dtype=np.float64).ravel()
+    if m.size == 0 or m.size != s.size:
+        raise ValueError("means and stderrs must be non-empty and of equal length")
+    n = m.size
+    s = np.where(np.isfinite(s), s, 0.0)
+    if n == 1:
+        return Pooled(float(m[0]), float(s[0]), _Z95 * float(s[0]), math.nan, 1)
+    tiny = np.finfo(float).tiny
+    w = 1.0 / np.maximum(s * s, tiny)
+    m_w = float(np.sum(w * m) / np.sum(w))
+    q = float(np.sum(w * (m - m_w) ** 2))
+    s1, s2 = float(np.sum(w)), float(np.sum(w * w))
+    tau2 = max(0.0, (q - (n - 1)) / (s1 - s2 / s1)) if s1 > 0.0 else 0.0
+    if not np.all(s > 0.0):  # a run without an error of its own: the spread alone
+        tau2 = max(tau2, float(np.var(m, ddof=1)))
+    w_star = 1.0 / np.maximum(s * s + tau2, tiny)
+    mean = float(np.sum(w_star * m) / np.sum(w_star))
+    model = math.sqrt(1.0 / float(np.sum(w_star)))
+    hksj = math.sqrt(float(np.sum(w_star * (m - mean) ** 2)) / ((n - 1) * float(np.sum(w_star))))
+    half = max(_Z95 * model, student_t95(n - 1) * hksj)
+    return Pooled(mean, half / _Z95, half, math.sqrt(tau2), n)
+
+
+#: Two-sided 95 % quantiles of Student's t for 1..30 degrees of freedom (standard tables).
+_T95 = (12.7062, 4.3027, 3.1824, 2.7764, 2.5706, 2.4469, 2.3646, 2.3060, 2.2622, 2.2281,
+        2.2010, 2.1788, 2.1604, 2.1448, 2.1314, 2.1199, 2.1098, 2.1009, 2.0930, 2.0860,
+        2.0796, 2.0739, 2.0687, 2.0639, 2.0595, 2.0555, 2.0518, 2.0484, 2.0452, 2.0423)  # fmt: skip
+
+
+def student_t95(dof: int) -> float:
+    """Two-sided 95 % quantile of Student's t with ``dof`` >= 1 degrees of freedom.
+
+    A table to 30; beyond it the Cornish-Fisher expansion about z = 1.95996 (Abramowitz and
+    Stegun 26.7.5), within 1e-5 of the exact value there.
+    """
+    if dof < 1:
+        raise ValueError(f"dof must be >= 1, got {dof}")
+    if dof <= len(_T95):
+        return _T95[dof - 1]
+    z = 1.959963984540054
+    g1 = (z**3 + z) / 4.0
+    g2 = (5.0 * z**5 + 16.0 * z**3 + 3.0 * z) / 96.0
+    g3 = (3.0 * z**7 + 19.0 * z**5 + 17.0 * z**3 - 15.0 * z) / 384.0
+    return z + g1 / dof + g2 / dof**2 + g3 / dof**3
 
 
 def transient_end(samples: np.ndarray) -> int:
