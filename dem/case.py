@@ -264,6 +264,9 @@ class RunSpec:
         cycles: Drive cycles measured.
         timestep: dt, s, or None for automatic (from the stiffest contact).
         seed: Seed of the random generator (insertion positions).
+        replicas: Independent fills run and pooled (seeds ``seed``, ``seed + 1``, ...;
+            :func:`dem.measure.pooled`); 1: one run, whose error bar excludes the fill-to-fill
+            spread.
 
     """
 
@@ -271,6 +274,7 @@ class RunSpec:
     cycles: int = 30
     timestep: float | None = None
     seed: int = 1
+    replicas: int = 1
 
 
 @dataclass(frozen=True)
@@ -444,7 +448,7 @@ _PARTICLES_KEYS = (
     "template",
     "max_bumpiness",
 )
-_RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed")
+_RUN_KEYS = ("settle_cycles", "cycles", "timestep", "seed", "replicas")
 _OUTPUT_KEYS = ("frames_per_cycle",)
 _FEEDER_KEYS = ("feed_rate", "feed_length")
 
@@ -659,11 +663,15 @@ def _read_run(t: Table) -> RunSpec:
     else:
         dt = t.quantity("timestep")
     settle = None if t.data.get("settle_cycles") == "auto" else t.whole("settle_cycles", 10)
+    seed, replicas = t.whole("seed", 1), t.whole("replicas", 1)
+    if seed + replicas - 1 >= 2**63:
+        raise t.error("seed", seed, f"< 2^63 - {replicas - 1}: replica k is seeded seed + k")
     return RunSpec(
         settle_cycles=settle,
         cycles=t.whole("cycles", 30),
         timestep=dt,
-        seed=t.whole("seed", 1),
+        seed=seed,
+        replicas=replicas,
     )
 
 

@@ -32,6 +32,7 @@ _QUANTITY_OF = {
     "--eps-n": "restitution",
     "--cycles": "cycles",
     "--threads": "threads",
+    "--replicas": "replicas",
     "--workers": "workers",
     "--max-runs": "max_runs",
     "--tolerance": "tolerance",
@@ -394,15 +395,17 @@ def _pointmass_parser(sub) -> None:
 
 def _cmd_run(args) -> int:
     from dem.case import load_case
-    from dem.runner import RunInterrupted, run_case
+    from dem.replicas import run_replicas
+    from dem.runner import RunInterrupted
 
-    case = load_case(args.case_dir)
+    overrides = {} if args.replicas is None else {"run.replicas": args.replicas}
+    case = load_case(args.case_dir, overrides)
     out = _writable_path("--out", args.out or case.directory / "output", folder=True)
     try:
-        summary = run_case(
+        summary = run_replicas(
             case, out, cycles=args.cycles, threads=args.threads, progress=True,
             overwrite=args.overwrite, resume=args.resume, frames=not args.no_frames,
-            lab_frame=args.lab_frame,
+            lab_frame=args.lab_frame, all_replicas=args.all_replicas,
         )  # fmt: skip
     except RunInterrupted as stop:
         print(f"dem: stopped by {stop}", file=sys.stderr)
@@ -421,6 +424,13 @@ def _cmd_run(args) -> int:
     for key in keys:
         if key in summary:
             print(f"{key:26s} {summary[key]}")
+    if summary.get("replicas", 1) > 1:
+        print(f"{'error_bar':26s} {summary['error_bar']}; 95 % interval +- "
+              f"{summary['mean_velocity_ci95']:.3g} m/s; fill-to-fill spread "
+              f"{summary['replica_spread']:.3g} m/s")  # fmt: skip
+    else:
+        print(f"{'error_bar':26s} within this run only: it excludes the fill-to-fill spread "
+              "(pool fills with --replicas N)")  # fmt: skip
     print(f"wrote {out / 'summary.json'}")
     return 0
 
@@ -441,6 +451,10 @@ def _resume_command(args, case, out: Path) -> str:
         parts.append("--lab-frame")
     if args.threads is not None:
         parts += ["--threads", str(args.threads)]
+    if args.replicas is not None:
+        parts += ["--replicas", str(args.replicas)]
+    if args.all_replicas:
+        parts.append("--all-replicas")
     return shlex.join(parts)
 
 
@@ -669,6 +683,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--lab-frame", action="store_true", help="VTK frames in the lab frame (trough shakes)"
     )
+    p.add_argument(
+        "--replicas", type=_whole, help="independent fills pooled (overrides run.replicas)"
+    )
+    p.add_argument(
+        "--all-replicas", action="store_true",
+        help="keep every replica's frames and results.h5 (default: replica 0's only)",
+    )  # fmt: skip
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser(

@@ -16,6 +16,10 @@ class InputError(ValueError):
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{key} = {value!r} is not allowed: {allowed}")
 
+    def __reduce__(self):
+        """Rebuilt from its fields, so that it crosses process boundaries (replicas, sweeps)."""
+        return (type(self), (self.key, self.value, self.allowed, self.source))
+
 
 class SimulationError(RuntimeError):
     """A run went unstable or cannot continue; the message says why and what to change."""

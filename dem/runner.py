@@ -866,6 +866,9 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "mean_velocity_norm_stderr": stat.norm_stderr,
         "cycle_autocorrelation_time": stat.autocorrelation_time,
         "mean_velocity_stderr_independent": stat.stderr_independent,
+        "replicas": 1,
+        "error_bar": "within this run (autocorrelated per-cycle means): it excludes the "
+        "fill-to-fill spread; pool fills with run.replicas",
         "mass_flow_rate": flow,
         "mass_flow_rate_per_width": flow / case.trough.width,
         "amplitude": case.drive.amplitude,

@@ -1,0 +1,297 @@
+"""Replicas: one case from N independent fills, pooled into one answer with an honest error bar.
+
+One run's standard error comes from its own per-cycle means (autocorrelation-aware,
+:func:`dem.measure.correlated_stderr`); it cannot see how much the answer depends on the fill.
+Refilled with another seed, a bed conveys a few per cent differently, several times that error.
+``[run] replicas = N`` (or ``dem run --replicas N``) runs the case N times, replica k seeded
+``run.seed + k``, on the cores available (up to one process per core, the cores shared out as
+numba threads), and pools the N values by a random-effects model (:func:`dem.measure.pooled`),
+so the error bar includes the fill-to-fill spread.
+
+Output: replica 0 writes its frames, results.h5 and checkpoint in the output folder itself, as a
+single run does; replica k >= 1 writes into ``replicas/k/`` its summary.json (and its frames and
+results.h5 with ``all_replicas``; otherwise they are not written or are removed once pooled).
+Every replica's own summary is kept as ``replicas/k/summary.json``; the folder's summary.json is
+the pooled one, with the per-replica values under ``per_replica``. ``resume`` reruns only the
+replicas without a summary, continuing any that left a checkpoint.
+
+Cost: N runs of the case; on C cores, about ceil(N / C) times one single-threaded run's wall time.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import shutil
+import signal
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import replace
+from pathlib import Path
+
+from dem import config, measure
+from dem.io.files import json_text, replace_text
+
+#: Folder of the replicas' own outputs, inside the run's output folder.
+REPLICAS_DIR = "replicas"
+SUMMARY = "summary.json"
+#: Pooled value keys: (value, its standard error) of the single runs' summaries.
+POOLED = (
+    ("mean_velocity", "mean_velocity_stderr"),
+    ("mean_velocity_norm", "mean_velocity_norm_stderr"),
+)
+
+
+def replica_case(case, k: int):
+    """Replica ``k`` of ``case``: seeded ``run.seed + k``, one fill."""
+    return replace(case, run=replace(case.run, seed=case.run.seed + k, replicas=1))
+
+
+def replica_dir(out_dir: Path, k: int) -> Path:
+    """Where replica ``k`` keeps its own summary (and, k >= 1, its run)."""
+    return Path(out_dir) / REPLICAS_DIR / str(k)
+
+
+def _cores(threads: int | None) -> int:
+    """Cores to share among the replicas: ``threads`` if given, else the default thread count."""
+    if threads is not None:
+        return max(1, int(threads))
+    return max(1, config.default_threads())
+
+
+def _run_one(case, k: int, out_dir: str, kwargs: dict) -> dict:
+    """Run replica ``k`` in a worker process; its summary, or how it was interrupted."""
+    from dem.runner import RunInterrupted, run_case
+
+    try:
+        return {"k": k, "summary": run_case(case, Path(out_dir), **kwargs)}
+    except RunInterrupted as stop:
+        checkpoint = None if stop.checkpoint is None else str(stop.checkpoint)
+        return {"k": k, "interrupted": stop.signum, "checkpoint": checkpoint, "text": str(stop)}
+
+
+def run_replicas(
+    case,
+    out_dir: Path,
+    *,
+    cycles: int | None = None,
+    threads: int | None = None,
+    progress: bool = True,
+    overwrite: bool = False,
+    resume: bool = False,
+    frames: bool = True,
+    lab_frame: bool = False,
+    all_replicas: bool = False,
+) -> dict:
+    """Run ``case.run.replicas`` fills of ``case`` into ``out_dir`` and pool them.
+
+    Arguments as :func:`dem.runner.run_case`; ``threads`` is the number of cores shared among
+    the replicas (default: the default thread count); ``all_replicas`` keeps every replica's
+    frames and results.h5 (default: replica 0's only). Returns the pooled summary, also
+    written to ``out_dir/summary.json``. With one replica this is :func:`dem.runner.run_case`.
+
+    Raises:
+        dem.runner.RunInterrupted: a signal stopped a replica; finished replicas are kept and
+            the interrupted ones left a checkpoint (``resume`` continues them).
+
+    """
+    from dem.runner import RunInterrupted, run_case
+
+    n = case.run.replicas
+    if n == 1:
+        return run_case(case, out_dir, cycles=cycles, threads=threads, progress=progress,
+                        overwrite=overwrite, resume=resume, frames=frames,
+                        lab_frame=lab_frame)  # fmt: skip
+    out_dir = Path(out_dir)
+    if not resume:
+        _check_outputs(out_dir, n, overwrite)
+    cores = _cores(threads)
+    workers = min(n, cores)
+    per_worker = max(1, cores // workers)
+    started = time.perf_counter()
+    summaries: dict[int, dict] = {}
+    jobs = []
+    for k in range(n):
+        own = replica_dir(out_dir, k) / SUMMARY
+        if resume and own.is_file() and not _has_checkpoint(out_dir if k == 0 else own.parent):
+            summaries[k] = json.loads(own.read_text(encoding="utf-8"))
+            continue
+        run_dir = out_dir if k == 0 else replica_dir(out_dir, k)
+        pending_resume = resume and _has_checkpoint(run_dir)
+        kwargs = {
+            "cycles": cycles, "threads": per_worker, "progress": progress and k == 0,
+            "overwrite": overwrite or (resume and not pending_resume),
+            "resume": pending_resume, "frames": frames and (k == 0 or all_replicas),
+            "lab_frame": lab_frame,
+        }  # fmt: skip
+        jobs.append((replica_case(case, k), k, str(run_dir), kwargs))
+    if progress:
+        print(
+            f"dem: {n} replicas (seeds {case.run.seed}..{case.run.seed + n - 1}), "
+            f"{len(jobs)} to run on {workers} process(es) x {per_worker} thread(s)",
+            file=sys.stderr, flush=True,
+        )  # fmt: skip
+    interrupted = []
+    if jobs:
+        context = multiprocessing.get_context("spawn")  # fork after numba's threads is unsafe
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # the workers checkpoint
+        try:
+            with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
+                                     mp_context=context) as pool:  # fmt: skip
+                futures = [pool.submit(_run_one, *job) for job in jobs]
+                for future in as_completed(futures):
+                    try:
+                        result = future.result()
+                    except BaseException:
+                        _stop_workers(pool)
+                        raise
+                    k = result["k"]
+                    if "interrupted" in result:
+                        interrupted.append(result)
+                        continue
+                    summaries[k] = result["summary"]
+                    _keep_own_summary(out_dir, k, result["summary"])
+                    if progress:
+                        s = result["summary"]
+                        print(
+                            f"dem: replica {k} (seed {s['seed']}) done: v = "
+                            f"{s['mean_velocity']:.4g} +- {s['mean_velocity_stderr']:.2g} m/s "
+                            f"({len(summaries)}/{n}, {time.perf_counter() - started:.0f} s)",
+                            file=sys.stderr, flush=True,
+                        )  # fmt: skip
+        finally:
+            signal.signal(signal.SIGINT, previous)
+    if interrupted:
+        first = min(interrupted, key=lambda r: r["k"])
+        checkpoint = first["checkpoint"]
+        raise RunInterrupted(first["interrupted"], None if checkpoint is None else
+                             Path(checkpoint), -1, f"replica {first['k']}")  # fmt: skip
+    summary = pool_summaries([summaries[k] for k in range(n)], time.perf_counter() - started,
+                             processes=workers)  # fmt: skip
+    summary["replica_outputs"] = "all" if all_replicas else "replica 0 (frames, results.h5)"
+    if not all_replicas:
+        for k in range(1, n):
+            _drop_run_files(replica_dir(out_dir, k))
+    replace_text(out_dir / SUMMARY, json_text(summary))
+    return summary
+
+
+def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:
+    """Refuse, before any replica starts, a folder holding an earlier run (unless overwrite).
+
+    With ``overwrite`` an earlier ``replicas/`` folder is removed whole (a run with more
+    replicas leaves no stale ones behind).
+    """
+    from dem.errors import InputError
+    from dem.runner import RUN_OUTPUTS
+
+    folder = out_dir / REPLICAS_DIR
+    if folder.is_symlink():
+        raise InputError("--out", str(folder), "a real folder, not a symbolic link")
+    earlier = [out_dir / name for name in RUN_OUTPUTS if (out_dir / name).exists()]
+    if folder.is_dir():
+        earlier.append(folder)
+    if earlier and not overwrite:
+        raise InputError(
+            "--out", str(out_dir), f"a folder without an earlier run (it holds {earlier[0].name}); "
+            "use --overwrite to replace it, --resume to continue it, or another --out",
+        )  # fmt: skip
+    if overwrite and folder.is_dir():
+        shutil.rmtree(folder)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """One replica failed: the others' results would not be pooled, so stop them now."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list(getattr(pool, "_processes", {}).values()):
+        process.terminate()
+
+
+def _has_checkpoint(run_dir: Path) -> bool:
+    from dem.runner import CHECKPOINT
+
+    return (Path(run_dir) / CHECKPOINT).is_file()
+
+
+def _keep_own_summary(out_dir: Path, k: int, summary: dict) -> None:
+    """Replica k's own summary in ``replicas/k/`` (replica 0's is overwritten by the pool)."""
+    own = replica_dir(out_dir, k)
+    own.mkdir(parents=True, exist_ok=True)
+    replace_text(own / SUMMARY, json_text(summary))
+
+
+def _drop_run_files(run_dir: Path) -> None:
+    """Remove a replica's results.h5 and frames (never written with frames off but the h5)."""
+    from dem.runner import FRAMES_DIR, PVD_NAME, RESULTS
+
+    for name in (RESULTS, PVD_NAME):
+        (run_dir / name).unlink(missing_ok=True)
+    frames = run_dir / FRAMES_DIR
+    if frames.is_dir() and not frames.is_symlink():
+        shutil.rmtree(frames)
+
+
+def pool_summaries(
+    summaries: list[dict], wall_time_s: float | None = None, processes: int = 1
+) -> dict:
+    """The pooled summary of replica summaries (replica 0's fields, pooled values over all).
+
+    Each (value, standard error) pair of :data:`POOLED` is pooled by :func:`dem.measure.pooled`
+    and gets a ``_ci95`` half-width; the mass flow rates are the pooled velocity times each
+    replica's mass over length, pooled likewise; ``per_replica`` lists every replica's values;
+    ``replica_spread`` is the fill-to-fill standard deviation of v beyond the runs' own errors.
+    ``wall_time_s`` sums the replicas' step loops and ``particle_steps_per_s`` is their mean
+    rate times the ``processes`` that ran at once; ``elapsed_s`` is the whole wait.
+    """
+    first = summaries[0]
+    out = dict(first)
+    for key, err in POOLED:
+        p = measure.pooled([s[key] for s in summaries], [s[err] for s in summaries])
+        out[key], out[err], out[key + "_ci95"] = p.mean, p.stderr, p.half_width
+        if key == "mean_velocity":
+            out["replica_spread"] = p.between
+    flows, flow_errors = [], []
+    for s in summaries:
+        v, v_err = s["mean_velocity"], s["mean_velocity_stderr"]
+        flows.append(s["mass_flow_rate"])
+        ratio = abs(v_err / v) if v else math.nan
+        flow_errors.append(abs(s["mass_flow_rate"]) * ratio)
+    p = measure.pooled(flows, flow_errors)
+    out["mass_flow_rate"], out["mass_flow_rate_stderr"] = p.mean, p.stderr
+    out["mass_flow_rate_per_width"] = (
+        p.mean * first["mass_flow_rate_per_width"] / (first["mass_flow_rate"] or math.nan)
+    )
+    if first.get("feeder"):
+        rates = [s["feeder"]["discharge_rate"] for s in summaries]
+        errs = [s["feeder"]["discharge_rate_stderr"] for s in summaries]
+        p = measure.pooled(rates, errs)
+        out["feeder"] = dict(first["feeder"], discharge_rate=p.mean, discharge_rate_stderr=p.stderr,
+                             discharge_rate_ci95=p.half_width)  # fmt: skip
+    out["replicas"] = len(summaries)
+    out["error_bar"] = (
+        f"pooled over {len(summaries)} fills (random-effects, fill-to-fill spread included; "
+        "dem.measure.pooled)"
+    )
+    out["per_replica"] = [
+        {
+            "seed": s["seed"],
+            "mean_velocity": s["mean_velocity"],
+            "mean_velocity_stderr": s["mean_velocity_stderr"],
+            "mean_velocity_norm": s["mean_velocity_norm"],
+            "mass_flow_rate": s["mass_flow_rate"],
+            "settle_cycles": s["settle_cycles"],
+            "wall_time_s": s["wall_time_s"],
+        }
+        for s in summaries
+    ]
+    out["per_cycle_velocity_replica"] = 0
+    steps = sum(s["spheres"] * s["steps"] for s in summaries)
+    loops = sum(s["wall_time_s"] for s in summaries)
+    out["wall_time_s"] = loops  # the replicas' step loops, summed
+    out["particle_steps_per_s"] = steps / loops * processes if loops > 0 else None
+    if wall_time_s is not None:
+        out["elapsed_s"] = wall_time_s  # compile, fills and every replica, as the user waited
+    out["processes"] = processes
+    return out

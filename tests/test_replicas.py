@@ -1,0 +1,108 @@
+"""Replicas (dem.replicas): N fills of one case, pooled; reproducible, refusing, resumable."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from small_case import SMALL_CASE, run_cli, write_case
+
+from dem import measure, replicas
+from dem.case import load_case
+from dem.errors import InputError
+from dem.runner import run_case
+
+TINY = SMALL_CASE.replace("count = 120", "count = 40").replace("cycles = 6", "cycles = 3")
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    return write_case(tmp_path_factory.mktemp("replicas") / "case", TINY)
+
+
+@pytest.fixture(scope="module")
+def pooled_run(tiny, tmp_path_factory):
+    case = load_case(tiny, {"run.replicas": 3})
+    out = tmp_path_factory.mktemp("pooled") / "out"
+    return case, out, replicas.run_replicas(case, out, threads=2, progress=False)
+
+
+def test_replica_k_is_the_case_seeded_seed_plus_k(tiny):
+    case = load_case(tiny, {"run.replicas": 4})
+    assert [replicas.replica_case(case, k).run.seed for k in range(4)] == [3, 4, 5, 6]
+    assert all(replicas.replica_case(case, k).run.replicas == 1 for k in range(4))
+
+
+def test_the_pool_is_dem_measure_pooled_of_the_replicas_own_runs(pooled_run):
+    case, out, summary = pooled_run
+    per = summary["per_replica"]
+    assert [r["seed"] for r in per] == [3, 4, 5]
+    own = [json.loads((out / "replicas" / str(k) / "summary.json").read_text()) for k in range(3)]
+    assert [o["mean_velocity"] for o in own] == [r["mean_velocity"] for r in per]
+    p = measure.pooled([o["mean_velocity"] for o in own], [o["mean_velocity_stderr"] for o in own])
+    assert summary["mean_velocity"] == p.mean
+    assert summary["mean_velocity_stderr"] == p.stderr
+    assert summary["mean_velocity_ci95"] == p.half_width
+    assert summary["replicas"] == 3 and "fill-to-fill spread included" in summary["error_bar"]
+    # the fills differ: three seeds, three values
+    assert len({r["mean_velocity"] for r in per}) == 3
+    assert json.loads((out / "summary.json").read_text())["mean_velocity"] == p.mean
+    # frames and results.h5 of replica 0 only
+    assert (out / "results.h5").is_file() and (out / "particles.pvd").is_file()
+    assert not (out / "replicas" / "1" / "results.h5").exists()
+    assert not (out / "replicas" / "1" / "frames").exists()
+
+
+def test_replica_zero_is_the_single_run_bit_for_bit(pooled_run, tmp_path):
+    case, _, summary = pooled_run
+    single = run_case(replicas.replica_case(case, 0), tmp_path / "one", threads=1, progress=False)
+    assert single["mean_velocity"] == summary["per_replica"][0]["mean_velocity"]
+    assert "excludes the fill-to-fill spread" in single["error_bar"]
+
+
+def test_a_replicated_run_is_reproducible(pooled_run, tmp_path):
+    case, _, summary = pooled_run
+    again = replicas.run_replicas(case, tmp_path / "again", threads=1, progress=False)
+    assert again["per_replica"] == [
+        dict(r, wall_time_s=a["wall_time_s"])
+        for r, a in zip(summary["per_replica"], again["per_replica"], strict=True)
+    ]
+    assert again["mean_velocity"] == summary["mean_velocity"]
+
+
+def test_an_earlier_run_is_refused_before_any_replica_starts(pooled_run):
+    case, out, _ = pooled_run
+    before = (out / "summary.json").read_bytes()
+    with pytest.raises(InputError, match="--out"):
+        replicas.run_replicas(case, out, threads=2, progress=False)
+    assert (out / "summary.json").read_bytes() == before
+
+
+def test_resume_reruns_only_what_is_missing(pooled_run, tmp_path):
+    case, out, summary = pooled_run
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    (copy / "replicas" / "2" / "summary.json").unlink()
+    resumed = replicas.run_replicas(case, copy, threads=2, resume=True, progress=False)
+    assert resumed["per_replica"][:2] == summary["per_replica"][:2]
+    assert resumed["per_replica"][2]["mean_velocity"] == summary["per_replica"][2]["mean_velocity"]
+
+
+def test_pool_summaries_pools_the_feeder_and_flow(pooled_run):
+    _, _, summary = pooled_run
+    assert summary["mass_flow_rate"] > 0 and math.isfinite(summary["mass_flow_rate_stderr"])
+    ratio = summary["mass_flow_rate"] / summary["mean_velocity"]
+    first = summary["per_replica"][0]
+    assert ratio == pytest.approx(first["mass_flow_rate"] / first["mean_velocity"], rel=1e-9)
+
+
+def test_replicas_key_and_option_are_checked_at_the_door(tiny, capsys):
+    with pytest.raises(InputError, match="run.replicas"):
+        load_case(tiny, {"run.replicas": 0})
+    code, _, err = run_cli(capsys, "run", str(tiny), "--replicas", "0")
+    assert code == 2 and "--replicas" in err
+    with pytest.raises(InputError, match="seed"):
+        load_case(tiny, {"run.seed": 2**63 - 2, "run.replicas": 3})
+    np.testing.assert_equal(load_case(tiny, {"run.replicas": 2}).run.replicas, 2)
