@@ -412,27 +412,46 @@ def _cmd_run(args) -> int:
         if stop.checkpoint is not None:
             print(f"dem: continue with: {_resume_command(args, case, out)}", file=sys.stderr)
         return 128 + stop.signum
-    keys = (
-        "mean_velocity",
-        "mean_velocity_stderr",
-        "mean_velocity_norm",
-        "pointmass_velocity_norm",
-        "pointmass_bounded_velocity_norm",
-        "mass_flow_rate",
-        "particle_steps_per_s",
-    )
-    for key in keys:
-        if key in summary:
-            print(f"{key:26s} {summary[key]}")
-    if summary.get("replicas", 1) > 1:
-        print(f"{'error_bar':26s} {summary['error_bar']}; 95 % interval +- "
-              f"{summary['mean_velocity_ci95']:.3g} m/s; fill-to-fill spread "
-              f"{summary['replica_spread']:.3g} m/s")  # fmt: skip
-    else:
-        print(f"{'error_bar':26s} within this run only: it excludes the fill-to-fill spread "
-              "(pool fills with --replicas N)")  # fmt: skip
+    _print_summary(summary)
     print(f"wrote {out / 'summary.json'}")
     return 0
+
+
+def _print_summary(s: dict) -> None:
+    """The answer of a run, each value with its unit and the digits its error allows."""
+    from dem.measure import with_error
+
+    def line(label: str, text: str) -> None:
+        print(f"{label:<18s} {text}")
+
+    line("mean velocity", with_error(s["mean_velocity"], s["mean_velocity_stderr"], "m/s"))
+    line("normalised", with_error(s["mean_velocity_norm"], s["mean_velocity_norm_stderr"])
+         + "  (v / A omega cos phi)")  # fmt: skip
+    if s.get("replicas", 1) > 1:
+        line("error bar", f"{s['replicas']} fills pooled, fill-to-fill spread included (95 %: "
+             f"+- {s['mean_velocity_ci95']:.2g} m/s; spread between fills "
+             f"{s['replica_spread']:.2g} m/s)")  # fmt: skip
+    else:
+        line("error bar", "this run only: it excludes the fill-to-fill spread (pool fills "
+             "with --replicas N)")  # fmt: skip
+    paper, bounded = s.get("pointmass_velocity_norm"), s.get("pointmass_bounded_velocity_norm")
+    if paper is not None:
+        text = f"{paper:.3f} (paper's model)"
+        if bounded is not None and abs(bounded - paper) > 5e-4:
+            text += f", {bounded:.3f} (Coulomb-bounded, the DEM's reference)"
+        line("point mass", text + " in v_norm")
+    flow = with_error(s["mass_flow_rate"], s.get("mass_flow_rate_stderr")
+                      or abs(s["mass_flow_rate"] * s["mean_velocity_stderr"]
+                             / (s["mean_velocity"] or float("nan"))), "kg/s")  # fmt: skip
+    line("mass flow", f"{flow} through the section ({s['mass_flow_rate_per_width']:.3g} kg/s "
+         "per m of width)")  # fmt: skip
+    feeder = s.get("feeder")
+    if feeder:
+        line("discharge", with_error(feeder["discharge_rate"], feeder["discharge_rate_stderr"],
+                                     "kg/s") + " at the trough's end")  # fmt: skip
+    rate = s.get("particle_steps_per_s")
+    line("cost", f"dt {s['timestep']:.3g} s, {s['steps']} steps, {s['wall_time_s']:.0f} s"
+         + (f", {rate:.3g} particle-steps/s" if rate else ""))  # fmt: skip
 
 
 def _resume_command(args, case, out: Path) -> str:

@@ -292,3 +292,23 @@ def mass_flow_rate(total_mass: float, velocity: float, length: float) -> float:
 def mass_weighted_mean(mass: np.ndarray, values: np.ndarray) -> float:
     """sum_i m_i q_i / sum_i m_i for masses (n,) and values (n,)."""
     return float(np.dot(mass, values) / np.sum(mass))
+
+
+def with_error(value: float, error: float, unit: str = "") -> str:
+    """``value +- error unit`` with the digits the error allows: 0.0457 +- 0.0008 m/s.
+
+    The error keeps two significant digits when its first is 1 (0.011: rounding it to 0.01
+    would change it by 10 %), else one; the value is rounded to the same decimal place. A
+    missing or zero error leaves four significant digits and no error part.
+    """
+    unit = f" {unit}" if unit else ""
+    if value is None or not math.isfinite(value):
+        return f"{value}{unit}"
+    if error is None or not math.isfinite(error) or error <= 0.0:
+        return f"{value:.4g}{unit}"
+    exponent = math.floor(math.log10(error))
+    digits = 2 if f"{error:.1e}".startswith("1") else 1
+    place = exponent - digits + 1  # decimal place of the last digit kept
+    rounded_error = round(error, -place)  # 0.0096 -> 0.010: two digits, the first a 1
+    decimals = max(-place, 0)
+    return f"{round(value, -place):.{decimals}f} +- {rounded_error:.{decimals}f}{unit}"

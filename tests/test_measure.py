@@ -137,3 +137,19 @@ def test_student_t95_against_the_table_and_the_normal_limit():
     assert measure.student_t95(60) == pytest.approx(2.0003, abs=2e-4)
     assert measure.student_t95(120) == pytest.approx(1.9799, abs=2e-4)
     assert measure.student_t95(10**7) == pytest.approx(1.95996, abs=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("value", "error", "unit", "text"),
+    [
+        (0.045712, 0.00081, "m/s", "0.0457 +- 0.0008 m/s"),
+        (0.76123, 0.0112, "", "0.761 +- 0.011"),
+        (0.76123, 0.0096, "", "0.761 +- 0.010"),
+        (-0.0021, 0.00019, "m/s", "-0.00210 +- 0.00019 m/s"),
+        (12345.6, 234.0, "N", "12300 +- 200 N"),
+        (0.5, 0.0, "kg/s", "0.5 kg/s"),
+        (0.123456, math.nan, "", "0.1235"),
+    ],
+)
+def test_with_error_keeps_the_digits_the_error_allows(value, error, unit, text):
+    assert measure.with_error(value, error, unit) == text

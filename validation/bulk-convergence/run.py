@@ -1,0 +1,315 @@
+"""Bulk answers that hold: error-bar coverage, and the bed's velocity converged in stiffness.
+
+Regenerates the CSV files, provenance.json and figures of this folder (README.md shows them).
+Runs go to scratch/ (ignored by git); a rerun reuses finished replicas (``--resume``).
+
+    .venv/bin/python validation/bulk-convergence/run.py coverage     # 60 small beds, ~12 min
+    .venv/bin/python validation/bulk-convergence/run.py stiffness sphere-bed     # ~20 min
+    .venv/bin/python validation/bulk-convergence/run.py stiffness screw-trough   # ~20 min
+    .venv/bin/python validation/bulk-convergence/run.py timestep sphere-bed      # dt check
+    .venv/bin/python validation/bulk-convergence/run.py figures
+
+Everything goes through the public API a user has: ``dem.case.load_case`` with overrides, and
+``dem.replicas.run_replicas`` (``dem run --replicas N``), whose pooled summaries are read back.
+
+- coverage: a small sphere bed (cases/sphere-bed cut to 300 spheres in a 20 mm section, the
+  same depth) run from 60 fills. Each run's own 95 % interval (1.96 times its autocorrelated
+  standard error), and the pooled interval of each of 20 disjoint triples (``measure.pooled``),
+  are checked against the long-run mean: the pooled mean of every *other* run (leave the
+  run or the triple out), so no interval is judged against itself.
+- stiffness: the shipped bed (cases/sphere-bed, cases/screw-trough) at Young's moduli from 5e7 to
+  5e10 Pa, 3 replicas each, the time step a fixed fraction (DT_FRACTION) of the stability limit
+  at every E, so that only the stiffness changes; the rigid limit extrapolated by a fit
+  v(E) = v_inf + c E^(-p) on the stiffest points, weighted by the pooled errors.
+- timestep: the same bed at two stiffnesses with the step halved, to show dt is converged.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from dem import measure, provenance
+from dem.case import load_case
+from dem.replicas import run_replicas
+from dem.timestep import timestep_for
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+SCRATCH = HERE / "scratch"
+MODULI = [5e7, 2e8, 5e8, 2e9, 5e9, 2e10, 5e10]
+DT_FRACTION = 0.5  #: time step over the stability limit in the stiffness sweep
+REPLICAS = 3
+CYCLES = 20
+COVERAGE_RUNS = 60
+#: The small bed of the coverage check: cases/sphere-bed at a fifth of its length and count.
+COVERAGE_CASE = {"trough.length": 0.02, "particles.count": 300, "run.cycles": CYCLES}
+
+
+def _run(case, out: Path) -> dict:
+    """A replicated run into ``out`` (resumed if it was started), its pooled summary."""
+    resume = (out / "summary.json").is_file() or (out / "replicas").is_dir()
+    return run_replicas(case, out, threads=2, progress=True, resume=resume, frames=False)
+
+
+def _own(out: Path, k: int) -> dict:
+    return json.loads((out / "replicas" / str(k) / "summary.json").read_text())
+
+
+def coverage() -> None:
+    """Coverage of one run's interval and of pooled triples against the long-run mean."""
+    case = load_case(ROOT / "cases" / "sphere-bed",
+                     {**COVERAGE_CASE, "run.replicas": COVERAGE_RUNS})  # fmt: skip
+    out = SCRATCH / "coverage"
+    _run(case, out)
+    runs = [_own(out, k) for k in range(COVERAGE_RUNS)]
+    m = np.array([r["mean_velocity"] for r in runs])
+    s = np.array([r["mean_velocity_stderr"] for r in runs])
+    rows, single_hits, triple_hits = [], 0, 0
+    for i in range(COVERAGE_RUNS):
+        others = np.arange(COVERAGE_RUNS) != i
+        truth = measure.pooled(m[others], s[others]).mean
+        hit = abs(m[i] - truth) <= 1.959963984540054 * s[i]
+        single_hits += hit
+        rows.append({"kind": "one run", "index": i, "seed": runs[i]["seed"], "mean_m_s": m[i],
+                     "half_width_m_s": 1.959963984540054 * s[i], "long_run_mean_m_s": truth,
+                     "covers": int(hit)})  # fmt: skip
+    triples = COVERAGE_RUNS // 3
+    for g in range(triples):
+        members = np.arange(3 * g, 3 * g + 3)
+        others = np.ones(COVERAGE_RUNS, bool)
+        others[members] = False
+        truth = measure.pooled(m[others], s[others]).mean
+        p = measure.pooled(m[members], s[members])
+        hit = abs(p.mean - truth) <= p.half_width
+        triple_hits += hit
+        rows.append({"kind": "3 replicas", "index": g, "seed": runs[3 * g]["seed"],
+                     "mean_m_s": p.mean, "half_width_m_s": p.half_width,
+                     "long_run_mean_m_s": truth, "covers": int(hit)})  # fmt: skip
+    _write_csv(HERE / "coverage.csv", rows)
+    grand = measure.pooled(m, s)
+    result = {
+        "runs": COVERAGE_RUNS, "cycles": CYCLES, "case": "cases/sphere-bed", **{
+            f"override_{k}": v for k, v in COVERAGE_CASE.items()},
+        "one_run_coverage": single_hits / COVERAGE_RUNS,
+        "three_replica_coverage": triple_hits / triples, "triples": triples,
+        "long_run_mean_m_s": grand.mean, "long_run_mean_stderr_m_s": grand.stderr,
+        "fill_to_fill_spread_m_s": grand.between,
+        "median_one_run_stderr_m_s": float(np.median(s)),
+        "spread_of_one_run_means_m_s": float(np.std(m, ddof=1)),
+    }  # fmt: skip
+    _record("coverage", result)
+    print(json.dumps(result, indent=1))
+
+
+def _bed_case(bed: str, youngs: float, fraction: float = DT_FRACTION):
+    """The shipped bed at Young's modulus ``youngs``, dt = ``fraction`` of its stability limit."""
+    base = {"contact.youngs_modulus": youngs, "run.cycles": CYCLES, "run.replicas": REPLICAS}
+    probe = load_case(ROOT / "cases" / bed, {**base, "run.timestep": "auto"})
+    dt = fraction * timestep_for(probe).limit
+    return load_case(ROOT / "cases" / bed, {**base, "run.timestep": float(f"{dt:.4g}")})
+
+
+def stiffness(bed: str, moduli: list[float]) -> None:
+    """The pooled bed velocity at each Young's modulus; the rigid-limit fit."""
+    rows = []
+    for youngs in moduli:
+        case = _bed_case(bed, youngs)
+        summary = _run(case, SCRATCH / f"{bed}_E{youngs:.0e}")
+        rows.append(_row(bed, youngs, DT_FRACTION, case, summary))
+        print(f"{bed} E = {youngs:.0e}: v = {summary['mean_velocity']:.5f} +- "
+              f"{summary['mean_velocity_stderr']:.5f} m/s", flush=True)  # fmt: skip
+    path = HERE / f"stiffness_{bed}.csv"
+    old = _read_csv(path) if path.is_file() else []
+    keep = [r for r in old if float(r["youngs_modulus_pa"]) not in moduli]
+    rows = sorted(keep + rows, key=lambda r: float(r["youngs_modulus_pa"]))
+    _write_csv(path, rows)
+    fit = rigid_limit(rows)
+    _record(f"stiffness_{bed}", {"rows": len(rows), "dt_fraction": DT_FRACTION, **fit})
+    print(json.dumps(fit, indent=1))
+
+
+def timestep(bed: str, moduli: list[float]) -> None:
+    """The bed with dt halved (DT_FRACTION / 2) at the given moduli."""
+    rows = []
+    for youngs in moduli:
+        case = _bed_case(bed, youngs, DT_FRACTION / 2)
+        summary = _run(case, SCRATCH / f"{bed}_E{youngs:.0e}_halfdt")
+        rows.append(_row(bed, youngs, DT_FRACTION / 2, case, summary))
+    path = HERE / f"timestep_{bed}.csv"
+    _write_csv(path, rows)
+    _record(f"timestep_{bed}", {"rows": rows})
+
+
+def _row(bed, youngs, fraction, case, s) -> dict:
+    return {
+        "bed": bed, "youngs_modulus_pa": youngs, "dt_fraction_of_limit": fraction,
+        "timestep_s": case.run.timestep, "replicas": s["replicas"],
+        "mean_velocity_m_s": s["mean_velocity"], "stderr_m_s": s["mean_velocity_stderr"],
+        "ci95_m_s": s["mean_velocity_ci95"], "mean_velocity_norm": s["mean_velocity_norm"],
+        "fill_to_fill_spread_m_s": s["replica_spread"],
+        "per_replica_m_s": " ".join(f"{r['mean_velocity']:.6g}" for r in s["per_replica"]),
+        "settle_cycles": " ".join(str(r["settle_cycles"]) for r in s["per_replica"]),
+        "cpu_s": s["wall_time_s"], "particle_steps_per_s": s["particle_steps_per_s"],
+    }  # fmt: skip
+
+
+def rigid_limit(rows: list[dict]) -> dict:
+    """v(E) = v_inf + c E^(-p) by weighted least squares over p on a grid; held-out check.
+
+    Fitted on the stiffest points but one (at least three), the stiffest point held out and
+    predicted; then refitted on all of them for the reported v_inf, whose error is the
+    weighted least-squares standard error at the best p, widened by the spread of v_inf over
+    the p whose chi^2 lies within 1 of the minimum.
+    """
+    e = np.array([float(r["youngs_modulus_pa"]) for r in rows])
+    v = np.array([float(r["mean_velocity_m_s"]) for r in rows])
+    s = np.array([float(r["stderr_m_s"]) for r in rows])
+    if e.size < 4:
+        return {"fit": "too few points"}
+
+    def fit(mask):
+        best = None
+        table = []
+        for p in np.linspace(0.1, 1.5, 141):
+            x = e[mask] ** (-p)
+            a = np.column_stack([np.ones_like(x), x]) / s[mask, None]
+            coef, *_ = np.linalg.lstsq(a, v[mask] / s[mask], rcond=None)
+            chi2 = float(np.sum((a @ coef - v[mask] / s[mask]) ** 2))
+            cov = np.linalg.inv(a.T @ a)
+            table.append((chi2, p, coef[0], coef[1], math.sqrt(cov[0, 0])))
+            if best is None or chi2 < best[0]:
+                best = table[-1]
+        near = [t[2] for t in table if t[0] <= best[0] + 1.0]
+        return best, float(np.ptp(near)) / 2.0
+
+    order = np.argsort(e)
+    held = order[-1]
+    train = np.zeros(e.size, bool)
+    train[order[:-1]] = True
+    (chi2, p, v_inf, c, err), width = fit(train)
+    predicted = v_inf + c * e[held] ** (-p)
+    (chi2_all, p_all, v_all, c_all, err_all), width_all = fit(np.ones(e.size, bool))
+    return {
+        "form": "v(E) = v_inf + c E^(-p), weighted least squares, p on a grid 0.1-1.5",
+        "held_out_youngs_pa": float(e[held]),
+        "held_out_measured_m_s": float(v[held]), "held_out_stderr_m_s": float(s[held]),
+        "held_out_predicted_m_s": float(predicted),
+        "held_out_z": float((v[held] - predicted) / s[held]),
+        "v_inf_m_s": float(v_all), "v_inf_stderr_m_s": float(math.hypot(err_all, width_all)),
+        "p": float(p_all), "c": float(c_all), "chi2": float(chi2_all),
+        "dof": int(e.size - 3),
+    }  # fmt: skip
+
+
+def figures() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    beds = [b for b in ("sphere-bed", "screw-trough") if (HERE / f"stiffness_{b}.csv").is_file()]
+    if beds:
+        fig, axes = plt.subplots(1, len(beds), figsize=(5.2 * len(beds), 4.0), squeeze=False,
+                                 constrained_layout=True)  # fmt: skip
+        record = _read_record()
+        for ax, bed in zip(axes[0], beds, strict=True):
+            rows = _read_csv(HERE / f"stiffness_{bed}.csv")
+            e = np.array([float(r["youngs_modulus_pa"]) for r in rows])
+            v = np.array([float(r["mean_velocity_m_s"]) for r in rows])
+            ci = np.array([float(r["ci95_m_s"]) for r in rows])
+            ax.errorbar(e, v, yerr=ci, fmt="o", capsize=3, label="3 fills pooled, 95 %")
+            for r in rows:
+                reps = [float(x) for x in r["per_replica_m_s"].split()]
+                ax.plot([float(r["youngs_modulus_pa"])] * len(reps), reps, ".", color="0.6")
+            fit = record.get(f"stiffness_{bed}", {})
+            if "v_inf_m_s" in fit:
+                grid = np.geomspace(e.min(), 1e12, 100)
+                ax.plot(grid, fit["v_inf_m_s"] + fit["c"] * grid ** (-fit["p"]), "-",
+                        label=f"fit, v_inf = {fit['v_inf_m_s']:.4f} +- "
+                              f"{fit['v_inf_stderr_m_s']:.4f} m/s")  # fmt: skip
+                ax.axhspan(
+                    fit["v_inf_m_s"] - 1.96 * fit["v_inf_stderr_m_s"],
+                    fit["v_inf_m_s"] + 1.96 * fit["v_inf_stderr_m_s"],
+                    alpha=0.15,
+                )
+            half = HERE / f"timestep_{bed}.csv"
+            if half.is_file():
+                for r in _read_csv(half):
+                    ax.errorbar(float(r["youngs_modulus_pa"]) * 1.15,
+                                float(r["mean_velocity_m_s"]), yerr=float(r["ci95_m_s"]),
+                                fmt="s", color="C3", capsize=3)  # fmt: skip
+                ax.plot([], [], "s", color="C3", label="dt halved")
+            ax.set_xscale("log")
+            ax.set_xlabel("Young's modulus E (Pa)")
+            ax.set_ylabel("mean conveying velocity v (m/s)")
+            ax.set_title(f"cases/{bed}: v against contact stiffness")
+            ax.legend(fontsize=8)
+        fig.savefig(HERE / "stiffness.png", dpi=120)
+    if (HERE / "coverage.csv").is_file():
+        rows = _read_csv(HERE / "coverage.csv")
+        fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
+        for ax, kind in zip(axes, ("one run", "3 replicas"), strict=True):
+            sel = [r for r in rows if r["kind"] == kind]
+            z = [(float(r["mean_m_s"]) - float(r["long_run_mean_m_s"]))
+                 / (float(r["half_width_m_s"]) / 1.959963984540054) for r in sel]  # fmt: skip
+            share = np.mean([int(r["covers"]) for r in sel])
+            ax.hist(z, bins=np.linspace(-8, 8, 33), color="C0")
+            for x in (-1.96, 1.96):
+                ax.axvline(x, color="C3", ls="--")
+            ax.set_xlabel("(estimate - long-run mean) / reported standard error")
+            ax.set_ylabel("runs" if kind == "one run" else "triples")
+            ax.set_title(f"{kind}: 95 % interval covers in {100 * share:.0f} % of {len(sel)}")
+        fig.savefig(HERE / "coverage.png", dpi=120)
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def _read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def _read_record() -> dict:
+    path = HERE / "provenance.json"
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def _record(name: str, result: dict) -> None:
+    data = _read_record()
+    data[name] = {**result, "command": " ".join(["run.py", *sys.argv[1:]]),
+                  "provenance": provenance.record()}  # fmt: skip
+    (HERE / "provenance.json").write_text(json.dumps(data, indent=1, default=float) + "\n")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", choices=["coverage", "stiffness", "timestep", "figures"])
+    parser.add_argument("bed", nargs="?", default="sphere-bed",
+                        choices=["sphere-bed", "screw-trough"])  # fmt: skip
+    parser.add_argument("--moduli", type=float, nargs="+", default=None)
+    args = parser.parse_args()
+    SCRATCH.mkdir(exist_ok=True)
+    if args.what == "coverage":
+        coverage()
+    elif args.what == "stiffness":
+        stiffness(args.bed, args.moduli or MODULI)
+    elif args.what == "timestep":
+        timestep(args.bed, args.moduli or [5e8, 5e10])
+    figures()
+
+
+if __name__ == "__main__":
+    main()
