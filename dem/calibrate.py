@@ -31,6 +31,7 @@ from dem.errors import InputError
 from dem.laws import TANGENTIAL_LAWS
 from dem.pointmass import elliptic
 from dem.pointmass.stepped import step_motion, step_point_mass
+from dem.scene import resolve
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
 LANDING_STEPS = 4000
@@ -77,7 +78,8 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     """Throw one grain of ``case`` at the floor (module docstring) and measure eps_n and eps_t.
 
     Args:
-        case: A :class:`dem.case.Case`; its contact, material and grain are used.
+        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here; its
+            contact, material and grain are used.
         incidence: theta in [0, 90), deg from the floor normal.
         speed: V > 0, m/s.
         quat: Clumps: orientation (w, x, y, z); default the template's principal axes.
@@ -90,6 +92,9 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
         raise ValueError(f"incidence must lie in [0, 90) deg, got {incidence}")
     if speed <= 0.0:
         raise ValueError(f"speed must be > 0, got {speed}")
+    # the scene's own step is the fill's; the impact's is taken (and checked) by from_grains
+    scene = resolve(case, check_limit=False)
+    case = scene.case
     theta = math.radians(incidence)
     v0 = np.array([speed * math.sin(theta), 0.0, -speed * math.cos(theta)])
     if case.particles.shape != "sphere" and quat is None:
@@ -98,7 +103,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     height = _lowest_offset(case, q)
     x0 = np.array([[0.5 * case.trough.length, 0.0, height + 1e-9]])
     sim = setup.from_grains(
-        case, x0, orientations=None if q is None else q[None, :], velocities=v0[None, :],
+        scene, x0, orientations=None if q is None else q[None, :], velocities=v0[None, :],
         impact_speed=speed,
     )  # fmt: skip
     return measure_impact(sim, max_steps=max_steps)
@@ -280,14 +285,16 @@ def _with_tangential(case, kappa: float, zeta_t: float):
 def _measure(case, impacts, quats, strict=True) -> tuple[np.ndarray, np.ndarray]:
     """Return eps_t per impact and orientation, (L, Q), and eps_n, (L Q,).
 
-    An impact that never ends is left out (nan) rather than stopping the fit, unless every
+    ``case``: a :class:`dem.scene.Scene`, or a case resolved here once for all its impacts. An
+    impact that never ends is left out (nan) rather than stopping the fit, unless every
     orientation of one impact fails and ``strict``.
     """
+    scene = resolve(case, check_limit=False)
     eps_t, eps_n = [], []
     for incidence, speed in impacts:
         for q in quats:
             try:
-                r = virtual_impact(case, float(incidence), float(speed), q, max_steps=50_000)
+                r = virtual_impact(scene, float(incidence), float(speed), q, max_steps=50_000)
             except RuntimeError:
                 eps_t.append(math.nan)
                 eps_n.append(math.nan)
@@ -332,7 +339,8 @@ def calibrate(
     The target of each landing is what Coulomb lets it reach (:func:`bounded_targets`), so a
     grazing landing that friction bounds neither pulls the fit nor counts against it.
     ``tangential = "impact"`` leaves nothing to fit: its impacts are measured and reported as
-    they are (``fitted`` False).
+    they are (``fitted`` False). ``case`` is a :class:`dem.scene.Scene`, or a
+    :class:`dem.case.Case` resolved here.
 
     What a law leaves to fit, and whether it may be calibrated, is its registry row's
     (:data:`dem.laws.TANGENTIAL_LAWS`).
@@ -341,6 +349,9 @@ def calibrate(
         InputError: the law refuses calibration ("liggghts").
 
     """
+    # the case as given, resolved once (each kappa tried is another case, resolved in _measure)
+    scene = resolve(case, check_limit=False)
+    case = scene.case
     row = TANGENTIAL_LAWS[case.contact.tangential]
     if row.calibration_refused:
         allowed = [k for k, r in TANGENTIAL_LAWS.items() if not r.calibration_refused]
@@ -351,7 +362,6 @@ def calibrate(
             source=str(case.source),
         )
     from dem.kernels import contacts
-    from dem.timestep import ContactLaw
 
     target = case.material.restitution_tangential
     impacts = landings(case)
@@ -383,9 +393,9 @@ def calibrate(
     fan = np.arange(5.0, 86.0, 10.0)
     fan_impacts = np.column_stack([fan, np.full(fan.size, np.mean(impacts[:, 1]))])
     if not row.calibrates:
-        e_t, e_n = _measure(case, impacts, quats)
+        e_t, e_n = _measure(scene, impacts, quats)
         after = np.nanmean(e_t, axis=1)
-        fan_values = _nanmean_rows(_measure(case, fan_impacts, quats, strict=False)[0])
+        fan_values = _nanmean_rows(_measure(scene, fan_impacts, quats, strict=False)[0])
         weights = np.sin(np.radians(impacts[:, 0])) ** 2
         weights /= weights.sum()
         deviation = math.sqrt(float(np.sum(weights * (after - targets) ** 2)))
@@ -399,7 +409,7 @@ def calibrate(
             fan=fan, fan_before=fan_values, fan_after=fan_values, targets=targets,
             bounded=bounded, fitted=False,
         )  # fmt: skip
-    zeta_t = float(ContactLaw.from_case(case).params[contacts.P_ZETA_T])
+    zeta_t = float(scene.law.params[contacts.P_ZETA_T])
     # a landing matters by the tangential momentum at stake: weight (v_t / V)^2 = sin^2(theta)
     weights = np.sin(np.radians(impacts[:, 0])) ** 2
     weights /= weights.sum()
@@ -417,14 +427,13 @@ def calibrate(
                 progress(kappa, float(np.nanmean(e_t)))
         return cache[log_kappa][0]
 
-    before = np.nanmean(_measure(case, impacts, quats)[0], axis=1)
+    before = np.nanmean(_measure(scene, impacts, quats)[0], axis=1)
     # eps_t need not be monotone in kappa (a rolling grain's is not): scan the whole range
     # coarsely, then refine around the best point of the scan and the start
     grid = np.linspace(*LOG_KAPPA_RANGE, 16)
     for x in grid:
         evaluate(float(x))
-    law = ContactLaw.from_case(case)
-    x = math.log(start if start is not None else float(law.params[contacts.P_KT_RATIO]))
+    x = math.log(start if start is not None else float(scene.law.params[contacts.P_KT_RATIO]))
     evaluate(x)
     x = min(cache, key=lambda k: cache[k][0])
     step = float(grid[1] - grid[0])
@@ -435,7 +444,7 @@ def calibrate(
     _, e_t, e_n = cache[best_log]
     eps = float(np.nanmean(e_t))
     after = np.nanmean(e_t, axis=1)
-    fan_before = _nanmean_rows(_measure(case, fan_impacts, quats, strict=False)[0])
+    fan_before = _nanmean_rows(_measure(scene, fan_impacts, quats, strict=False)[0])
     fan_after = _nanmean_rows(
         _measure(_with_tangential(case, best, zeta_t), fan_impacts, quats, strict=False)[0]
     )

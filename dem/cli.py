@@ -558,17 +558,18 @@ def _cmd_report(args) -> int:
 def _cmd_export_liggghts(args) -> int:
     from dem.case import load_case
     from dem.io.liggghts import CLUMP_FILE, DECK_NAME, MESH_FILE, write_deck
-    from dem.timestep import timestep_for
+    from dem.scene import resolve
 
     case = load_case(args.case_dir)
     # dem's own time step (explicit or automatic, checked against the stability limit), so
     # the deck integrates with the step a dem run of this case would take
     try:
-        timestep = timestep_for(case, timestep=args.timestep).dt
+        scene = resolve(case, timestep=args.timestep)
     except InputError as exc:
         if args.timestep is None:
             raise
         raise InputError("--timestep", args.timestep, exc.allowed) from None  # not the case's
+    timestep = scene.step.dt
     steps = int(round(case.run.cycles / case.drive.frequency / timestep))
     settle = args.settle_cycles if args.settle_cycles is not None else case.run.settle_cycles
     if settle is None:
@@ -587,7 +588,7 @@ def _cmd_export_liggghts(args) -> int:
             "which the export would replace (pass --overwrite to replace them)",
         )  # fmt: skip
     path = write_deck(
-        case, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps
+        scene, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps
     )
     print(f"wrote {path} (dt = {timestep:.4g} s, {steps} measured steps)")
     return 0

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from dem import config
-from dem.timestep import timestep_for
+from dem.scene import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
 TOLERANCE = 0.02
@@ -201,25 +201,27 @@ MEMORY_SAMPLE_GRAINS = 2000
 def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
     """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start).
 
-    Several threads add the parallel pair loop's inbox (:meth:`dem.state.PairList.ensure_inbox`).
-    Measured by allocating the arrays (zeros: no page is touched) up to
-    2 :data:`MEMORY_SAMPLE_GRAINS` grains, and extrapolated linearly beyond.
+    ``case``: a :class:`dem.scene.Scene`, or a case resolved here. Several threads add the
+    parallel pair loop's inbox (:meth:`dem.state.PairList.ensure_inbox`). Measured by allocating
+    the arrays (zeros: no page is touched) up to 2 :data:`MEMORY_SAMPLE_GRAINS` grains, and
+    extrapolated linearly beyond.
     """
+    scene = resolve(case)
     g1 = MEMORY_SAMPLE_GRAINS
     if grains <= 2 * g1:
-        return _allocated_bytes(case, spheres, grains, threads)
+        return _allocated_bytes(scene, spheres, grains, threads)
     per = spheres // grains
-    m1 = _allocated_bytes(case, g1 * per, g1, threads)
-    m2 = _allocated_bytes(case, 2 * g1 * per, 2 * g1, threads)
+    m1 = _allocated_bytes(scene, g1 * per, g1, threads)
+    m2 = _allocated_bytes(scene, 2 * g1 * per, 2 * g1, threads)
     return int(m1 + (m2 - m1) * (grains - g1) / g1)
 
 
-def _allocated_bytes(case, spheres: int, grains: int, threads: int) -> int:
+def _allocated_bytes(scene, spheres: int, grains: int, threads: int) -> int:
     """The bytes of the state's arrays, allocated for ``grains`` grains of ``spheres``."""
     from dem.state import Bodies, PairList, Spheres
-    from dem.timestep import ContactLaw
 
-    width = ContactLaw.from_case(case).history_width
+    case = scene.case
+    width = scene.law.history_width
     total = 0
     if case.particles.shape == "sphere":
         s = Spheres.create(np.zeros((spheres, 3)), case.particles.radius, case.material.density)
@@ -227,7 +229,7 @@ def _allocated_bytes(case, spheres: int, grains: int, threads: int) -> int:
     else:
         q = np.zeros((grains, 4))
         q[:, 0] = 1.0
-        b, s = Bodies.create(case.particles.grain, np.zeros((grains, 3)), q)
+        b, s = Bodies.create(scene.grain, np.zeros((grains, 3)), q)
         arrays = [s, b]
     s.set_history_width(width)
     if case.trough.mesh is not None:
@@ -280,21 +282,25 @@ def _scale(rate_used: float, used: int, threads: int) -> float:
 
 
 def grain_mass_radius(case) -> tuple[float, float]:
-    """A grain's mass, kg, and its largest sphere radius, m (the grain-floor impact's)."""
-    pt = case.particles
-    if pt.shape == "sphere":
-        return case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3, pt.radius
-    return pt.grain.mass, float(max(pt.grain.radii))
+    """A grain's mass, kg, and its largest sphere radius, m (the grain-floor impact's).
+
+    ``case``: a :class:`dem.scene.Scene`, or a case resolved here.
+    """
+    scene = resolve(case)
+    return scene.grain_mass, scene.max_radius
 
 
 def linear_equivalent_stiffness(case) -> float:
     """The linear k_n, N/m, whose contact lasts as long as the case's Hertz impact.
 
-    The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2.
+    The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2. ``case``: a
+    :class:`dem.scene.Scene`, or a case resolved here.
     """
     from dem.kernels import contacts
 
-    mass, radius = grain_mass_radius(case)
+    scene = resolve(case)
+    case = scene.case
+    mass, radius = grain_mass_radius(scene)
     c = case.contact
     y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
     speed = case.drive.peak_speed
@@ -306,10 +312,13 @@ def equivalent_youngs_modulus(case) -> float:
     """The study's stiffness axis: the case's Young's modulus, Pa.
 
     For the linear law: the modulus whose Hertz grain-floor impact at A omega lasts as long as
-    the linear contact, pi sqrt(m / k_n).
+    the linear contact, pi sqrt(m / k_n). ``case``: a :class:`dem.scene.Scene`, or a case
+    resolved here.
     """
+    scene = resolve(case)
+    case = scene.case
     c = case.contact
-    mass, radius = grain_mass_radius(case)
+    mass, radius = grain_mass_radius(scene)
     if c.model == "hertz_mindlin":
         return float(c.youngs_modulus)
     t_c = math.pi * math.sqrt(mass / c.stiffness)
@@ -390,7 +399,12 @@ def unmeasured(case, data: dict, kind: str) -> list[str]:
 
 
 def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan:
-    """The plan of a :class:`dem.case.Case` (no fill, no dynamics)."""
+    """The plan of a :class:`dem.scene.Scene`, or of a :class:`dem.case.Case` resolved here.
+
+    No fill, no dynamics.
+    """
+    scene = resolve(case)
+    case = scene.case
     data_all = study_data()
     kind = study_kind(case)
     data = data_all["cases"][kind] if data_all else None
@@ -400,7 +414,7 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     per_grain = 1 if pt.shape == "sphere" else pt.grain.count
     grains = pt.count
     spheres = grains * per_grain
-    step = timestep_for(case)
+    step = scene.step
     per_cycle = 1.0 / case.drive.frequency / step.dt
     auto_settle = case.run.settle_cycles is None
     if not auto_settle:
@@ -428,7 +442,7 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
                 "or advice on stiffness, step and section is claimed for this case")  # fmt: skip
         advice.append(Advice("note", away[0].split(" =")[0], text))
     elif data and grains > 1:
-        expected, parts, error_source = _expected_error(case, data, kind, step, cycles, advice)
+        expected, parts, error_source = _expected_error(scene, data, kind, cycles, advice)
     elif data:  # one grain: the bed study says nothing of its error; the ladder does
         expected, parts = math.nan, {}
         error_source = ("one grain: compare it with the point mass (validation/single-grain, "
@@ -443,7 +457,7 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
             "and memory here are those of the initial charge (particles.count)"
         )
         advice.append(Advice("note", "feeder", text))
-    mem = memory_bytes(case, spheres, grains, threads)
+    mem = memory_bytes(scene, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:
         advice.append(Advice("warn", "particles.count", f"the state needs {_size(mem)}, over half "
@@ -460,8 +474,9 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     )  # fmt: skip
 
 
-def _expected_error(case, data, kind, step, cycles, advice) -> tuple[float, dict, str]:
+def _expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str]:
     """The error to expect, its parts and source, and the study's advice (appended)."""
+    case, step = scene.case, scene.step
     parts: dict[str, float] = {}
     outside: list[str] = []
 
@@ -473,7 +488,7 @@ def _expected_error(case, data, kind, step, cycles, advice) -> tuple[float, dict
 
     # The stiffness series is the error against the reference; the others are what one setting
     # changed against the base settings (0 there).
-    e_equiv = equivalent_youngs_modulus(case)
+    e_equiv = equivalent_youngs_modulus(scene)
     key = "contact.youngs_modulus" if case.contact.model == "hertz_mindlin" else "contact.stiffness"
     change("stiffness", data["stiffness"], e_equiv, key)
     fraction = step.dt / step.limit

@@ -48,6 +48,7 @@ from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
 from dem.provenance import record
+from dem.scene import resolve
 from dem.simulation import Simulation
 from dem.threads import ThreadGuard
 
@@ -361,7 +362,11 @@ def _ignore_file_size_signal():
 
 
 def run_case(case, out_dir: Path, **kwargs) -> dict:
-    """Run ``case`` into ``out_dir`` holding the folder's lock; see :func:`_run_case`."""
+    """Run ``case`` into ``out_dir`` holding the folder's lock; see :func:`_run_case`.
+
+    ``case`` is a :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here once for
+    the plan, the checks and the run.
+    """
     out_dir = Path(out_dir)
     cycles = kwargs.get("cycles")
     if cycles is not None and int(cycles) < 1:  # checked before the folder is made
@@ -369,14 +374,15 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
     if kwargs.get("resume"):  # checked before the folder is touched
         _prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(kwargs.get("threads"))
-    estimate = plan.plan(case, threads=n_threads, cycles=kwargs.get("cycles"))
-    _check_memory(case, estimate)
-    _check_duration(case, estimate)
+    scene = resolve(case)
+    estimate = plan.plan(scene, threads=n_threads, cycles=kwargs.get("cycles"))
+    _check_memory(scene.case, estimate)
+    _check_duration(scene.case, estimate)
     made = not out_dir.exists()
     lock = _lock_output(out_dir)
     size_signal = _ignore_file_size_signal()
     try:
-        return _run_case(case, out_dir, **kwargs)
+        return _run_case(scene, out_dir, **kwargs)
     finally:
         if size_signal is not None:
             signal.signal(signal.SIGXFSZ, size_signal)
@@ -402,7 +408,7 @@ def _run_case(
     """Run ``case`` into ``out_dir``; returns the summary (also written to summary.json).
 
     Args:
-        case: A :class:`dem.case.Case`.
+        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here.
         out_dir: Output folder: summary.json, results.h5, particles.pvd + frames/.
         cycles: Measured cycles (default ``case.run.cycles``).
         threads: numba threads (default all cores or NUMBA_NUM_THREADS).
@@ -419,12 +425,14 @@ def _run_case(
             written first (after the last cycle the summary is finished instead).
 
     """
+    scene = resolve(case)
+    case = scene.case
     cycles = case.run.cycles if cycles is None else int(cycles)
     if cycles < 1:
         raise InputError("--cycles", cycles, "a whole number >= 1")
     out_dir = Path(out_dir)
     n_threads = _set_threads(threads)
-    estimate = plan.plan(case, threads=n_threads, cycles=cycles)
+    estimate = plan.plan(scene, threads=n_threads, cycles=cycles)
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     if not resume:
         _warn_plan(estimate)
@@ -463,7 +471,7 @@ def _run_case(
         if progress:
             print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
                   flush=True)  # fmt: skip
-        sim = setup.from_case(case)
+        sim = setup.from_case(scene)
     if config.DEM_THREAD_GUARD and n_threads > 1:
         sim.guard = ThreadGuard(n_threads)
     if resume:

@@ -2,7 +2,9 @@
 
 :func:`from_case` fills the case's trough at random (:func:`dem.fill.fill`); :func:`from_grains`
 places the case's grain at chosen poses and velocities (virtual impacts, validation studies).
-Both take the time step from :func:`dem.timestep.timestep_for`, which depends on the case alone.
+Both take a :class:`dem.scene.Scene` (the case resolved once: grain, law, step, trough) or a
+case, which they resolve at the door. The time step is :func:`dem.timestep.timestep_for`'s, which
+depends on the case alone.
 """
 
 from __future__ import annotations
@@ -12,27 +14,29 @@ from dataclasses import replace
 import numpy as np
 
 from dem import fill
-from dem.errors import InputError
 from dem.mesh import TriangleMesh
+from dem.scene import resolve
 from dem.simulation import Simulation
 from dem.state import Bodies, Spheres
-from dem.timestep import ContactLaw, impact_speed_for, timestep_for
+from dem.timestep import impact_speed_for, timestep_for
 from dem.trough import Trough
 
 
 def from_case(case, *, timestep: float | None = None, check_limit: bool = True) -> Simulation:
     """The case's trough filled with its grains (seeded), ready to settle and drive.
 
+    ``case`` is a :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here
+    (:func:`dem.scene.resolve` with ``timestep`` and ``check_limit``).
+
     Spheres: :func:`dem.fill.random_fill`. Screws and clumps: N copies of the case's grain
     template at random positions and orientations without member overlap
-    (:func:`dem.fill.random_fill_clumps`). The time step is the case's
+    (:func:`dem.fill.random_fill_clumps`). The time step is the scene's
     (:func:`dem.timestep.timestep_for`, impact from the top of the fill box; ``check_limit`` as
     there); the instability check's speed scale takes the box as it was finally drawn.
     """
-    check_buildable(case)
-    step = timestep_for(case, timestep=timestep, check_limit=check_limit)
-    positions, quats, height = fill.fill(case)
-    return _build(case, positions, quats, None, step, impact_speed_for(case, height))
+    scene = resolve(case, timestep=timestep, check_limit=check_limit)
+    positions, quats, height = fill.fill(scene.case)
+    return _build(scene, positions, quats, None, scene.step, impact_speed_for(scene.case, height))
 
 
 def from_grains(
@@ -47,7 +51,8 @@ def from_grains(
     """The case's grains at chosen poses and velocities (the case's count is not used).
 
     Args:
-        case: A :class:`dem.case.Case` (contact, material, grain, trough, drive, run).
+        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` (contact, material,
+            grain, trough, drive, run) resolved here.
         positions: Centres (spheres) or centres of mass (clumps), trough frame, (G, 3), m.
         orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
             default the template's principal axes along the trough axes.
@@ -61,7 +66,9 @@ def from_grains(
     speed; a given step above the stability limit raises InputError naming ``run.timestep``.
 
     """
-    check_buildable(case)
+    # the scene's own step is the fill's, not these grains': theirs is taken (and checked) below
+    scene = resolve(case, check_limit=False)
+    case = scene.case
     positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
     n = positions.shape[0]
     if velocities is None:
@@ -71,11 +78,12 @@ def from_grains(
         top = float(np.max(positions[:, 2])) if n else 0.0
         fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
         impact_speed = impact_speed_for(case, top, fastest)
-    step = timestep_for(case, timestep=timestep, impact_speed=impact_speed, grains=n)
-    return _build(case, positions, orientations, velocities, step, impact_speed)
+    step = timestep_for(case, timestep=timestep, impact_speed=impact_speed, grains=n, law=scene.law)
+    return _build(scene, positions, orientations, velocities, step, impact_speed)
 
 
-def _build(case, positions, orientations, velocities, step, reference_speed) -> Simulation:
+def _build(scene, positions, orientations, velocities, step, reference_speed) -> Simulation:
+    case = scene.case
     pt, mat = case.particles, case.material
     n = positions.shape[0]
     bodies = None
@@ -87,37 +95,34 @@ def _build(case, positions, orientations, velocities, step, reference_speed) -> 
         if orientations is None:
             orientations = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
         quats = np.ascontiguousarray(orientations, dtype=np.float64).reshape(n, 4)
-        bodies, spheres = Bodies.create(pt.grain, positions, quats)
+        bodies, spheres = Bodies.create(scene.grain, positions, quats)
         if velocities is not None:
             bodies.v[:] = velocities
         bodies.place(spheres)
-    trough = Trough.from_case(case)
+    trough = scene.trough
     mesh = trough_mesh(case)
     feeder = None
     if case.feeder is not None:
-        trough, feeder = _finite(case, trough, mesh, step.dt, reference_speed)
+        trough, feeder = _finite(scene, trough, mesh, step.dt, reference_speed)
         if mesh is not None:
             mesh = TriangleMesh(mesh.tri, period=trough.length, source=mesh.source)
             lo = float(mesh.tri[..., 2].min())
             feeder.floor = lo
             feeder.inside = lambda p, r: fill.inside_mesh(mesh, p, float(np.max(r)))
     return Simulation(
-        spheres, trough, ContactLaw.from_case(case), step.dt,
+        spheres, trough, scene.law, step.dt,
         rotation=pt.rotation, reference_speed=reference_speed, bodies=bodies,
         timestep_limit=step.limit, mesh=mesh, feeder=feeder,
     )  # fmt: skip
 
 
-def _finite(case, trough: Trough, mesh, dt: float, reference_speed: float):
+def _finite(scene, trough: Trough, mesh, dt: float, reference_speed: float):
     """The finite feeder's periodic domain (the trough and an empty gap) and its Feeder."""
     from dem import config
-    from dem.feeder import EXCHANGE_FRACTION, Feeder, domain_gap, grain_factory, grain_mass
+    from dem.feeder import EXCHANGE_FRACTION, Feeder, domain_gap, grain_factory
 
-    pt = case.particles
-    if pt.shape == "sphere":
-        bound = r_max = pt.radius
-    else:
-        bound, r_max = pt.grain.bounding_radius, float(np.max(pt.grain.radii))
+    case = scene.case
+    bound, r_max = scene.grain.bounding_radius, scene.max_radius
     interval = max(1, int(round(EXCHANGE_FRACTION * trough.period / dt)))
     travel = config.DEM_MAX_SPEED_FACTOR * reference_speed * interval * dt
     skin = config.DEM_SKIN_FRACTION * r_max
@@ -128,7 +133,7 @@ def _finite(case, trough: Trough, mesh, dt: float, reference_speed: float):
         width = float(np.ptp(mesh.tri[..., 1]))
     feeder = Feeder(
         discharge=length, width=width, feed_rate=case.feeder.feed_rate,
-        feed_length=case.feeder.feed_length, grain_mass=grain_mass(case), bound=bound,
+        feed_length=case.feeder.feed_length, grain_mass=scene.grain_mass, bound=bound,
         interval=interval, make=grain_factory(case),
         random=np.random.default_rng([case.run.seed, 0xFEED]),
     )  # fmt: skip
@@ -142,10 +147,3 @@ def trough_mesh(case):
     from dem.mesh import load_mesh
 
     return load_mesh(case.trough.mesh, length=case.trough.length)
-
-
-def check_buildable(case) -> None:
-    """Refuse what the engine cannot build (a grain without its template)."""
-    pt = case.particles
-    if pt.shape != "sphere" and pt.grain is None:
-        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")

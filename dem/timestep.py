@@ -1,6 +1,7 @@
 """The time step of a case, from the case alone: contact time scales and stability limits.
 
-:class:`ContactLaw` is a case's contact law in kernel form. :func:`timestep_limits` gives the
+:class:`dem.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
+:func:`timestep_limits` gives the
 automatic step and the stability limit for one contact, and :func:`timestep_for` applies them to
 a case: every member radius of its grain, sphere-sphere and sphere-wall contacts, and the
 hardest impact the case can produce, taken from the drive and a fall from the top of the fill box
@@ -128,6 +129,7 @@ def timestep_for(
     impact_speed: float | None = None,
     grains: int | None = None,
     check_limit: bool = True,
+    law: ContactLaw | None = None,
 ) -> Timestep:
     """The time step of a :class:`dem.case.Case`, without placing a grain.
 
@@ -139,6 +141,8 @@ def timestep_for(
             ``particles.count``.
         check_limit: False lets a given step exceed the stability limit: for stability studies
             (validation/stability), whose runs the instability guard must then stop.
+        law: The case's contact law when it is already built (:func:`dem.scene.resolve`);
+            default :meth:`ContactLaw.from_case`.
 
     The step of a clump takes the smallest effective mass a point of its surface has for a force
     in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation
@@ -148,7 +152,8 @@ def timestep_for(
 
     """
     pt, mat = case.particles, case.material
-    law = ContactLaw.from_case(case)
+    if law is None:
+        law = ContactLaw.from_case(case)
     if impact_speed is None:
         impact_speed = impact_speed_for(case)
     if grains is None:

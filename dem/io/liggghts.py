@@ -107,10 +107,10 @@ from dem import __version__
 from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
-from dem.feeder import grain_mass as grain_mass_of
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
 from dem.laws import NORMAL_LAWS, TANGENTIAL_LAWS
 from dem.mesh import load_mesh
+from dem.scene import Scene, resolve
 from dem.shapes import write_clump
 from dem.timestep import ContactLaw
 
@@ -193,8 +193,9 @@ def _fmt(x: float) -> str:
     return repr(float(x) + 0.0)  # + 0.0 turns -0.0 into 0.0
 
 
-def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]:
+def _contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str]:
     """Return the property/global lines, the model string and the model settings."""
+    case = scene.case
     lines = [
         "# grains are atom type 1, walls type 2; one material for both",
     ]
@@ -235,7 +236,8 @@ def _contact_block(case: Case, sphere_mass: float) -> tuple[list[str], str, str]
         model = NORMAL_LAWS[contact.model].liggghts
         settings = f"limitForce {limit} tangential_damping on"
     else:
-        law = ContactLaw.from_case(case)
+        # the scene's law, or the law of the case switched to "liggghts" above (its own)
+        law = scene.law if case is scene.case else ContactLaw.from_case(case)
         kn = contact.stiffness
         kt = law.params[P_KT_RATIO] * kn
         zeta = damping_ratio(material.restitution_normal)
@@ -432,7 +434,7 @@ def _placement(case: Case) -> str:
 
 
 def _feeder_lines(
-    case: Case,
+    scene: Scene,
     timestep: float,
     fill_y: tuple[float, float],
     fill_z0: float,
@@ -457,12 +459,13 @@ def _feeder_lines(
     """
     from dem.feeder import EXCHANGE_FRACTION
 
+    case = scene.case
     f, d = case.feeder, case.drive
     # one grain per insertion, as dem feeds a grain whenever a whole one is owed (checked
     # every EXCHANGE_FRACTION of a period): LIGGGHTS's massrate rounds a fraction of a grain
     # per insertion down and feeds 10 % short (measured on cases/feeder, every 1/16 cycle)
     exchange = max(1, round(EXCHANGE_FRACTION / (d.frequency * timestep)))
-    grain = grain_mass_of(case)
+    grain = scene.grain_mass
     every = max(exchange, round(grain / (f.feed_rate * timestep))) if f.feed_rate > 0 else 0
     placement = _placement(case)
     p = case.particles
@@ -503,7 +506,7 @@ def _feeder_lines(
 
 
 def write_deck(
-    case: Case,
+    case: Case | Scene,
     out_dir: str | Path,
     *,
     timestep: float,
@@ -516,7 +519,7 @@ def write_deck(
     """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a case.
 
     Args:
-        case: A validated case (spheres, screws or clumps).
+        case: A validated case (spheres, screws or clumps), or its :class:`dem.scene.Scene`.
         out_dir: Directory for the deck (created; a clump case also gets ``grain.multisphere``,
             a mesh case ``trough.stl``); LIGGGHTS is run inside it.
         timestep: dt, s.
@@ -536,6 +539,8 @@ def write_deck(
             or timestep/steps not positive.
 
     """
+    scene = case if isinstance(case, Scene) else None
+    case = case.case if scene is not None else case
     source = str(case.source)
     p, t, d = case.particles, case.trough, case.drive
     if p.shape != "sphere" and p.grain is None:
@@ -544,6 +549,8 @@ def write_deck(
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:
         raise InputError("steps", steps, ">= 1")
+    if scene is None:  # the deck's step is ``timestep``: the scene's own is not checked here
+        scene = resolve(case, check_limit=False)
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -565,7 +572,7 @@ def write_deck(
         integrator = [f"fix integr all {'nve/sphere' if p.rotation else 'nve'}"]
         velocity = ["compute vxm all reduce ave vx"]
     else:
-        g = p.grain
+        g = scene.grain
         r_max, r_min = float(max(g.radii)), float(min(g.radii))
         grain_volume, grain_mass, members = g.volume, g.mass, g.count
         what = f"{n} {p.shape}s of {members} spheres, m = {g.mass:.6g} kg"
@@ -601,7 +608,7 @@ def write_deck(
     if thermo_every is None:
         thermo_every = max(1, round(steps_per_cycle))
 
-    material_lines, model, settings = _contact_block(case, grain_mass)
+    material_lines, model, settings = _contact_block(scene, grain_mass)
     placement = _placement(case)
 
     # loose insertion column and a box tall enough that thrown grains never leave it
@@ -684,7 +691,7 @@ def write_deck(
             f"fix back all wall/gran {model} primitive type 2 xplane 0.0 {settings}",
         ]
         feed_lines, balance_note = _feeder_lines(
-            case, timestep, fill_y, fill_z0, fill_height, members, s_feed=_prime_at_least(
+            scene, timestep, fill_y, fill_z0, fill_height, members, s_feed=_prime_at_least(
                 67867967 + 1000 * seed), sample_steps=sample_steps, drive_start=fill_steps,
         )  # fmt: skip
         wall_lines += feeder_lines

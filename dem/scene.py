@@ -1,0 +1,105 @@
+"""A case resolved once: the grain, the contact law, the time step and the trough.
+
+:func:`resolve` turns a :class:`dem.case.Case` into a :class:`Scene`, and the consumers
+(:mod:`dem.setup`, :mod:`dem.runner`, :mod:`dem.plan`, :mod:`dem.io.liggghts`,
+:mod:`dem.calibrate`, ``dem export``) take the scene instead of deriving these again. A case
+changed after loading (another count, another tangential stiffness) is resolved anew.
+
+The trough mesh is not part of a scene: a :class:`dem.mesh.TriangleMesh` is mutable (the fill
+and the simulation each re-index it for their own reach), so every simulation loads its own
+(:func:`dem.setup.trough_mesh`) and a scene stays immutable and shareable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from dem import shapes
+from dem.errors import InputError
+from dem.laws import ContactLaw
+from dem.timestep import Timestep, timestep_for
+from dem.trough import Trough
+
+if TYPE_CHECKING:
+    from dem.case import Case
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A case resolved once: the grain, the contact law, the time step and the trough.
+
+    Every consumer takes these from here; nobody rebuilds them.
+
+    Attributes:
+        case: The :class:`dem.case.Case` it was resolved from.
+        grain: The grain as a :class:`dem.shapes.Template`: the one-sphere template
+            (:func:`dem.shapes.sphere`) of radius R and density rho for spheres, the case's
+            template for screws and clumps.
+        law: The contact law in kernel form (:meth:`dem.laws.ContactLaw.from_case`).
+        step: The time step of the case's fill (:func:`dem.timestep.timestep_for` with ``law``):
+            dt, automatic step and stability limit, s, and the impact speed, m/s.
+        trough: The trough's geometry and drive (:meth:`dem.trough.Trough.from_case`).
+
+    """
+
+    case: Case
+    grain: shapes.Template
+    law: ContactLaw
+    step: Timestep
+    trough: Trough
+
+    @property
+    def grain_mass(self) -> float:
+        """Mass of one grain, kg.
+
+        A sphere: rho 4/3 pi R^3 evaluated as :meth:`dem.state.Spheres.create` gives each sphere
+        (the one-sphere template's rho V equals it to rounding); a clump: its template's mass.
+        """
+        pt = self.case.particles
+        if pt.shape == "sphere":
+            return self.case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
+        return float(self.grain.mass)
+
+    @property
+    def max_radius(self) -> float:
+        """Largest member sphere radius of the grain, m (a sphere's own radius)."""
+        return float(np.max(self.grain.radii))
+
+
+def resolve(case, *, timestep: float | None = None, check_limit: bool = True) -> Scene:
+    """Resolve a case into a :class:`Scene`, building its contact law exactly once.
+
+    Args:
+        case: A :class:`dem.case.Case`; a :class:`Scene` passes through as it was resolved
+            (with ``timestep`` given: its step taken again with that dt, its law kept).
+        timestep: dt, s; default ``case.run.timestep``, else automatic.
+        check_limit: As :func:`dem.timestep.timestep_for`: False lets a given step exceed the
+            stability limit.
+
+    Raises:
+        InputError: A clump case without its template (not read by :func:`dem.case.load_case`),
+            or a given step above the stability limit (``check_limit``).
+
+    """
+    if isinstance(case, Scene):
+        if timestep is None:
+            return case
+        step = timestep_for(case.case, timestep=timestep, check_limit=check_limit, law=case.law)
+        return replace(case, step=step)
+    check_buildable(case)
+    pt = case.particles
+    grain = shapes.sphere(pt.radius, case.material.density) if pt.shape == "sphere" else pt.grain
+    law = ContactLaw.from_case(case)
+    step = timestep_for(case, timestep=timestep, check_limit=check_limit, law=law)
+    return Scene(case=case, grain=grain, law=law, step=step, trough=Trough.from_case(case))
+
+
+def check_buildable(case) -> None:
+    """Refuse what the engine cannot build (a grain without its template)."""
+    pt = case.particles
+    if pt.shape != "sphere" and pt.grain is None:
+        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")
