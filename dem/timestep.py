@@ -1,9 +1,8 @@
 """The time step of a case, from the case alone: contact time scales and stability limits.
 
 :class:`dem.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
-:func:`timestep_limits` gives the
-automatic step and the stability limit for one contact, and :func:`timestep_for` applies them to
-a case: every member radius of its grain, sphere-sphere and sphere-wall contacts, and the
+:func:`timestep_limits` gives the automatic step and the stability limit for one contact, and
+:func:`timestep_for` applies them to a case: every member radius of its grain, sphere-sphere and sphere-wall contacts, and the
 hardest impact the case can produce, taken from the drive and a fall from the top of the fill box
 (:func:`dem.fill.box_height`). Nothing is filled or simulated, so ``dem export liggghts``, the
 validation scripts and ``dem run`` agree on dt before any grain is placed.
