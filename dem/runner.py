@@ -536,12 +536,7 @@ def _run_case(
         loop["h5_frames"] = 1
 
     period = sim.trough.period
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=_planned(loop), initial=loop["cycle"], unit="cycle",
-                   desc=f"dem {case.name}")  # fmt: skip
+    bar = _phase_bar(case, loop) if progress else None
     # SIGINT/SIGTERM are recorded, not fatal, until summary.json is on disk: the summary's
     # point-mass model compiles for seconds on a fresh machine, and a signal there used to end
     # the run with no summary, no checkpoint and no message. After the last cycle the summary
@@ -569,10 +564,13 @@ def _run_case(
                     loop["vtk_entries"] = vtk.entries
                 loop["chunk"] = k + 1
                 if loop["chunk"] == per_frame:
+                    measuring = _measuring(loop)
                     _end_cycle(sim, case, results, loop)
                     if bar is not None:
-                        bar.total = _planned(loop)
                         bar.update(1)
+                        if _measuring(loop) != measuring:  # the settling phase has ended
+                            bar.close()
+                            bar = _phase_bar(case, loop)
                     if loop["cycle"] % config.DEM_CHECKPOINT_EVERY == 0:
                         _checkpoint(checkpoint, sim, loop)
                 unfinished = loop["settle_cycles"] is None or loop["cycle"] < loop["total_cycles"]
@@ -783,11 +781,30 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     )  # fmt: skip
 
 
-def _planned(loop: dict) -> int:
-    """Cycles the run will take: known once the settling cycles are (else the most they can)."""
-    if loop["settle_cycles"] is None:
-        return config.DEM_AUTO_SETTLE_MAX_CYCLES + loop["cycles"]
-    return loop["total_cycles"]
+def _measuring(loop: dict) -> bool:
+    """True once the cycles about to run are measured ones (settling is over)."""
+    settle = loop["settle_cycles"]
+    return settle is not None and loop["cycle"] >= settle
+
+
+def _phase_bar(case, loop: dict):
+    """A progress bar of the current phase, whose total never changes.
+
+    Settling: its cycles, or with ``settle_cycles = "auto"`` the cap
+    (``DEM_AUTO_SETTLE_MAX_CYCLES``), which the MSER test usually ends early; then the
+    measured cycles.
+    """
+    from tqdm import tqdm
+
+    settle = loop["settle_cycles"]
+    if _measuring(loop):
+        return tqdm(total=loop["cycles"], initial=loop["cycle"] - settle, unit="cycle",
+                    desc=f"dem {case.name}: measuring")  # fmt: skip
+    if settle is None:
+        return tqdm(total=config.DEM_AUTO_SETTLE_MAX_CYCLES, initial=loop["cycle"], unit="cycle",
+                    desc=f"dem {case.name}: settling (until steady, at most)")  # fmt: skip
+    return tqdm(total=settle, initial=loop["cycle"], unit="cycle",
+                desc=f"dem {case.name}: settling")  # fmt: skip
 
 
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:
