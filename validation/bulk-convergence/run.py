@@ -4,6 +4,7 @@ Regenerates the CSV files, provenance.json and figures of this folder (README.md
 Runs go to scratch/ (ignored by git); a rerun reuses finished replicas (``--resume``).
 
     .venv/bin/python validation/bulk-convergence/run.py coverage     # 60 small beds, ~12 min
+    .venv/bin/python validation/bulk-convergence/run.py persistence  # 6 fills x 200 cycles
     .venv/bin/python validation/bulk-convergence/run.py stiffness sphere-bed     # ~20 min
     .venv/bin/python validation/bulk-convergence/run.py stiffness screw-trough   # ~20 min
     .venv/bin/python validation/bulk-convergence/run.py timestep sphere-bed      # dt check
@@ -105,6 +106,46 @@ def coverage() -> None:
         "spread_of_one_run_means_m_s": float(np.std(m, ddof=1)),
     }  # fmt: skip
     _record("coverage", result)
+    print(json.dumps(result, indent=1))
+
+
+PERSISTENCE_RUNS, PERSISTENCE_CYCLES = 6, 200
+
+
+def persistence() -> None:
+    """Why one run under-covers: do fills differ for good, or do short runs err by more?
+
+    Six fills of the coverage bed run 200 measured cycles each. If the fills differed only by
+    slow noise, their 200-cycle means would agree within their own errors and the 20-cycle
+    blocks of one long run would scatter as much as 20-cycle runs of different fills do; if
+    each fill keeps its own velocity, the 200-cycle means stay apart.
+    """
+    overrides = {**COVERAGE_CASE, "run.cycles": PERSISTENCE_CYCLES,
+                 "run.replicas": PERSISTENCE_RUNS}  # fmt: skip
+    case = load_case(ROOT / "cases" / "sphere-bed", overrides)
+    out = SCRATCH / "persistence"
+    _run(case, out)
+    runs = [_own(out, k) for k in range(PERSISTENCE_RUNS)]
+    long_means = np.array([r["mean_velocity"] for r in runs])
+    long_errors = np.array([r["mean_velocity_stderr"] for r in runs])
+    blocks = np.array([[np.mean(r["per_cycle_velocity"][i : i + CYCLES])
+                        for i in range(0, PERSISTENCE_CYCLES, CYCLES)] for r in runs])  # fmt: skip
+    within = float(np.mean(np.std(blocks, axis=1, ddof=1)))
+    across = float(np.mean(np.std(blocks, axis=0, ddof=1)))
+    p = measure.pooled(long_means, long_errors)
+    rows = [{"seed": r["seed"], "mean_200_m_s": m, "stderr_200_m_s": e,
+             "blocks_of_20_m_s": " ".join(f"{b:.5g}" for b in bl)}
+            for r, m, e, bl in zip(runs, long_means, long_errors, blocks, strict=True)]  # fmt: skip
+    _write_csv(HERE / "persistence.csv", rows)
+    result = {
+        "fills": PERSISTENCE_RUNS, "cycles": PERSISTENCE_CYCLES,
+        "spread_of_200_cycle_means_m_s": float(np.std(long_means, ddof=1)),
+        "median_200_cycle_stderr_m_s": float(np.median(long_errors)),
+        "fill_to_fill_spread_200_m_s": p.between,
+        "block_spread_within_a_fill_m_s": within,
+        "block_spread_across_fills_m_s": across,
+    }  # fmt: skip
+    _record("persistence", result)
     print(json.dumps(result, indent=1))
 
 
@@ -296,7 +337,9 @@ def _record(name: str, result: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["coverage", "stiffness", "timestep", "figures"])
+    parser.add_argument(
+        "what", choices=["coverage", "persistence", "stiffness", "timestep", "figures"]
+    )
     parser.add_argument("bed", nargs="?", default="sphere-bed",
                         choices=["sphere-bed", "screw-trough"])  # fmt: skip
     parser.add_argument("--moduli", type=float, nargs="+", default=None)
@@ -304,6 +347,8 @@ def main() -> None:
     SCRATCH.mkdir(exist_ok=True)
     if args.what == "coverage":
         coverage()
+    elif args.what == "persistence":
+        persistence()
     elif args.what == "stiffness":
         stiffness(args.bed, args.moduli or MODULI)
     elif args.what == "timestep":
