@@ -207,6 +207,7 @@ def bulk_optimum(
     """Search the bulk optimum of a case; writes optimum.json, optimum.csv and optimum.png."""
     from dem.case import load_case
     from dem.pointmass.sweep import optimum as pointmass_optimum
+    from dem.provenance import record
     from dem.sweep import folder_name
 
     if over not in OVER:
@@ -288,6 +289,10 @@ def bulk_optimum(
                       objective: getattr(pm, objective)},
         "samples": [dict(zip(("x", "fill", "value", "stderr"), s, strict=True))
                     for s in result.samples],
+        "csv_columns": dict(zip(_csv_columns(over, objective), (
+            f"the scanned {over}", "the fill (replicate: run.seed = the case's seed + fill)",
+            f"the {objective} of the run", "its standard error"), strict=True)),
+        "provenance": record(),
     }  # fmt: skip
     replace_text(out / "optimum.json", json_text(summary, indent=2) + "\n")
     _write_csv(out / "optimum.csv", result.samples, over, objective)
@@ -295,12 +300,25 @@ def bulk_optimum(
     return summary
 
 
-def _write_csv(path: Path, samples, over: str, objective: str) -> None:
-    from dem.provenance import header_lines
+def _csv_columns(over: str, objective: str) -> list[str]:
+    """optimum.csv's columns: the scanned value, the fill, the objective and its stderr."""
+    from dem.io.tables import case_key_unit, column_name
 
-    lines = header_lines("dem optimum") + [f"{over},fill,{objective},stderr"]
-    lines += [f"{x!r},{rep},{v!r},{se!r}" for x, rep, v, se in samples]
-    path.write_text("\n".join(lines) + "\n")
+    x = column_name(over.split(".")[1], case_key_unit(over))
+    if objective == "velocity_norm":
+        return [x, "fill", "velocity_norm", "velocity_norm_stderr"]
+    return [x, "fill", "velocity_m_s", "velocity_stderr_m_s"]
+
+
+def _write_csv(path: Path, samples, over: str, objective: str) -> None:
+    """optimum.csv: one header line, one row per DEM run, 6 significant digits.
+
+    Its provenance and the meaning of its columns are in optimum.json beside it (the sidecar
+    of the same stem, ``provenance`` and ``csv_columns``).
+    """
+    from dem.io.tables import csv_text
+
+    replace_text(path, csv_text(_csv_columns(over, objective), samples))
 
 
 def replot(out: str | Path) -> None:

@@ -15,13 +15,13 @@
 - ``report.txt``: the numbers behind the figures.
 
 With several runs each gets a sub-folder named after its output folder, and the report folder
-also holds ``comparison.csv``, ``comparison.txt`` (one row per run) and ``comparison.png``.
+also holds ``comparison.csv`` (units in the column names, its provenance in ``comparison.json``
+beside it), ``comparison.txt`` (one row per run) and ``comparison.png``.
 Figures that lack their data (no ``results.h5``, no frames) are skipped and report.txt says so.
 """
 
 from __future__ import annotations
 
-import csv
 import io
 import json
 import math
@@ -430,12 +430,19 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
 
 
 def _comparison(rows: list[dict], dest: Path) -> list[Path]:
-    csv_path = dest / "comparison.csv"
-    with csv_path.open("w", newline="", encoding="ascii", errors="replace") as fh:
-        w = csv.DictWriter(fh, fieldnames=COMPARISON_COLUMNS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in COMPARISON_COLUMNS})
+    from dem.io.tables import SUMMARY_UNITS, summary_column, write_csv
+
+    names = [summary_column(k) for k in COMPARISON_COLUMNS]
+    meaning = {"run": "the run's output folder (its report sub-folder)",
+               "dem_over_pointmass": "mean_velocity_norm over pointmass_velocity_norm"}  # fmt: skip
+    columns = {
+        n: {"unit": SUMMARY_UNITS.get(k, ""), "meaning": meaning.get(k, f"summary.json {k}")}
+        for n, k in zip(names, COMPARISON_COLUMNS, strict=True)
+    }
+    csv_path = write_csv(
+        dest / "comparison.csv", names, ([r.get(k) for k in COMPARISON_COLUMNS] for r in rows),
+        meta={"columns": columns}, command="dem report",
+    )  # fmt: skip
     shown = (
         ("run", "run", "s"),
         ("angle", "phi", ".4g"),

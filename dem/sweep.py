@@ -26,7 +26,6 @@ Gathering reads each summary.json once: O(P).
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import math
@@ -300,7 +299,9 @@ def run_sweep(
                 cluster.close()
     out.mkdir(parents=True, exist_ok=True)
     rows = gather(points, failed)
-    csv_path = write_table(rows, out)
+    context = {"case_dir": str(case_dir.resolve()), "set": dict(sets),
+               "cycles": cycles, "frames": frames}  # fmt: skip
+    csv_path = write_table(rows, out, context)
     plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
     return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
             "failed": failed, "csv": str(csv_path)}  # fmt: skip
@@ -358,31 +359,51 @@ def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     return rows
 
 
-def write_table(rows: list[dict], out: Path) -> Path:
-    """``sweep.csv`` and ``sweep.h5`` (one dataset per column; numbers as float64, NaN for none)."""
+def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Path:
+    """``sweep.csv``, its sidecar ``sweep.json`` and ``sweep.h5`` (one dataset per column).
+
+    Column names carry their units (:func:`dem.io.tables.summary_column`: ``drive.angle_deg``,
+    ``mean_velocity_m_s``); the CSV has one header line and numbers to 6 significant digits
+    (:mod:`dem.io.tables`), the sidecar the provenance and what each column means. sweep.h5
+    has the same names, numbers as float64 (NaN for none), each dataset's unit as its ``unit``
+    attribute. ``context`` (the case folder, the swept values) goes into the sidecar too.
+    """
     import h5py
     import numpy as np
 
-    from dem.provenance import header_lines
+    from dem.io.tables import SUMMARY_UNITS as UNITS
+    from dem.io.tables import case_key_unit, summary_column, write_csv
 
     fields = list(rows[0])
-    path = out / f"{TABLE}.csv"
-    with open(path, "w", newline="") as fh:
-        fh.write("\n".join(header_lines("dem sweep")) + "\n")
-        writer = csv.DictWriter(fh, fieldnames=fields)
-        writer.writeheader()
-        writer.writerows(rows)
+    names = {f: summary_column(f) for f in fields}
+    if len(set(names.values())) < len(names):  # a swept key named like a summary column
+        names = {f: f for f in fields}
+    columns = [names[f] for f in fields]
+    units = {names[f]: UNITS.get(f, case_key_unit(f) if "." in f else "") for f in fields}
+    meaning = {
+        "point": "the point's folder under the sweep folder",
+        "status": "done, or failed (error says why)",
+        "error": "why the point failed",
+    }
+    meaning |= {names[f]: f"swept case key {f}" for f in fields if "." in f}
+    meaning |= {names[c]: f"summary.json {c}" for c in COLUMNS if c in names}
+    meta = dict(context or {})
+    meta["columns"] = {c: {"unit": units[c], "meaning": meaning.get(c, "")} for c in columns}
+    path = write_csv(out / f"{TABLE}.csv", columns, ([r[f] for f in fields] for r in rows),
+                     meta=meta, command="dem sweep")  # fmt: skip
     with h5py.File(out / f"{TABLE}.h5", "w") as h5:
         g = h5.create_group(TABLE)
         for f in fields:
             values = [r[f] for r in rows]
+            name = names[f]
             if all(isinstance(v, (int, float)) or v is None for v in values) and not all(
                 isinstance(v, bool) for v in values
             ):
-                g[f] = np.array([math.nan if v is None else float(v) for v in values])
+                g[name] = np.array([math.nan if v is None else float(v) for v in values])
             else:
-                g[f] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
-        g.attrs["columns"] = json.dumps(fields)
+                g[name] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
+            g[name].attrs["unit"] = units[name]
+        g.attrs["columns"] = json.dumps(columns)
     return path
 
 
