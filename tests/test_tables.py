@@ -102,3 +102,30 @@ def test_optimum_csv_has_units_in_its_header(tmp_path):
     assert (tmp_path / "o2.csv").read_text().splitlines()[0] == (
         "throw_number,fill,velocity_m_s,velocity_stderr_m_s"
     )
+
+
+def test_cycles_csv_holds_the_measured_cycles_of_results_h5(tmp_path):
+    from dem.io.hdf5 import ResultsWriter
+    from dem.io.tables import write_cycles_csv
+
+    w = ResultsWriter(tmp_path / "results.h5", case={}, versions={}, seed=0, timestep=1e-5)
+    velocities = [0.001, 0.002, 0.0101, 0.0102, 0.0097]
+    for k, v in enumerate(velocities):
+        w.append_cycle(cycle=k, time=(k + 1) / 60.0, mean_velocity=v, kinetic_energy=1e-6 * k,
+                       contacts=100 + k, measured=int(k >= 2))  # fmt: skip
+    w.close()
+    summary = {"case": "x", "velocity_scale": 0.1, "settle_cycles": 2, "mean_velocity": 0.01}
+    path = write_cycles_csv(tmp_path, summary)
+    assert path == tmp_path / "cycles.csv"
+    text = path.read_text()
+    _no_comments(text)
+    table = np.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    assert table.dtype.names == ("cycle", "time_s", "mean_velocity_m_s", "velocity_norm",
+                                 "kinetic_energy_J", "contacts")  # fmt: skip
+    assert list(table["cycle"]) == [2, 3, 4]
+    assert np.allclose(table["time_s"], [3 / 60, 4 / 60, 5 / 60], rtol=1e-9)
+    assert np.allclose(table["mean_velocity_m_s"], velocities[2:])
+    assert np.allclose(table["velocity_norm"], np.array(velocities[2:]) / 0.1)
+    side = json.loads((tmp_path / "cycles.json").read_text())
+    assert side["settle_cycles_left_out"] == 2 and side["measured_cycles"] == 3
+    assert side["columns"]["time_s"]["unit"] == "s"
