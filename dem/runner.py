@@ -758,7 +758,7 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     grain_id = sim.grain_id[s.body]
     vtk.write_frame(
         t, s.x, s.radius, s.v, grain_id, s.body, counts, orientation,
-        drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
+        drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
     )  # fmt: skip
     balance = None
     if sim.feeder is not None:
