@@ -278,10 +278,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
     files: list[Path] = []
     notes: list[str] = []
     case = summary.get("case", label)
-    title = (
-        f"{case}: phi = {_num(summary, 'angle'):g} deg, Gamma = {_num(summary, 'throw_number'):.3g}"
-        f", f = {_num(summary, 'frequency'):g} Hz"
-    )
+    title = f"{case}: " + plots.held_text(_drive_values(summary))
 
     series = _cycle_series(summary, results)
     if series is not None:
@@ -313,6 +310,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
             [pm],
             dest / "pointmass_comparison.png",
             bounded_norm=[bounded],
+            title=f"DEM and point mass, {title}",
         )  # fmt: skip
     )
 
@@ -348,7 +346,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
                 length,
                 width,
                 dest / "bed_snapshot.png",
-                title=f"{case}: last frame, t = {frame['time']:.4g} s",
+                title=f"{title}; last frame, t = {frame['time']:.4g} s",
             )  # fmt: skip
         )
         complete = "complete" if results["complete"] else "INCOMPLETE (run did not close it)"
@@ -467,13 +465,18 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
     txt_path.write_text(buf.getvalue(), encoding="ascii", errors="replace")
 
     labels, xlabel = [r["run"] for r in rows], ""
-    for key, name in (("angle", "vibration angle phi (deg)"), ("throw_number", "Gamma")):
+    for key in ("angle", "throw_number"):
         vals = [r.get(key) for r in rows]
         if all(isinstance(v, int | float) for v in vals) and len(set(vals)) == len(vals):
             others = [k for k in ("angle", "throw_number") if k != key]
             if all(len({r.get(k) for r in rows}) == 1 for k in others):
-                labels, xlabel = [float(v) for v in vals], name
+                labels, xlabel = [float(v) for v in vals], plots.axis_label(key)
                 break
+    same = [k for k in _DRIVE_KEYS if len({repr(r.get(k)) for r in rows}) == 1]
+    shared = {k: rows[0][k] for k in same if _is_number(rows[0].get(k))}
+    title = "DEM and point mass of the runs" + (
+        f" at {plots.held_text(shared)}" if shared else " (no drive value in common)"
+    )
     png = plots.pointmass_comparison_figure(
         labels,
         [_as_float(r.get("mean_velocity_norm")) for r in rows],
@@ -482,8 +485,18 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
         dest / "comparison.png",
         xlabel=xlabel,
         bounded_norm=[_as_float(r.get("pointmass_bounded_velocity_norm")) for r in rows],
+        title=title,
     )
     return [csv_path, txt_path, png]
+
+
+#: summary.json keys that say what a run's drive and material were, in a title's order.
+_DRIVE_KEYS = ("angle", "throw_number", "frequency", "friction", "inclination")
+
+
+def _drive_values(summary: dict) -> dict:
+    """The drive and material of a run by key, where summary.json gives them as numbers."""
+    return {k: summary[k] for k in _DRIVE_KEYS if _is_number(summary.get(k))}
 
 
 def _bounded_lines(paper, bounded) -> list[str]:

@@ -17,8 +17,9 @@ frames setting; a finished point without it, or of another case or other options
 before anything runs, naming the point and each key that differs, and left as it is. A point
 that fails (bad physics the guard stops, a lost worker) is reported with its error and leaves
 the others running; the sweep's exit status says that some failed. The results
-are gathered into ``sweep.csv``, ``sweep.h5`` (one dataset per column) and ``sweep.png`` (the
-bulk velocity against the first swept key, with the point-mass model beside it).
+are gathered into ``sweep.csv`` (units in the column names, its provenance in ``sweep.json``),
+``sweep.h5`` (one dataset per column) and ``sweep.png`` (the bulk velocity in m/s and normalised
+against the first swept key, the point-mass model beside it, the held values in the title).
 
 Cost: the points are independent; a grid of P points takes about P / workers times one run.
 Gathering reads each summary.json once: O(P).
@@ -43,6 +44,7 @@ COLUMNS = (
     "mean_velocity_norm",
     "mean_velocity_norm_stderr",
     "pointmass_velocity_norm",
+    "velocity_scale",
     "mass_flow_rate",
     "throw_number",
     "amplitude",
@@ -302,7 +304,7 @@ def run_sweep(
     context = {"case_dir": str(case_dir.resolve()), "set": dict(sets),
                "cycles": cycles, "frames": frames}  # fmt: skip
     csv_path = write_table(rows, out, context)
-    plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
+    plot(rows, out / f"{TABLE}.png", [k for k, _ in sets], held=held_values(case_dir, sets))
     return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
             "failed": failed, "csv": str(csv_path)}  # fmt: skip
 
@@ -407,16 +409,42 @@ def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Pat
     return path
 
 
-def plot(rows: list[dict], path: Path, keys: list[str]) -> None:
-    """V / (A omega cos phi) against the first swept key, a line per value of the others."""
-    import matplotlib
+def held_values(case_dir: Path, sets: list[tuple[str, list]]) -> dict:
+    """The base case's drive and material values that the sweep does not vary, by key.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    The drive as the case gives it (its throw number or its amplitude), the angle, frequency,
+    friction and inclination: what a sweep's figure names as held fixed.
+    """
+    from dem.case import load_case
 
+    case = load_case(case_dir)
+    d = case.drive
+    values = {
+        "drive.angle": d.angle,
+        f"drive.{d.given}": getattr(d, d.given),
+        "drive.frequency": d.frequency,
+        "material.friction": case.material.friction,
+        "trough.inclination": case.trough.inclination,
+    }
+    swept = {k.rsplit(".", 1)[-1] for k, _ in sets}
+    if swept & {"amplitude", "throw_number"}:  # setting one of them moves the other
+        swept |= {"amplitude", "throw_number"}
+    return {k: v for k, v in values.items() if k.rsplit(".", 1)[-1] not in swept}
+
+
+def plot(rows: list[dict], path: Path, keys: list[str], held: dict | None = None) -> None:
+    """The bulk velocity against the first swept key: in m/s (left) and normalised (right).
+
+    One line per value of the other swept keys; the point-mass model dashed beside each (its
+    velocity in m/s is its v_norm times the run's velocity scale A omega cos phi). The title
+    names the case's values the sweep held fixed (``held``, :func:`held_values`).
+    """
+    from dem import plots
+
+    plt = plots.plt
     first, rest = keys[0], keys[1:]
     numeric = all(isinstance(r[first], (int, float)) for r in rows)
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, (ax_v, ax_n) = plt.subplots(1, 2, figsize=(11, 4.4))
     groups: dict[tuple, list[dict]] = {}
     for r in rows:
         groups.setdefault(tuple(r[k] for k in rest), []).append(r)
@@ -425,20 +453,36 @@ def plot(rows: list[dict], path: Path, keys: list[str]) -> None:
         if not sel:
             continue
         xs = [r[first] if numeric else j for j, r in enumerate(sel)]
-        name = ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(rest, label, strict=True)) or "bed"
-        ax.errorbar(xs, [r["mean_velocity_norm"] for r in sel],
-                    yerr=[r["mean_velocity_norm_stderr"] for r in sel], fmt="o-", capsize=2,
-                    color=f"C{i}", label=f"DEM {name}")  # fmt: skip
-        ax.plot(xs, [r["pointmass_velocity_norm"] for r in sel], "--", color=f"C{i}",
-                lw=1, label=f"point mass {name}")  # fmt: skip
-        if not numeric:
-            ax.set_xticks(xs, [str(r[first]) for r in sel])
-    ax.set_xlabel(first)
-    ax.set_ylabel("v / (A omega cos phi)")
+        name = plots.held_text(dict(zip(rest, label, strict=True)))
+        scale = [_number(r.get("velocity_scale")) for r in sel]
+        pm_norm = [_number(r.get("pointmass_velocity_norm")) for r in sel]
+        for ax, key, pm in (
+            (ax_v, "mean_velocity", [p * v for p, v in zip(pm_norm, scale, strict=True)]),
+            (ax_n, "mean_velocity_norm", pm_norm),
+        ):
+            ax.errorbar(xs, [_number(r[key]) for r in sel],
+                        yerr=[_number(r[key + "_stderr"]) for r in sel], fmt="o-", capsize=2,
+                        color=f"C{i}", label="DEM" + (f", {name}" if name else ""))  # fmt: skip
+            ax.plot(xs, pm, "--", color=f"C{i}", lw=1,
+                    label="point mass" + (f", {name}" if name else ""))  # fmt: skip
+            if not numeric:
+                ax.set_xticks(xs, [str(r[first]) for r in sel])
+    for ax in (ax_v, ax_n):
+        ax.set_xlabel(plots.axis_label(first))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    ax_v.set_ylabel(plots.VELOCITY_LABEL)
+    ax_n.set_ylabel(plots.NORM_LABEL)
     failed = sum(r["status"] != "done" for r in rows)
-    title = f"dem sweep: {len(rows) - failed} points" + (f", {failed} failed" if failed else "")
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    varied = ", ".join(plots.QUANTITY.get(k.rsplit(".", 1)[-1], (k,))[0] for k in keys)
+    title = f"Bulk conveying velocity over {varied}"
+    if held:
+        title += f"; held: {plots.held_text(held)}"
+    if failed:
+        title += f" ({failed} of {len(rows)} points failed: not drawn)"
+    fig.suptitle(plots.wrap_title(title, fig, 10), fontsize=10)
+    plots.save(fig, path)
+
+
+def _number(v) -> float:
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else math.nan

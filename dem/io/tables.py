@@ -165,6 +165,7 @@ def write_sidecar(path: Path, meta: Mapping | None = None, *, command: str | Non
 SUMMARY_UNITS = {
     "mean_velocity": "m/s",
     "mean_velocity_stderr": "m/s",
+    "velocity_scale": "m/s",
     "mass_flow_rate": "kg/s",
     "mass_flow_rate_per_width": "kg/(s m)",
     "amplitude": "m",
