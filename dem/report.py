@@ -379,7 +379,11 @@ def _fmt(v, spec: str = ".4g") -> str:
     return str(v)
 
 
-def _feeder_lines(f: dict | None) -> list[str]:
+def feeder_lines(f: dict | None) -> list[str]:
+    """A finite feeder's discharge and grain balance as report.txt and ``dem run`` print them.
+
+    ``f`` is summary.json's ``feeder`` (None or empty for a periodic section: no lines).
+    """
     if not f:
         return []
     return [
@@ -414,7 +418,7 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
         *_bounded_lines(g("pointmass_velocity_norm"), g("pointmass_bounded_velocity_norm")),
         f"mass flow       {_fmt(g('mass_flow_rate'))} kg/s "
         f"({_fmt(g('mass_flow_rate_per_width'))} kg/(s m))",
-        *_feeder_lines(g("feeder")),
+        *feeder_lines(g("feeder")),
         "",
         f"timestep        {_fmt(g('timestep'))} s (limit {_fmt(g('timestep_limit'))} s), "
         f"{_fmt(g('steps'))} steps",
