@@ -394,6 +394,7 @@ def _pointmass_parser(sub) -> None:
 
 def _cmd_run(args) -> int:
     from dem.case import load_case
+    from dem.report import feeder_lines
     from dem.runner import RunInterrupted, run_case
 
     case = load_case(args.case_dir)
@@ -421,6 +422,8 @@ def _cmd_run(args) -> int:
     for key in keys:
         if key in summary:
             print(f"{key:26s} {summary[key]}")
+    for line in feeder_lines(summary.get("feeder")):  # the discharge: a feeder's answer
+        print(line)
     print(f"wrote {out / 'summary.json'}")
     return 0
 

@@ -142,3 +142,24 @@ def test_screw_frames_have_a_grains_block(tmp_path):
         d = spheres.points[spheres["clump_id"] == g] - grains.points[g]
         d[:, 0] -= case.trough.length * np.round(d[:, 0] / case.trough.length)
         assert np.max(np.linalg.norm(d, axis=1)) < 0.016
+
+
+def test_a_feeder_run_prints_its_discharge_and_tables_it_per_cycle(tmp_path, capsys):
+    from test_feeder import FEEDER
+
+    from dem.cli import main
+
+    case_dir = write_case(tmp_path / "case", FEEDER)
+    out = tmp_path / "out"
+    assert main(["run", str(case_dir), "--out", str(out), "--threads", "1", "--no-frames"]) == 0
+    printed = capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    f = summary["feeder"]
+    line = [x for x in printed.splitlines() if x.startswith("discharge")]
+    assert len(line) == 1 and "kg/s" in line[0] and f"{f['discharge_rate']:.4g}" in line[0]
+    with (out / "cycles.csv").open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == summary["cycles"]
+    rate = np.mean([float(r["discharge_rate_kg_s"]) for r in rows])
+    assert rate == pytest.approx(f["discharge_rate"], rel=1e-5, abs=1e-9)
+    assert {"mass_in_trough_kg", "grains_in_trough", "feed_backlog"} <= set(rows[0])
