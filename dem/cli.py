@@ -420,6 +420,7 @@ def _cmd_run(args) -> int:
 def _print_summary(s: dict) -> None:
     """The answer of a run, each value with its unit and the digits its error allows."""
     from dem.measure import with_error
+    from dem.report import feeder_lines
 
     def line(label: str, text: str) -> None:
         print(f"{label:<18s} {text}")
@@ -445,10 +446,8 @@ def _print_summary(s: dict) -> None:
                              / (s["mean_velocity"] or float("nan"))), "kg/s")  # fmt: skip
     line("mass flow", f"{flow} through the section ({s['mass_flow_rate_per_width']:.3g} kg/s "
          "per m of width)")  # fmt: skip
-    feeder = s.get("feeder")
-    if feeder:
-        line("discharge", with_error(feeder["discharge_rate"], feeder["discharge_rate_stderr"],
-                                     "kg/s") + " at the trough's end")  # fmt: skip
+    for text in feeder_lines(s.get("feeder")):  # the discharge: a feeder's answer
+        print(text)
     rate = s.get("particle_steps_per_s")
     line("cost", f"dt {s['timestep']:.3g} s, {s['steps']} steps, {s['wall_time_s']:.0f} s"
          + (f", {rate:.3g} particle-steps/s" if rate else ""))  # fmt: skip

@@ -207,6 +207,7 @@ def bulk_optimum(
     """Search the bulk optimum of a case; writes optimum.json, optimum.csv and optimum.png."""
     from dem.case import load_case
     from dem.pointmass.sweep import optimum as pointmass_optimum
+    from dem.provenance import record
     from dem.sweep import folder_name
 
     if over not in OVER:
@@ -288,6 +289,11 @@ def bulk_optimum(
                       objective: getattr(pm, objective)},
         "samples": [dict(zip(("x", "fill", "value", "stderr"), s, strict=True))
                     for s in result.samples],
+        "plateau": plateau(result),
+        "csv_columns": dict(zip(_csv_columns(over, objective), (
+            f"the scanned {over}", "the fill (replicate: run.seed = the case's seed + fill)",
+            f"the {objective} of the run", "its standard error"), strict=True)),
+        "provenance": record(),
     }  # fmt: skip
     replace_text(out / "optimum.json", json_text(summary, indent=2) + "\n")
     _write_csv(out / "optimum.csv", result.samples, over, objective)
@@ -295,12 +301,25 @@ def bulk_optimum(
     return summary
 
 
-def _write_csv(path: Path, samples, over: str, objective: str) -> None:
-    from dem.provenance import header_lines
+def _csv_columns(over: str, objective: str) -> list[str]:
+    """optimum.csv's columns: the scanned value, the fill, the objective and its stderr."""
+    from dem.io.tables import case_key_unit, column_name
 
-    lines = header_lines("dem optimum") + [f"{over},fill,{objective},stderr"]
-    lines += [f"{x!r},{rep},{v!r},{se!r}" for x, rep, v, se in samples]
-    path.write_text("\n".join(lines) + "\n")
+    x = column_name(over.split(".")[1], case_key_unit(over))
+    if objective == "velocity_norm":
+        return [x, "fill", "velocity_norm", "velocity_norm_stderr"]
+    return [x, "fill", "velocity_m_s", "velocity_stderr_m_s"]
+
+
+def _write_csv(path: Path, samples, over: str, objective: str) -> None:
+    """optimum.csv: one header line, one row per DEM run, 6 significant digits.
+
+    Its provenance and the meaning of its columns are in optimum.json beside it (the sidecar
+    of the same stem, ``provenance`` and ``csv_columns``).
+    """
+    from dem.io.tables import csv_text
+
+    replace_text(path, csv_text(_csv_columns(over, objective), samples))
 
 
 def replot(out: str | Path) -> None:
@@ -332,30 +351,97 @@ def _pointmass(case, over, hold, bounds, pointmass_optimum):
     )  # fmt: skip
 
 
+def _estimates(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per scanned value: (x, mean over its fills, standard error), as the search weighs them.
+
+    The error is the fills' own standard errors combined, or the scatter of the fills over
+    sqrt(fills) where that is larger (:func:`maximize_noisy`).
+    """
+    runs: dict[float, list[tuple[float, float]]] = {}
+    for x, _, v, se in samples:
+        runs.setdefault(float(x), []).append((float(v), float(se)))
+    xs = np.array(sorted(runs))
+    m, s = np.zeros(xs.size), np.zeros(xs.size)
+    for j, x in enumerate(xs):
+        vs = runs[x]
+        m[j] = np.mean([v for v, _ in vs])
+        s[j] = math.sqrt(sum(se**2 for _, se in vs)) / len(vs)
+        if len(vs) > 1:
+            s[j] = max(s[j], float(np.std([v for v, _ in vs], ddof=1)) / math.sqrt(len(vs)))
+    return xs, m, s
+
+
+def plateau(result: NoisyOptimum, z: float = 2.0) -> dict:
+    """The range of the scanned value where the velocity is within its error of the maximum.
+
+    A weighted parabola (weights 1 / stderr^2) is fitted through the top of the curve: the
+    scanned values whose mean is within 5 typical standard errors of the best mean (at least the
+    3 nearest the best). Where it curves down with its vertex among them, the plateau is where
+    the parabola is within one typical standard error s of a run (the median over those values)
+    of its maximum: x_v +- sqrt(s / |c2|), kept inside the scanned values. Using the fitted
+    maximum, not the best mean, keeps one lucky run from narrowing the band to itself.
+    Otherwise (the top is flat within the noise) it is the span of the scanned values whose mean
+    is within ``z`` combined standard errors of the best, the search's "level with the best".
+
+    Returns ``{"range": [lo, hi], "rule": text, "parabola": [c2, c1, c0] or None}`` and, with a
+    parabola, ``"fitted_over"``: the span of the values it was fitted through.
+    """
+    xs, m, s = _estimates(result.samples)
+    s = np.maximum(s, 1e-12)
+    i = int(np.argmax(m))
+    typical = float(np.median(s))
+    top = np.flatnonzero(m >= m[i] - 5.0 * typical)
+    if top.size < 3:
+        top = np.argsort(np.abs(xs - xs[i]))[: min(3, xs.size)]
+    if top.size >= 3:
+        c2, c1, c0 = np.polyfit(xs[top], m[top], 2, w=1.0 / s[top])
+        xv = -c1 / (2.0 * c2) if c2 < 0 else math.nan
+        if c2 < 0 and xs[top].min() <= xv <= xs[top].max():
+            err = float(np.median(s[top]))
+            half = math.sqrt(err / -c2)
+            lo, hi = float(max(xv - half, xs.min())), float(min(xv + half, xs.max()))
+            return {"range": [lo, hi], "parabola": [float(c2), float(c1), float(c0)],
+                    "fitted_over": [float(xs[top].min()), float(xs[top].max())],
+                    "rule": f"a weighted parabola through the top of the curve within a run's "
+                            f"standard error ({err:.3g}) of its maximum"}  # fmt: skip
+    level = xs[m >= m[i] - z * np.hypot(s, s[i])]
+    return {"range": [float(level.min()), float(level.max())], "parabola": None,
+            "rule": f"the scanned values whose mean is within {z:g} combined standard errors "
+                    "of the best (no maximum stands out)"}  # fmt: skip
+
+
 def _plot(path: Path, result: NoisyOptimum, pm, over: str, objective: str, name: str) -> None:
-    import matplotlib
+    from dem import plots
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    plt = plots.plt
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    unit = plots.QUANTITY[over.split(".")[1]][2]
+    band = plateau(result)
+    lo, hi = band["range"]
+    label = f"plateau {lo:.3g} .. {hi:.3g} {unit}: within the error of the maximum"
+    ax.axvspan(lo, hi, color="C2", alpha=0.15, label=label)
     x = np.array([s[0] for s in result.samples])
     ax.errorbar(x, [s[2] for s in result.samples], yerr=[s[3] for s in result.samples], fmt="o",
-                color="C0", capsize=2, label="DEM runs (fills)")  # fmt: skip
-    flat = "flat within the noise" in result.reason
-    u = result.uncertainty
-    band = result.bracket if flat else (result.x - u, result.x + u)
-    ax.axvspan(*band, color="C0", alpha=0.15, label="level with the best" if flat else None)
-    ax.axvline(
-        result.x, color="C0", label=f"bulk optimum {result.x:.3g} +- {result.uncertainty:.2g}"
-    )
+                color="C0", capsize=2, ms=4, label="DEM runs (each fill, +-1 s.e.)")  # fmt: skip
+    if band["parabola"] is not None:
+        grid = np.linspace(*band["fitted_over"], 100)
+        ax.plot(grid, np.polyval(band["parabola"], grid), "-", color="C2", lw=1,
+                label="weighted parabola through the top")  # fmt: skip
+    ax.errorbar([result.x], [result.value], xerr=[result.uncertainty], fmt="D", color="C3",
+                capsize=4, ms=6, label=f"bulk optimum {result.x:.3g} +- "
+                f"{result.uncertainty:.2g} {unit}")  # fmt: skip
     curve_x = pm.curve["angle" if over == "drive.angle" else "throw_number"]
     ax.plot(curve_x, pm.curve[objective], "--", color="C1", label="point mass")
-    ax.axvline(pm.value, color="C1", ls=":", label=f"point-mass optimum {pm.value:.3g}")
-    ax.set_xlabel(over)
-    ax.set_ylabel("v / (A omega cos phi)" if objective == "velocity_norm" else "v, m/s")
-    ax.set_title(f"{name}: {result.reason}", fontsize=9)
+    ax.axvline(pm.value, color="C1", ls=":", label=f"point-mass optimum {pm.value:.3g} {unit}")
+    ax.set_xlim(min(x.min(), lo) - 0.05 * np.ptp(x), max(x.max(), hi) + 0.05 * np.ptp(x))
+    ax.set_xlabel(plots.axis_label(over))
+    ax.set_ylabel(plots.NORM_LABEL if objective == "velocity_norm" else plots.VELOCITY_LABEL)
+    scanned = over.split(".")[1]
+    key = pm.hold if pm.hold in pm.held else "peak_acceleration"
+    fixed = plots.held_text({key: pm.held.get(key)})
+    others = plots.held_text({k: v for k, v in pm.held.items() if k not in (key, scanned)})
+    symbol = plots.QUANTITY[scanned][1]
+    plots.set_title(ax, f"{name}: bulk optimum {symbol} at fixed {fixed}\n{others}")
+    ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    plots.save(fig, path)

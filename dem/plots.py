@@ -1,5 +1,14 @@
-"""Matplotlib figures (Agg backend, PNG files); no computation here."""
+"""Matplotlib figures (Agg backend, PNG files); no computation here.
 
+Every figure states on its axes what is plotted and in which unit ("vibration angle phi (deg)",
+"conveying velocity v (m/s)", "(-)" for a dimensionless number: :func:`axis_label`), and in its
+title what was held fixed (:func:`held_text`); long titles are wrapped and every figure is laid
+out before it is written (:func:`save`), so nothing is cut off at an edge.
+"""
+
+import re
+import textwrap
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -7,12 +16,98 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+#: Quantities by key (a case key's last part, a point-mass input): (words with the symbol,
+#: the symbol alone, the unit; "" dimensionless).
+QUANTITY = {
+    "angle": ("vibration angle phi", "phi", "deg"),
+    "throw_number": ("throw number Gamma", "Gamma", ""),
+    "friction": ("friction coefficient mu", "mu", ""),
+    "inclination": ("inclination alpha", "alpha", "deg"),
+    "eps_t": ("tangential restitution eps_t", "eps_t", ""),
+    "eps_n": ("normal restitution eps_n", "eps_n", ""),
+    "restitution_tangential": ("tangential restitution eps_t", "eps_t", ""),
+    "restitution_normal": ("normal restitution eps_n", "eps_n", ""),
+    "frequency": ("drive frequency f", "f", "Hz"),
+    "amplitude": ("drive amplitude A", "A", "m"),
+    "peak_acceleration": ("peak trough acceleration A omega^2", "A omega^2", "g"),
+    "drive_velocity": ("drive velocity A omega", "A omega", "m/s"),
+    "impact": ("landing law", "landing law", ""),
+    "count": ("grains", "grains", ""),
+    "radius": ("grain radius r", "r", "m"),
+    "density": ("density rho", "rho", "kg/m^3"),
+    "youngs_modulus": ("Young's modulus E", "E", "Pa"),
+    "stiffness": ("normal stiffness k_n", "k_n", "N/m"),
+}
+#: Axis text of the conveying velocity, in m/s and normalised.
+VELOCITY_LABEL = "conveying velocity v (m/s)"
+NORM_LABEL = "normalised velocity\nv / (A omega cos phi) (-)"
 
-def _save(fig, path: str | Path) -> Path:
-    """Lay out, write and close a figure; returns the path."""
-    fig.tight_layout()
+
+def axis_label(key: str) -> str:
+    """Axis text of a quantity with its unit: ``drive.angle`` -> "vibration angle phi (deg)".
+
+    A key not in :data:`QUANTITY` keeps its name, with the unit of
+    :data:`dem.quantities.QUANTITIES` where that table knows it; "(-)" marks a dimensionless
+    number.
+    """
+    name = key.rsplit(".", 1)[-1]
+    if name in QUANTITY:
+        words, _, unit = QUANTITY[name]
+        return f"{words} ({unit or '-'})"
+    from dem.quantities import QUANTITIES
+
+    q = QUANTITIES.get(name)
+    return f"{key} ({(q.unit if q is not None else '') or '-'})"
+
+
+def held_text(values: dict) -> str:
+    """Each held value with its symbol and unit: "Gamma = 1.8, f = 60 Hz, mu = 0.35".
+
+    An amplitude is given in mm; a word (the landing law) as it is; a key not in
+    :data:`QUANTITY` by its name.
+    """
+    parts = []
+    for key, v in values.items():
+        name = key.rsplit(".", 1)[-1]
+        _, symbol, unit = QUANTITY.get(name, (name, name, ""))
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            text = f"{symbol} {v}"
+        else:
+            if unit == "m" and 0 < abs(v) < 0.1:
+                v, unit = 1e3 * v, "mm"
+            text = f"{symbol} = {v:.4g}" + (f" {unit}" if unit else "")
+        parts.append(text.replace(" ", NBSP))  # a wrapped title keeps "phi = 25 deg" whole
+    return ", ".join(parts)
+
+
+#: A space that a wrapped title does not break at.
+NBSP = "\u00a0"
+
+
+def wrap_title(text: str, fig=None, fontsize: float = 9.0) -> str:
+    """``text`` wrapped to the figure's width (about 0.55 fontsize per character)."""
+    width_in = fig.get_figwidth() if fig is not None else 6.5
+    chars = max(30, int(width_in * 72.0 / (0.55 * fontsize)) - 4)
+    return "\n".join(textwrap.fill(line, chars) for line in text.split("\n"))
+
+
+def set_title(ax, text: str, fontsize: float = 9.0) -> None:
+    """A title wrapped to the figure's width."""
+    ax.set_title(wrap_title(text, ax.figure, fontsize), fontsize=fontsize)
+
+
+def save(fig, path: str | Path) -> Path:
+    """Lay out, write and close a figure; returns the path.
+
+    Laid out so that titles, labels and legends stay inside the figure (tight layout, or the
+    figure's constrained layout), and written with a tight bounding box besides.
+    """
+    if not fig.get_constrained_layout():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # tight_layout's warning on an odd axes mix
+            fig.tight_layout()
     path = Path(path)
-    fig.savefig(path)
+    fig.savefig(path, bbox_inches="tight", pad_inches=0.08)
     plt.close(fig)
     return path
 
@@ -24,17 +119,23 @@ def optimum_figure(opt, path: str | Path) -> Path:
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
     ax.plot(x, y, color="C0")
     best = opt.velocity_norm if opt.objective == "velocity_norm" else opt.velocity
-    ax.plot([opt.value], [best], "o", color="C3", label=f"optimum {opt.value:.3g}")
-    ax.axvspan(*opt.plateau, color="C0", alpha=0.12, label="within 90%")
-    ax.set_xlabel("vibration angle phi (deg)" if opt.over == "angle" else "throw number Gamma")
-    ax.set_ylabel("v / (A omega cos phi)" if opt.objective == "velocity_norm" else "v (m/s)")
-    held = ", ".join(
-        f"{k}={v:g}" if isinstance(v, int | float) else f"{k}={v}" for k, v in opt.held.items()
-    )
-    ax.set_title(f"holding {opt.hold}: {held}", fontsize=8)
+    unit = QUANTITY[opt.over][2]
+    ax.plot([opt.value], [best], "o", color="C3", label=f"optimum {opt.value:.3g} {unit}".strip())
+    ax.axvspan(*opt.plateau, color="C0", alpha=0.12, label="within 90 % of the optimum")
+    ax.set_xlabel(axis_label(opt.over))
+    ax.set_ylabel(NORM_LABEL if opt.objective == "velocity_norm" else VELOCITY_LABEL)
+    symbol = QUANTITY[opt.over][1]
+    main = held_text({k: v for k, v in opt.held.items() if k == _HELD_KEY.get(opt.hold)})
+    rest = held_text({k: v for k, v in opt.held.items() if k != _HELD_KEY.get(opt.hold)})
+    set_title(ax, f"point mass: optimum {symbol} at fixed {main or opt.hold}\n{rest}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
+
+
+#: The key of ``Optimum.held`` that ``hold`` names.
+_HELD_KEY = {"acceleration": "peak_acceleration"}
+_HELD_KEY |= {k: k for k in ("throw_number", "amplitude", "frequency", "drive_velocity")}
 
 
 def velocity_cycles_figure(
@@ -71,12 +172,13 @@ def velocity_cycles_figure(
     ax.plot(cycle[measured], velocity[measured], "o-", ms=3, lw=0.8, color="C0", label="cycle")
     ax.plot(cycle, m, color="C3", label="running mean")
     ax.fill_between(cycle, m - s, m + s, color="C3", alpha=0.2, label="+-1 standard error")
-    ax.set_xlabel("drive cycle")
-    ax.set_ylabel("mean x-velocity v (m/s)")
-    ax.set_title(title, fontsize=9)
+    ax.set_xlabel("drive cycle (-)")
+    ax.xaxis.get_major_locator().set_params(integer=True)
+    ax.set_ylabel("cycle's mean x-velocity v (m/s)")
+    set_title(ax, title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def discharge_figure(
@@ -118,20 +220,20 @@ def discharge_figure(
                             color="C3", alpha=0.2, label="+-1 standard error")  # fmt: skip
     if feed_rate:
         ax.axhline(feed_rate, color="k", ls="--", lw=1.0, label=f"feed {feed_rate:.4g} kg/s")
-    ax.set_ylabel("discharge (kg/s)")
-    ax.set_title(title, fontsize=9)
+    ax.set_ylabel("discharge rate (kg/s)")
+    set_title(ax, title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     bx.plot(time, 1e3 * np.asarray(mass_in_trough), "o-", ms=3, lw=0.8, color="C2")
     bx.set_xlabel("drive time (s)")
     bx.set_ylabel("mass in the trough (g)")
     bx.grid(alpha=0.3)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def pointmass_comparison_figure(
     labels, dem_norm, dem_stderr, pointmass_norm, path: str | Path, *, xlabel: str = "",
-    bounded_norm=None,
+    bounded_norm=None, title: str = "",
 ) -> Path:  # fmt: skip
     """DEM normalised velocity v / (A omega cos phi) with +-1 s.e. bars beside the point mass.
 
@@ -141,7 +243,8 @@ def pointmass_comparison_figure(
         dem_stderr: Its standard error, (R,) (nan: no bar).
         pointmass_norm: Point-mass prediction per run, (R,) (nan: not available).
         path: PNG file.
-        xlabel: Axis label (for numeric labels).
+        xlabel: Axis label with its unit (for numeric labels; runs by name: "run").
+        title: What the runs share (drive, material), wrapped to the figure.
         bounded_norm: The Coulomb-bounded point mass per run, (R,) (the DEM's reference), drawn
             where it differs from ``pointmass_norm`` (the paper's Eq. 12) by more than 1e-3.
 
@@ -183,13 +286,35 @@ def pointmass_comparison_figure(
             ax.text(xi - w / 2, yi + ei, f"{yi:.3g}", ha="center", va="bottom", fontsize=8)
             if np.isfinite(p):
                 ax.text(xi + w / 2, p, f"{p:.3g}", ha="center", va="bottom", fontsize=8)
-        ax.set_xticks(x, [str(v) for v in labels], fontsize=8)
+        # a bar pair's width in characters of 8 pt (about 4.8 pt each), the axes 65 % wide
+        chars = max(10, int(0.65 * 0.9 * 72 * fig.get_figwidth() / len(y) / 4.8))
+        ticks = [_wrap_name(str(v), chars) for v in labels]
+        ax.set_xticks(x, ticks, fontsize=8)
         ax.set_xlim(-0.7, len(y) - 0.3)
         ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_ylabel("v / (A omega cos phi)")
+        ax.set_xlabel(xlabel or "run (output folder)")
+    ax.set_ylabel(NORM_LABEL)
+    if title:
+        set_title(ax, title)
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=8)
-    return _save(fig, path)
+    if not numeric:  # room above the bars and their numbers for the legend
+        tops = [v for v in (*(y + e), *pm, *bounded) if np.isfinite(v)]
+        if tops and max(tops) > 0:
+            ax.set_ylim(top=1.35 * max(tops))
+        ax.legend(fontsize=8, loc="upper right", ncols=2 if len(y) > 1 else 1)
+    else:
+        ax.legend(fontsize=8)
+    return save(fig, path)
+
+
+def _wrap_name(text: str, chars: int) -> str:
+    """A folder name on lines of at most ``chars``, broken after "_" where it can be."""
+    lines = [""]
+    for piece in re.split(r"(?<=_)", text):
+        if lines[-1] and len(lines[-1]) + len(piece) > chars:
+            lines.append("")
+        lines[-1] += piece
+    return "\n".join(textwrap.fill(line, chars) if len(line) > chars else line for line in lines)
 
 
 def bed_snapshot_figure(
@@ -249,17 +374,14 @@ def bed_snapshot_figure(
     a1.set_ylim(0.0, 1.05 * top)
     a1.axhline(0.0, color="k", lw=1.0)
     a1.set_ylabel("z (m)")
-    a1.set_title(title, fontsize=9)
+    set_title(a1, title)
     a2.set_ylim(-0.5 * width, 0.5 * width)
     a2.axhline(-0.5 * width, color="k", lw=1.0)
     a2.axhline(0.5 * width, color="k", lw=1.0)
     a2.set_ylabel("y (m)")
-    a2.set_xlabel("x (m)")
+    a2.set_xlabel("x, along the trough (m)")
     fig.colorbar(coll, ax=[a1, a2], label="v_x relative to the trough (m/s)", shrink=0.8)
-    path = Path(path)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save(fig, path)
 
 
 def calibration_figure(cal, friction: float, path: str | Path) -> Path:
@@ -287,12 +409,13 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
     grid = np.linspace(5.0, 89.0, 200)
     bound = 1.0 - friction / np.tan(np.radians(grid))
     ax.plot(grid, bound, "--", color="C2", lw=1, label="Coulomb bound 1 - mu cot(theta)")
-    ax.set_xlabel("incidence theta (deg from the floor normal)")
-    ax.set_ylabel("eps_t (centre of mass, after / before)")
+    ax.set_xlabel("incidence theta from the floor normal (deg)")
+    ax.set_ylabel("tangential restitution eps_t, centre of mass (-)")
     ax.set_ylim(min(0.0, np.nanmin(cal.fan_before), np.nanmin(cal.fan_after)) - 0.05, 1.05)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title(
-        f"{len(theta)} landings of the point mass; residual {cal.residual:+.3f}", fontsize=8
-    )
-    return _save(fig, path)
+    set_title(
+        ax, f"eps_t of virtual impacts, mu = {friction:.4g}: {len(theta)} point-mass landings, "
+        f"residual {cal.residual:+.3f}",
+    )  # fmt: skip
+    return save(fig, path)

@@ -15,13 +15,13 @@
 - ``report.txt``: the numbers behind the figures.
 
 With several runs each gets a sub-folder named after its output folder, and the report folder
-also holds ``comparison.csv``, ``comparison.txt`` (one row per run) and ``comparison.png``.
+also holds ``comparison.csv`` (units in the column names, its provenance in ``comparison.json``
+beside it), ``comparison.txt`` (one row per run) and ``comparison.png``.
 Figures that lack their data (no ``results.h5``, no frames) are skipped and report.txt says so.
 """
 
 from __future__ import annotations
 
-import csv
 import io
 import json
 import math
@@ -278,10 +278,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
     files: list[Path] = []
     notes: list[str] = []
     case = summary.get("case", label)
-    title = (
-        f"{case}: phi = {_num(summary, 'angle'):g} deg, Gamma = {_num(summary, 'throw_number'):.3g}"
-        f", f = {_num(summary, 'frequency'):g} Hz"
-    )
+    title = f"{case}: " + plots.held_text(_drive_values(summary))
 
     series = _cycle_series(summary, results)
     if series is not None:
@@ -313,6 +310,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
             [pm],
             dest / "pointmass_comparison.png",
             bounded_norm=[bounded],
+            title=f"DEM and point mass, {title}",
         )  # fmt: skip
     )
 
@@ -348,7 +346,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
                 length,
                 width,
                 dest / "bed_snapshot.png",
-                title=f"{case}: last frame, t = {frame['time']:.4g} s",
+                title=f"{title}; last frame, t = {frame['time']:.4g} s",
             )  # fmt: skip
         )
         complete = "complete" if results["complete"] else "INCOMPLETE (run did not close it)"
@@ -381,14 +379,19 @@ def _fmt(v, spec: str = ".4g") -> str:
     return str(v)
 
 
-def _feeder_lines(f: dict | None) -> list[str]:
+def feeder_lines(f: dict | None) -> list[str]:
+    """A finite feeder's discharge and grain balance as report.txt and ``dem run`` print them.
+
+    ``f`` is summary.json's ``feeder`` (None or empty for a periodic section: no lines).
+    """
     if not f:
         return []
+    from dem.measure import with_error
+
     return [
-        f"discharge       {_fmt(f.get('discharge_rate'))} +- "
-        f"{_fmt(f.get('discharge_rate_stderr'))} kg/s at x = {_fmt(f.get('length'))} m "
-        f"(feed {_fmt(f.get('feed_rate'))} kg/s)",
-        f"grain balance   {_fmt(f.get('grains_inserted'))} inserted = "
+        f"discharge          {with_error(f.get('discharge_rate'), f.get('discharge_rate_stderr'))}"
+        f" kg/s at x = {_fmt(f.get('length'))} m (feed {_fmt(f.get('feed_rate'))} kg/s)",
+        f"grain balance      {_fmt(f.get('grains_inserted'))} inserted = "
         f"{_fmt(f.get('grains_in_trough'))} in the trough + {_fmt(f.get('grains_discharged'))} "
         f"discharged; feed backlog {_fmt(f.get('feed_backlog'))}",
     ]
@@ -416,7 +419,7 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
         *_bounded_lines(g("pointmass_velocity_norm"), g("pointmass_bounded_velocity_norm")),
         f"mass flow       {_fmt(g('mass_flow_rate'))} kg/s "
         f"({_fmt(g('mass_flow_rate_per_width'))} kg/(s m))",
-        *_feeder_lines(g("feeder")),
+        *feeder_lines(g("feeder")),
         "",
         f"timestep        {_fmt(g('timestep'))} s (limit {_fmt(g('timestep_limit'))} s), "
         f"{_fmt(g('steps'))} steps",
@@ -430,12 +433,19 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
 
 
 def _comparison(rows: list[dict], dest: Path) -> list[Path]:
-    csv_path = dest / "comparison.csv"
-    with csv_path.open("w", newline="", encoding="ascii", errors="replace") as fh:
-        w = csv.DictWriter(fh, fieldnames=COMPARISON_COLUMNS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in COMPARISON_COLUMNS})
+    from dem.io.tables import SUMMARY_UNITS, summary_column, write_csv
+
+    names = [summary_column(k) for k in COMPARISON_COLUMNS]
+    meaning = {"run": "the run's output folder (its report sub-folder)",
+               "dem_over_pointmass": "mean_velocity_norm over pointmass_velocity_norm"}  # fmt: skip
+    columns = {
+        n: {"unit": SUMMARY_UNITS.get(k, ""), "meaning": meaning.get(k, f"summary.json {k}")}
+        for n, k in zip(names, COMPARISON_COLUMNS, strict=True)
+    }
+    csv_path = write_csv(
+        dest / "comparison.csv", names, ([r.get(k) for k in COMPARISON_COLUMNS] for r in rows),
+        meta={"columns": columns}, command="dem report",
+    )  # fmt: skip
     shown = (
         ("run", "run", "s"),
         ("angle", "phi", ".4g"),
@@ -460,13 +470,18 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
     txt_path.write_text(buf.getvalue(), encoding="ascii", errors="replace")
 
     labels, xlabel = [r["run"] for r in rows], ""
-    for key, name in (("angle", "vibration angle phi (deg)"), ("throw_number", "Gamma")):
+    for key in ("angle", "throw_number"):
         vals = [r.get(key) for r in rows]
         if all(isinstance(v, int | float) for v in vals) and len(set(vals)) == len(vals):
             others = [k for k in ("angle", "throw_number") if k != key]
             if all(len({r.get(k) for r in rows}) == 1 for k in others):
-                labels, xlabel = [float(v) for v in vals], name
+                labels, xlabel = [float(v) for v in vals], plots.axis_label(key)
                 break
+    same = [k for k in _DRIVE_KEYS if len({repr(r.get(k)) for r in rows}) == 1]
+    shared = {k: rows[0][k] for k in same if _is_number(rows[0].get(k))}
+    title = "DEM and point mass of the runs" + (
+        f" at {plots.held_text(shared)}" if shared else " (no drive value in common)"
+    )
     png = plots.pointmass_comparison_figure(
         labels,
         [_as_float(r.get("mean_velocity_norm")) for r in rows],
@@ -475,8 +490,18 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
         dest / "comparison.png",
         xlabel=xlabel,
         bounded_norm=[_as_float(r.get("pointmass_bounded_velocity_norm")) for r in rows],
+        title=title,
     )
     return [csv_path, txt_path, png]
+
+
+#: summary.json keys that say what a run's drive and material were, in a title's order.
+_DRIVE_KEYS = ("angle", "throw_number", "frequency", "friction", "inclination")
+
+
+def _drive_values(summary: dict) -> dict:
+    """The drive and material of a run by key, where summary.json gives them as numbers."""
+    return {k: summary[k] for k in _DRIVE_KEYS if _is_number(summary.get(k))}
 
 
 def _bounded_lines(paper, bounded) -> list[str]:

@@ -46,6 +46,7 @@ from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import ResultsWriter, package_versions
+from dem.io.tables import write_cycles_csv
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
 from dem.provenance import record
 from dem.scene import resolve
@@ -612,6 +613,7 @@ def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
             print(f"dem: {n_threads} threads ran slower than one here (another process on the "
                   f"cores?): {share:.0%} of the steps ran on one thread",
                   file=sys.stderr)  # fmt: skip
+    write_cycles_csv(out_dir, summary)  # before summary.json: a summary means the table is there
     # strict JSON (an undefined value, a one-cycle run's stderr, is null, not NaN), written whole
     replace_text(out_dir / SUMMARY, json_text(summary) + "\n")
     results.close()
@@ -762,7 +764,7 @@ def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) 
     grain_id = sim.grain_id[s.body]
     vtk.write_frame(
         t, s.x, s.radius, s.v, grain_id, s.body, counts, orientation,
-        drive_displacement=shift, drive_velocity=lab_v if vtk.lab_frame else None,
+        drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
     )  # fmt: skip
     balance = None
     if sim.feeder is not None:

@@ -17,8 +17,9 @@ frames setting; a finished point without it, or of another case or other options
 before anything runs, naming the point and each key that differs, and left as it is. A point
 that fails (bad physics the guard stops, a lost worker) is reported with its error and leaves
 the others running; the sweep's exit status says that some failed. The results
-are gathered into ``sweep.csv``, ``sweep.h5`` (one dataset per column) and ``sweep.png`` (the
-bulk velocity against the first swept key, with the point-mass model beside it).
+are gathered into ``sweep.csv`` (units in the column names, its provenance in ``sweep.json``),
+``sweep.h5`` (one dataset per column) and ``sweep.png`` (the bulk velocity in m/s and normalised
+against the first swept key, the point-mass model beside it, the held values in the title).
 
 Cost: the points are independent; a grid of P points takes about P / workers times one run.
 Gathering reads each summary.json once: O(P).
@@ -26,7 +27,6 @@ Gathering reads each summary.json once: O(P).
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import math
@@ -44,6 +44,7 @@ COLUMNS = (
     "mean_velocity_norm",
     "mean_velocity_norm_stderr",
     "pointmass_velocity_norm",
+    "velocity_scale",
     "mass_flow_rate",
     "throw_number",
     "amplitude",
@@ -300,8 +301,10 @@ def run_sweep(
                 cluster.close()
     out.mkdir(parents=True, exist_ok=True)
     rows = gather(points, failed)
-    csv_path = write_table(rows, out)
-    plot(rows, out / f"{TABLE}.png", [k for k, _ in sets])
+    context = {"case_dir": str(case_dir.resolve()), "set": dict(sets),
+               "cycles": cycles, "frames": frames}  # fmt: skip
+    csv_path = write_table(rows, out, context)
+    plot(rows, out / f"{TABLE}.png", [k for k, _ in sets], held=held_values(case_dir, sets))
     return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
             "failed": failed, "csv": str(csv_path)}  # fmt: skip
 
@@ -358,44 +361,90 @@ def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     return rows
 
 
-def write_table(rows: list[dict], out: Path) -> Path:
-    """``sweep.csv`` and ``sweep.h5`` (one dataset per column; numbers as float64, NaN for none)."""
+def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Path:
+    """``sweep.csv``, its sidecar ``sweep.json`` and ``sweep.h5`` (one dataset per column).
+
+    Column names carry their units (:func:`dem.io.tables.summary_column`: ``drive.angle_deg``,
+    ``mean_velocity_m_s``); the CSV has one header line and numbers to 6 significant digits
+    (:mod:`dem.io.tables`), the sidecar the provenance and what each column means. sweep.h5
+    has the same names, numbers as float64 (NaN for none), each dataset's unit as its ``unit``
+    attribute. ``context`` (the case folder, the swept values) goes into the sidecar too.
+    """
     import h5py
     import numpy as np
 
-    from dem.provenance import header_lines
+    from dem.io.tables import SUMMARY_UNITS as UNITS
+    from dem.io.tables import case_key_unit, summary_column, write_csv
 
     fields = list(rows[0])
-    path = out / f"{TABLE}.csv"
-    with open(path, "w", newline="") as fh:
-        fh.write("\n".join(header_lines("dem sweep")) + "\n")
-        writer = csv.DictWriter(fh, fieldnames=fields)
-        writer.writeheader()
-        writer.writerows(rows)
+    names = {f: summary_column(f) for f in fields}
+    if len(set(names.values())) < len(names):  # a swept key named like a summary column
+        names = {f: f for f in fields}
+    columns = [names[f] for f in fields]
+    units = {names[f]: UNITS.get(f, case_key_unit(f) if "." in f else "") for f in fields}
+    meaning = {
+        "point": "the point's folder under the sweep folder",
+        "status": "done, or failed (error says why)",
+        "error": "why the point failed",
+    }
+    meaning |= {names[f]: f"swept case key {f}" for f in fields if "." in f}
+    meaning |= {names[c]: f"summary.json {c}" for c in COLUMNS if c in names}
+    meta = dict(context or {})
+    meta["columns"] = {c: {"unit": units[c], "meaning": meaning.get(c, "")} for c in columns}
+    path = write_csv(out / f"{TABLE}.csv", columns, ([r[f] for f in fields] for r in rows),
+                     meta=meta, command="dem sweep")  # fmt: skip
     with h5py.File(out / f"{TABLE}.h5", "w") as h5:
         g = h5.create_group(TABLE)
         for f in fields:
             values = [r[f] for r in rows]
+            name = names[f]
             if all(isinstance(v, (int, float)) or v is None for v in values) and not all(
                 isinstance(v, bool) for v in values
             ):
-                g[f] = np.array([math.nan if v is None else float(v) for v in values])
+                g[name] = np.array([math.nan if v is None else float(v) for v in values])
             else:
-                g[f] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
-        g.attrs["columns"] = json.dumps(fields)
+                g[name] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
+            g[name].attrs["unit"] = units[name]
+        g.attrs["columns"] = json.dumps(columns)
     return path
 
 
-def plot(rows: list[dict], path: Path, keys: list[str]) -> None:
-    """V / (A omega cos phi) against the first swept key, a line per value of the others."""
-    import matplotlib
+def held_values(case_dir: Path, sets: list[tuple[str, list]]) -> dict:
+    """The base case's drive and material values that the sweep does not vary, by key.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    The drive as the case gives it (its throw number or its amplitude), the angle, frequency,
+    friction and inclination: what a sweep's figure names as held fixed.
+    """
+    from dem.case import load_case
 
+    case = load_case(case_dir)
+    d = case.drive
+    values = {
+        "drive.angle": d.angle,
+        f"drive.{d.given}": getattr(d, d.given),
+        "drive.frequency": d.frequency,
+        "material.friction": case.material.friction,
+        "trough.inclination": case.trough.inclination,
+    }
+    swept = {k.rsplit(".", 1)[-1] for k, _ in sets}
+    if swept & {"amplitude", "throw_number"}:  # setting one of them moves the other
+        swept |= {"amplitude", "throw_number"}
+    return {k: v for k, v in values.items() if k.rsplit(".", 1)[-1] not in swept}
+
+
+def plot(rows: list[dict], path: Path, keys: list[str], held: dict | None = None) -> None:
+    """The bulk velocity against the first swept key: in m/s (left) and normalised (right).
+
+    One line per value of the other swept keys; the point-mass model dashed beside each (its
+    velocity in m/s is its v_norm times the run's velocity scale A omega cos phi). The title
+    names the case's values the sweep held fixed (``held``, :func:`held_values`).
+    """
+    from dem import plots
+
+    plt = plots.plt
     first, rest = keys[0], keys[1:]
     numeric = all(isinstance(r[first], (int, float)) for r in rows)
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, (ax_v, ax_n) = plt.subplots(1, 2, figsize=(11, 4.4))
     groups: dict[tuple, list[dict]] = {}
     for r in rows:
         groups.setdefault(tuple(r[k] for k in rest), []).append(r)
@@ -404,20 +453,36 @@ def plot(rows: list[dict], path: Path, keys: list[str]) -> None:
         if not sel:
             continue
         xs = [r[first] if numeric else j for j, r in enumerate(sel)]
-        name = ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(rest, label, strict=True)) or "bed"
-        ax.errorbar(xs, [r["mean_velocity_norm"] for r in sel],
-                    yerr=[r["mean_velocity_norm_stderr"] for r in sel], fmt="o-", capsize=2,
-                    color=f"C{i}", label=f"DEM {name}")  # fmt: skip
-        ax.plot(xs, [r["pointmass_velocity_norm"] for r in sel], "--", color=f"C{i}",
-                lw=1, label=f"point mass {name}")  # fmt: skip
-        if not numeric:
-            ax.set_xticks(xs, [str(r[first]) for r in sel])
-    ax.set_xlabel(first)
-    ax.set_ylabel("v / (A omega cos phi)")
+        name = plots.held_text(dict(zip(rest, label, strict=True)))
+        scale = [_number(r.get("velocity_scale")) for r in sel]
+        pm_norm = [_number(r.get("pointmass_velocity_norm")) for r in sel]
+        for ax, key, pm in (
+            (ax_v, "mean_velocity", [p * v for p, v in zip(pm_norm, scale, strict=True)]),
+            (ax_n, "mean_velocity_norm", pm_norm),
+        ):
+            ax.errorbar(xs, [_number(r[key]) for r in sel],
+                        yerr=[_number(r[key + "_stderr"]) for r in sel], fmt="o-", capsize=2,
+                        color=f"C{i}", label="DEM" + (f", {name}" if name else ""))  # fmt: skip
+            ax.plot(xs, pm, "--", color=f"C{i}", lw=1,
+                    label="point mass" + (f", {name}" if name else ""))  # fmt: skip
+            if not numeric:
+                ax.set_xticks(xs, [str(r[first]) for r in sel])
+    for ax in (ax_v, ax_n):
+        ax.set_xlabel(plots.axis_label(first))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    ax_v.set_ylabel(plots.VELOCITY_LABEL)
+    ax_n.set_ylabel(plots.NORM_LABEL)
     failed = sum(r["status"] != "done" for r in rows)
-    title = f"dem sweep: {len(rows) - failed} points" + (f", {failed} failed" if failed else "")
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    varied = ", ".join(plots.QUANTITY.get(k.rsplit(".", 1)[-1], (k,))[0] for k in keys)
+    title = f"Bulk conveying velocity over {varied}"
+    if held:
+        title += f"; held: {plots.held_text(held)}"
+    if failed:
+        title += f" ({failed} of {len(rows)} points failed: not drawn)"
+    fig.suptitle(plots.wrap_title(title, fig, 10), fontsize=10)
+    plots.save(fig, path)
+
+
+def _number(v) -> float:
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else math.nan

@@ -2,10 +2,11 @@
 
 :class:`dem.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
 :func:`timestep_limits` gives the automatic step and the stability limit for one contact, and
-:func:`timestep_for` applies them to a case: every member radius of its grain, sphere-sphere and sphere-wall contacts, and the
-hardest impact the case can produce, taken from the drive and a fall from the top of the fill box
-(:func:`dem.fill.box_height`). Nothing is filled or simulated, so ``dem export liggghts``, the
-validation scripts and ``dem run`` agree on dt before any grain is placed.
+:func:`timestep_for` applies them to a case: every member radius of its grain, sphere-sphere
+and sphere-wall contacts, and the hardest impact the case can produce, taken from the drive and
+a fall from the top of the fill box (:func:`dem.fill.box_height`). Nothing is filled or
+simulated, so ``dem export liggghts``, the validation scripts and ``dem run`` agree on dt before
+any grain is placed.
 """
 
 from __future__ import annotations

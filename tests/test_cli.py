@@ -83,7 +83,7 @@ def test_sweep_writes_csv(capsys, tmp_path):
     )
     assert code == 0
     lines = out.read_text().splitlines()
-    assert lines[0].startswith("throw_number,angle,friction")
+    assert lines[0].startswith("throw_number,angle_deg,friction,inclination_deg")
     assert len(lines) == 1 + 3 * 2
 
 

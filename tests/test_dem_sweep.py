@@ -23,7 +23,7 @@ TINY = SMALL_CASE.replace("count = 120", "count = 30").replace(
 
 def read_csv(path):
     with open(path) as fh:
-        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+        return list(csv.DictReader(fh))
 
 
 def test_parse_set_takes_ranges_lists_words_and_whole_numbers():
@@ -54,14 +54,26 @@ def test_two_points_run_on_dask_and_a_rerun_recomputes_nothing(tmp_path, capsys)
     args = ["sweep", str(case), "--set", "drive.angle=20,30", "--out", str(out), "--workers", "2"]
     assert main(args) == 0
     rows = read_csv(out / "sweep.csv")
-    assert [float(r["drive.angle"]) for r in rows] == [20.0, 30.0]
+    assert [float(r["drive.angle_deg"]) for r in rows] == [20.0, 30.0]
     for r in rows:
         summary = json.loads((out / r["point"] / SUMMARY).read_text())
-        assert summary["angle"] == float(r["drive.angle"])
-        assert float(r["mean_velocity_norm"]) == summary["mean_velocity_norm"]
+        assert summary["angle"] == float(r["drive.angle_deg"])
+        assert float(r["mean_velocity_norm"]) == pytest.approx(summary["mean_velocity_norm"],
+                                                               rel=1e-5)  # fmt: skip
+        assert float(r["mean_velocity_m_s"]) == pytest.approx(summary["mean_velocity"], rel=1e-5)
         assert r["status"] == "done"
+    with open(out / "sweep.csv") as fh:
+        assert not any(line.startswith("#") for line in fh)
+    table = np.genfromtxt(out / "sweep.csv", delimiter=",", names=True, dtype=None,
+                          encoding="utf-8")  # fmt: skip
+    assert list(table["mean_velocity_m_s"]) == [float(r["mean_velocity_m_s"]) for r in rows]
+    side = json.loads((out / "sweep.json").read_text())
+    assert side["provenance"]["versions"]["dem"] and side["command"] == "dem sweep"
+    assert side["columns"]["mean_velocity_m_s"]["unit"] == "m/s"
+    assert side["columns"]["drive.angle_deg"]["unit"] == "deg"
     with h5py.File(out / "sweep.h5") as h5:
-        assert np.array_equal(h5["sweep/drive.angle"][:], [20.0, 30.0])
+        assert np.array_equal(h5["sweep/drive.angle_deg"][:], [20.0, 30.0])
+        assert h5["sweep/mean_velocity_m_s"].attrs["unit"] == "m/s"
     assert (out / "sweep.png").stat().st_size > 0
     stamps = {r["point"]: (out / r["point"] / SUMMARY).stat().st_mtime_ns for r in rows}
     capsys.readouterr()

@@ -120,8 +120,14 @@ def test_comparison_across_runs(tmp_path):
     with (tmp_path / "cmp" / "comparison.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     assert [r["run"] for r in rows] == ["phi15.0", "phi25.0", "phi35.0"]
-    assert [float(r["angle"]) for r in rows] == [15.0, 25.0, 35.0]
-    assert np.isclose(float(rows[1]["dem_over_pointmass"]), 0.31 / 0.42)
+    assert [float(r["angle_deg"]) for r in rows] == [15.0, 25.0, 35.0]
+    assert np.isclose(float(rows[1]["dem_over_pointmass"]), 0.31 / 0.42, rtol=1e-5)
+    assert "mean_velocity_m_s" in rows[0] and "mass_flow_rate_kg_s" in rows[0]
+    table = np.genfromtxt(tmp_path / "cmp" / "comparison.csv", delimiter=",", names=True,
+                          dtype=None, encoding="utf-8")  # fmt: skip
+    assert list(table["angle_deg"]) == [15.0, 25.0, 35.0]
+    side = json.loads((tmp_path / "cmp" / "comparison.json").read_text())
+    assert side["columns"]["mean_velocity_m_s"]["unit"] == "m/s" and side["provenance"]
     table = (tmp_path / "cmp" / "comparison.txt").read_text().splitlines()
     assert len(table) == 4 and "dem/pm" in table[0]
     assert _is_png(tmp_path / "cmp" / "comparison.png")

@@ -56,3 +56,7 @@ def test_every_shipped_case_runs(tmp_path, directory):
         assert last["orientation"].shape == (grains, 4)
         np.testing.assert_allclose(np.linalg.norm(last["orientation"], axis=1), 1.0, atol=1e-9)
     assert (tmp_path / "particles.pvd").is_file()
+    assert 'name="spheres"' in (tmp_path / "particles.pvd").read_text()
+    if case.particles.shape != "sphere":
+        assert 'name="grains"' in (tmp_path / "particles.pvd").read_text()
+    assert len((tmp_path / "cycles.csv").read_text().splitlines()) == 1 + 1  # header, 1 cycle

@@ -27,7 +27,8 @@ def test_csv_round_trip():
     lines = buf.getvalue().splitlines()
     header = lines[0].split(",")
     row = dict(zip(header, lines[2].split(","), strict=True))
-    assert float(row["velocity_norm"]) == r["velocity_norm"][1]
+    assert float(row["velocity_norm"]) == pytest.approx(r["velocity_norm"][1], rel=1e-5)
+    assert float(row["angle_deg"]) == 25.0
     assert row["periodic"] == "true"
 
 

@@ -6,13 +6,16 @@ Layout of an output directory::
     frames/particles_NNNNNN.vtp    spheres of frame NNNNNN (binary, zlib-compressed XML PolyData)
     frames/trough.vtp              trough (floor and the two side walls), trough frame: one file
     frames/trough_NNNNNN.vtp       trough of frame NNNNNN, lab frame (it moves with the drive)
+    frames/grains_NNNNNN.vtp       clumps (screws) of frame NNNNNN: one point per grain
 
-Every frame is one ``<DataSet timestep="t" part="0" .../>`` (the spheres) and one with
-``part="1"`` (the trough) in the collection, t in seconds of simulated time. The trough's
-geometry is that of :class:`dem.trough.Trough` (:meth:`~dem.trough.Trough.wall_corners`, the
-kernel's walls), or the triangles of a mesh trough (``trough.mesh``), built once per writer:
-in the trough frame it is written once and every frame refers to it, in the lab frame each frame
-writes a shifted copy. The collection is
+Every frame is one ``<DataSet timestep="t" part="0" name="spheres" .../>``, one with
+``part="1" name="trough"`` and, for clumps, one with ``part="2" name="grains"`` in the
+collection, t in seconds of simulated time; ParaView shows the three as named blocks
+(``/Root/spheres``, ``/Root/trough``, ``/Root/grains``: Extract Block selects them by name).
+The trough's geometry is that of :class:`dem.trough.Trough`
+(:meth:`~dem.trough.Trough.wall_corners`, the kernel's walls), or the triangles of a mesh trough
+(``trough.mesh``), built once per writer: in the trough frame it is written once and every
+frame refers to it, in the lab frame each frame writes a shifted copy. The collection is
 rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
 collection that opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a
 last time.
@@ -29,14 +32,35 @@ Frames (coordinates in m):
   Velocities are shifted by the optional ``drive_velocity`` s'(t) when it is given (otherwise they
   stay relative to the trough, as in the trough frame; field data ``velocity_frame`` says which).
 
+Velocities: the trough frame moves with the drive without turning, so a grain's velocity in the
+lab is its velocity relative to the trough plus the trough's velocity s'(t) at that time,
+v_lab = v_trough + s'(t) (:meth:`dem.trough.Trough.velocity`). Relative to the trough a
+conveyed bed moves forward on average but backward for part of every cycle; in the lab it
+moves with the trough.
+
 Sphere point data (one value per sphere): ``radius`` (m, float32, the active scalars),
-``velocity`` (m/s, float32, 3 components), ``grain_id``, ``clump_id``, ``contact_count`` (int32),
-and ``orientation`` (unit quaternion w, x, y, z of the sphere's clump, float32, 4 components) when
-orientations are given. Positions are float32 (2e-9 m resolution at 0.1 m: enough to look at) and
-x is wrapped into [0, length) of the periodic section. Every point is also a vertex cell, so
-ParaView shows the points as they are; for spheres use Filters > Glyph with Glyph Type Sphere,
-Scale Array ``radius`` and Scale Factor 2 (the unit glyph has radius 0.5), or
+``velocity`` (m/s, float32, 3 components; relative to the trough, or in the lab where
+field data ``velocity_frame`` says ``lab``), ``velocity_trough`` and ``speed_trough`` (m/s,
+relative to the trough), ``velocity_lab`` and ``speed_lab`` (m/s, in the lab; written when the
+drive velocity is given, as a run gives it), ``grain_id``, ``clump_id``, ``contact_count``
+(int32), and ``orientation`` (unit quaternion w, x, y, z of the sphere's clump, float32, 4
+components) when orientations are given.
+
+Grain point data (clumps only, one point per grain at its centre of mass): ``grain_id`` (the
+grain's lasting id), ``clump_id`` (its index in the frame, as the spheres give it), ``mass``
+(kg), ``axis`` (unit vector, the template's long axis (least moment of inertia) in the trough
+frame, pointing from the centre of mass towards the member that reaches farthest along it: a
+screw's shank, not its head), ``orientation`` (quaternion w, x, y, z), ``velocity``,
+``velocity_trough``, ``velocity_lab``, ``speed_trough``, ``speed_lab`` of the centre of mass
+(m/s, as for the spheres), ``angular_velocity`` (rad/s, trough frame), ``contact_count``
+(the members' contacts, summed) and ``spheres`` (members per grain).
+
+Positions are float32 (2e-9 m resolution at 0.1 m: enough to look at) and x is wrapped into
+[0, length) of the periodic section. Every point is also a vertex cell, so ParaView shows the
+points as they are; for spheres use Filters > Glyph with Glyph Type Sphere, Scale Array
+``radius`` and Scale Factor 2 (the unit glyph has radius 0.5), or
 ``mesh.glyph(scale="radius", geom=pyvista.Sphere(radius=1.0), orient=False)`` in pyvista.
+``dem/data/paraview/open_run.py`` (:func:`paraview_script`) does that in ParaView.
 """
 
 from __future__ import annotations
@@ -44,6 +68,7 @@ from __future__ import annotations
 import errno
 import math
 import os
+import re
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -58,6 +83,17 @@ FRAMES_DIR = "frames"
 #: The trough's file in the trough frame, shared by every frame.
 TROUGH_FILE = "trough.vtp"
 PARTICLE_ARRAYS = ("radius", "velocity", "grain_id", "clump_id", "contact_count")
+#: Sphere arrays beside :data:`PARTICLE_ARRAYS`: the velocity in both frames and its magnitude
+#: (the ``_lab`` pair when the drive velocity is given).
+VELOCITY_ARRAYS = ("velocity_trough", "speed_trough", "velocity_lab", "speed_lab")
+#: Point data of the per-grain dataset (clumps).
+GRAIN_ARRAYS = ("grain_id", "clump_id", "mass", "axis", "orientation", "velocity",
+                "velocity_trough", "velocity_lab", "speed_trough", "speed_lab",
+                "angular_velocity", "contact_count", "spheres")  # fmt: skip
+#: Block names of the collection's parts 0, 1, 2 (ParaView shows them as /Root/<name>).
+BLOCK_NAMES = ("spheres", "trough", "grains")
+#: A grains file of frame NNNNNN.
+GRAINS_FILE_RE = re.compile(r"grains_\d{6}\.vtp")
 
 
 def trough_polydata(
@@ -167,6 +203,18 @@ class VTKSeriesWriter:
         else:
             self._trough_mesh = mesh_polydata(mesh.tri, back_wall=back_wall)
         self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
+        # frames with a grains file: a resumed run's from its files, a new run's none (a grains
+        # file an earlier run left is removed: only this writer's are listed)
+        self._grain_frames: set[int] = set()
+        if self._entries:
+            self._grain_frames = {
+                i for i in range(len(self._entries))
+                if (self.frames_dir / _grains_name(i)).is_file()
+            }  # fmt: skip
+        else:
+            for path in self.frames_dir.iterdir():
+                if GRAINS_FILE_RE.fullmatch(path.name) and not path.is_symlink() and path.is_file():
+                    path.unlink()
 
     @property
     def entries(self) -> list[tuple[float, str, str]]:
@@ -191,8 +239,9 @@ class VTKSeriesWriter:
         drive_displacement: np.ndarray | None = None,
         *,
         drive_velocity: np.ndarray | None = None,
+        bodies=None,
     ) -> Path:
-        """Write one frame (spheres and trough) and rewrite the collection.
+        """Write one frame (spheres, trough, and grains for clumps) and rewrite the collection.
 
         Args:
             time: Simulated time of the frame, s (the ParaView time value).
@@ -206,8 +255,13 @@ class VTKSeriesWriter:
                 ``clump_id``; None for spheres.
             drive_displacement: Trough displacement s(t), (3,), m (default zeros); used in the
                 lab frame only.
-            drive_velocity: Trough velocity s'(t), (3,), m/s; added to the velocities in the lab
-                frame when given.
+            drive_velocity: Trough velocity s'(t), (3,), m/s. When given, ``velocity_lab`` =
+                ``velocity`` + s'(t) and ``speed_lab`` are written, and in the lab frame
+                ``velocity`` is that lab velocity too.
+            bodies: The clumps (:class:`dem.state.Bodies`, or any object with its ``x``, ``v``,
+                ``q``, ``omega``, ``mass``, ``moments``, ``offsets`` and ``body_of``), indexed by
+                ``clump_id``: a grains dataset (``grains_NNNNNN.vtp``) is written beside the
+                spheres. None for spheres.
 
         Returns:
             Path of the sphere ``.vtp`` file.
@@ -230,18 +284,26 @@ class VTKSeriesWriter:
         if not np.all(np.isfinite(shift)):
             raise ValueError("drive_displacement must be finite")
 
+        drive_v = None
+        if drive_velocity is not None:
+            drive_v = _check(drive_velocity, (3,), "drive_velocity").astype(np.float64)
+            if not np.all(np.isfinite(drive_v)):
+                raise ValueError("drive_velocity must be finite")
+
         pos = self._section.wrap(pos)
-        vel = arrays["velocity"].astype(np.float64)
+        rel = arrays["velocity"].astype(np.float64)
+        vel = rel
         if self.lab_frame:
             pos += shift
-            if drive_velocity is not None:
-                vel = vel + _check(drive_velocity, (3,), "drive_velocity")
+            if drive_v is not None:
+                vel = rel + drive_v
 
         mesh = pv.PolyData(pos.astype(np.float32))  # one vertex cell per point
         mesh.point_data["radius"] = arrays["radius"].astype(np.float32)
         mesh.point_data["velocity"] = vel.astype(np.float32)
         for key in ("grain_id", "clump_id", "contact_count"):
             mesh.point_data[key] = arrays[key].astype(np.int32)
+        _velocities(mesh, rel, drive_v)
         if orientation is not None:
             q = np.asarray(orientation, dtype=np.float64)
             cid = arrays["clump_id"].astype(np.int64)
@@ -251,21 +313,65 @@ class VTKSeriesWriter:
                 )
             mesh.point_data["orientation"] = q[cid].astype(np.float32)
         mesh.set_active_scalars("radius")
-        mesh.field_data["time"] = np.array([time], dtype=np.float64)
-        mesh.field_data["inclination_deg"] = np.array([self.inclination_deg])
-        mesh.field_data["drive_displacement"] = shift
-        frame = "lab" if self.lab_frame else "trough"
-        mesh.field_data["frame"] = np.array([frame])
-        lab_vel = self.lab_frame and drive_velocity is not None
-        mesh.field_data["velocity_frame"] = np.array(["lab" if lab_vel else "trough"])
+        self._field_data(mesh, time, shift, drive_v)
 
         index = len(self._entries)
+        if bodies is not None:
+            grains = self._grains(bodies, arrays, shift, drive_v)
+            self._field_data(grains, time, shift, drive_v)
+            save_vtp(grains, self.frames_dir / _grains_name(index))
+            self._grain_frames.add(index)
         p_name = f"particles_{index:06d}.vtp"
         save_vtp(mesh, self.frames_dir / p_name)
         t_name = self._write_trough(index, shift)
         self._entries.append((float(time), p_name, t_name))
         self._write_pvd()
         return self.frames_dir / p_name
+
+    def _field_data(self, mesh: pv.PolyData, time: float, shift, drive_v) -> None:
+        """The frame's time, inclination, drive displacement and velocity, and its frames."""
+        mesh.field_data["time"] = np.array([time], dtype=np.float64)
+        mesh.field_data["inclination_deg"] = np.array([self.inclination_deg])
+        mesh.field_data["drive_displacement"] = shift
+        if drive_v is not None:
+            mesh.field_data["drive_velocity"] = drive_v
+        frame = "lab" if self.lab_frame else "trough"
+        mesh.field_data["frame"] = np.array([frame])
+        lab_vel = self.lab_frame and drive_v is not None
+        mesh.field_data["velocity_frame"] = np.array(["lab" if lab_vel else "trough"])
+
+    def _grains(self, bodies, arrays: dict, shift: np.ndarray, drive_v) -> pv.PolyData:
+        """One point per clump at its centre of mass, with the arrays of :data:`GRAIN_ARRAYS`."""
+        x = np.asarray(bodies.x, dtype=np.float64).reshape(-1, 3)
+        b = x.shape[0]
+        q = np.asarray(bodies.q, dtype=np.float64).reshape(b, 4)
+        cid = np.asarray(arrays["clump_id"], dtype=np.int64)
+        if cid.size and (cid.min() < 0 or cid.max() >= b):
+            raise ValueError(f"clump_id must lie in [0, {b}) for {b} bodies")
+        pos = self._section.wrap(x)
+        rel = np.asarray(bodies.v, dtype=np.float64).reshape(b, 3)
+        vel = rel
+        if self.lab_frame:
+            pos += shift
+            if drive_v is not None:
+                vel = rel + drive_v
+        ids = np.full(b, -1, dtype=np.int64)  # each grain's lasting id, from its members
+        ids[cid] = np.asarray(arrays["grain_id"], dtype=np.int64)
+        mesh = pv.PolyData(pos.astype(np.float32))
+        mesh.point_data["grain_id"] = ids.astype(np.int32)
+        mesh.point_data["clump_id"] = np.arange(b, dtype=np.int32)
+        mesh.point_data["mass"] = np.asarray(bodies.mass, dtype=np.float32).reshape(b)
+        mesh.point_data["axis"] = long_axis(q, bodies.moments, bodies.offsets,
+                                            bodies.body_of).astype(np.float32)  # fmt: skip
+        mesh.point_data["orientation"] = q.astype(np.float32)
+        mesh.point_data["velocity"] = vel.astype(np.float32)
+        _velocities(mesh, rel, drive_v)
+        mesh.point_data["angular_velocity"] = np.asarray(bodies.omega, np.float32).reshape(b, 3)
+        counts = np.bincount(cid, weights=arrays["contact_count"], minlength=b)
+        mesh.point_data["contact_count"] = counts.astype(np.int32)
+        mesh.point_data["spheres"] = np.bincount(cid, minlength=b).astype(np.int32)
+        mesh.set_active_scalars("speed_lab" if drive_v is not None else "speed_trough")
+        return mesh
 
     def close(self) -> Path:
         """Write the collection a last time; returns the path of ``particles.pvd``."""
@@ -297,12 +403,26 @@ class VTKSeriesWriter:
             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
             "  <Collection>",
         ]
-        for t, p_name, t_name in self._entries:
-            for part, name in ((0, p_name), (1, t_name)):
+        for index, (t, p_name, t_name) in enumerate(self._entries):
+            parts = [p_name, t_name]
+            if index in self._grain_frames:
+                parts.append(_grains_name(index))
+            for part, name in enumerate(parts):
                 file = quoteattr(f"{FRAMES_DIR}/{name}")
-                lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" file={file}/>')
+                block = quoteattr(BLOCK_NAMES[part])
+                lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" '
+                             f"name={block} file={file}/>")  # fmt: skip
         lines += ["  </Collection>", "</VTKFile>", ""]
         replace_text(self.pvd_path, "\n".join(lines), encoding="ascii")
+
+
+def paraview_script() -> Path:
+    """The ParaView Python script shipped with dem: ``pvpython SCRIPT OUT_DIR`` opens a run.
+
+    It opens ``OUT_DIR/particles.pvd``, draws the spheres as sphere glyphs of their radius
+    coloured by their speed in the lab, the grains' long axes (clumps) and the trough.
+    """
+    return Path(__file__).resolve().parent.parent / "data" / "paraview" / "open_run.py"
 
 
 def save_vtp(mesh: pv.PolyData, path: Path) -> None:
@@ -338,6 +458,52 @@ def save_vtp(mesh: pv.PolyData, path: Path) -> None:
             )
 
     replace_file(path, write)
+
+
+def _grains_name(index: int) -> str:
+    return f"grains_{index:06d}.vtp"
+
+
+def _velocities(mesh: pv.PolyData, rel: np.ndarray, drive_v: np.ndarray | None) -> None:
+    """``velocity_trough`` and ``speed_trough``; with the drive velocity the ``_lab`` pair."""
+    mesh.point_data["velocity_trough"] = rel.astype(np.float32)
+    mesh.point_data["speed_trough"] = np.linalg.norm(rel, axis=1).astype(np.float32)
+    if drive_v is not None:
+        lab = rel + drive_v
+        mesh.point_data["velocity_lab"] = lab.astype(np.float32)
+        mesh.point_data["speed_lab"] = np.linalg.norm(lab, axis=1).astype(np.float32)
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (B, 3) turned by unit quaternions ``q`` (B, 4) (w, x, y, z): R(q) v."""
+    q = np.asarray(q, dtype=np.float64).reshape(-1, 4)
+    v = np.asarray(v, dtype=np.float64).reshape(-1, 3)
+    w, u = q[:, :1], q[:, 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def long_axis(q, moments, offsets, body_of) -> np.ndarray:
+    """Each clump's long axis in the trough frame, (B, 3) unit vectors.
+
+    The body axis of the least principal moment (``moments`` (B, 3), body frame), turned by the
+    orientation ``q`` (B, 4); it points from the centre of mass towards the member that reaches
+    farthest along it (``offsets`` (n, 3) body frame, ``body_of`` (n,)): along a screw's shank,
+    away from its head. A clump as long one way as the other keeps the body axis' sign.
+    """
+    q = np.asarray(q, dtype=np.float64).reshape(-1, 4)
+    b = q.shape[0]
+    k = np.argmin(np.asarray(moments, dtype=np.float64).reshape(b, 3), axis=1)
+    owner = np.asarray(body_of, dtype=np.int64)
+    along = np.asarray(offsets, dtype=np.float64).reshape(-1, 3)[np.arange(owner.size), k[owner]]
+    reach = np.zeros(b)
+    np.maximum.at(reach, owner, np.abs(along))
+    tip = np.abs(along) >= reach[owner] * (1.0 - 1e-9)
+    vote = np.zeros(b)
+    np.add.at(vote, owner, np.where(tip, np.sign(along), 0.0))
+    axis = np.zeros((b, 3))
+    axis[np.arange(b), k] = np.where(vote < 0.0, -1.0, 1.0)
+    return rotate(q, axis)
 
 
 def _check(a, shape: tuple[int, ...], name: str) -> np.ndarray:

@@ -24,7 +24,6 @@ throw number Gamma     drive_velocity      A omega fixed: v ~ v_norm(Gamma) (Fig
 =====================  ==================  ==============================================
 """
 
-import csv
 import math
 from dataclasses import dataclass, field
 from typing import IO
@@ -104,22 +103,45 @@ def sweep(
     return result
 
 
+#: Column names of the CSV (:func:`write_csv`), units in the name, by result key.
+CSV_COLUMNS = {
+    "throw_number": "throw_number",
+    "angle": "angle_deg",
+    "friction": "friction",
+    "inclination": "inclination_deg",
+    "eps_t": "eps_t",
+    "eps_n": "eps_n",
+    "velocity_norm": "velocity_norm",
+    "regime": "regime",
+    "periodic": "periodic",
+    "period": "period_cycles",
+    "spread": "spread",
+    "velocity_min": "velocity_norm_min",
+    "velocity_max": "velocity_norm_max",
+    "stick": "stick",
+    "slide_forward": "slide_forward",
+    "slide_backward": "slide_backward",
+    "flight": "flight",
+    "impact": "impact",
+}
+
+
 def write_csv(result: dict[str, np.ndarray], stream: IO[str]) -> None:
-    """Write a sweep result as CSV with a header row."""
-    writer = csv.writer(stream, lineterminator="\n")
-    writer.writerow(_COLUMNS)
+    """Write a sweep result as CSV: one header line, units in the names, 6 significant digits.
+
+    Columns (:data:`CSV_COLUMNS`): the inputs ``throw_number``, ``angle_deg``, ``friction``,
+    ``inclination_deg``, ``eps_t``, ``eps_n``; the normalised velocity v / (A omega cos phi)
+    ``velocity_norm``; the regime and landing law as words; ``periodic`` (true/false) and the
+    orbit's period in drive cycles ``period_cycles``; for a non-periodic point the ``spread``
+    and range ``velocity_norm_min`` .. ``velocity_norm_max`` over starting phases; the phase
+    fractions of a cycle ``stick``, ``slide_forward``, ``slide_backward``, ``flight``.
+    """
+    from dem.io.tables import csv_text
+
+    keys = list(_COLUMNS)
     n = len(result["velocity_norm"])
-    for i in range(n):
-        row = []
-        for name in _COLUMNS:
-            value = result[name][i]
-            if isinstance(value, np.bool_ | bool):
-                row.append(str(bool(value)).lower())
-            elif isinstance(value, np.floating | float):
-                row.append(repr(float(value)))
-            else:
-                row.append(str(value))
-        writer.writerow(row)
+    rows = ([result[k][i] for k in keys] for i in range(n))
+    stream.write(csv_text([CSV_COLUMNS[k] for k in keys], rows))
 
 
 @dataclass(frozen=True)

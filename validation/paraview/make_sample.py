@@ -42,6 +42,7 @@ def write(writer: VTKSeriesWriter, sim: Simulation) -> None:
         clump_id=ids,
         contact_count=sim.contact_counts(),
         drive_displacement=sim.trough.displacement(t) if sim.drive_on else np.zeros(3),
+        drive_velocity=sim.trough.velocity(t) if sim.drive_on else np.zeros(3),
     )
 
 

@@ -44,8 +44,16 @@ from paraview.simple import (
     Text,
 )
 
-SPHERES = "/Root/Block0"  # part="0" of the collection
-TROUGH = "/Root/Block1"  # part="1"
+
+def block_paths(pvd):
+    """(spheres, trough) block paths: /Root/<name> of parts 0 and 1 (/Root/Block<part> unnamed)."""
+    import xml.etree.ElementTree as ET
+
+    names = {}
+    for ds in ET.parse(pvd).getroot().iter("DataSet"):
+        part = int(ds.get("part", "0"))
+        names.setdefault(part, ds.get("name") or f"Block{part}")
+    return f"/Root/{names.get(0, 'Block0')}", f"/Root/{names.get(1, 'Block1')}"
 
 
 def parse_args(argv):
@@ -100,8 +108,9 @@ def main(argv):
     scene.UpdateAnimationUsingDataTimeSteps()
     scene.AnimationTime = t
 
-    spheres = ExtractBlock(Input=reader, Selectors=[SPHERES])
-    trough = ExtractBlock(Input=reader, Selectors=[TROUGH])
+    spheres_path, trough_path = block_paths(pvd)
+    spheres = ExtractBlock(Input=reader, Selectors=[spheres_path])
+    trough = ExtractBlock(Input=reader, Selectors=[trough_path])
     spheres.UpdatePipeline(t)
     trough.UpdatePipeline(t)
     n, arrays = block_arrays(spheres)

@@ -25,25 +25,64 @@ from pathlib import Path
 #: (name, case folder, overrides); small counts so that the whole matrix runs in minutes.
 CONFIGS = [
     ("sphere-hertz-impact", "cases/sphere-bed", {"particles.count": 120}),
-    ("sphere-hertz-coulomb", "cases/sphere-bed", {"particles.count": 120,
-                                                  "contact.tangential": "coulomb"}),
-    ("sphere-hertz-liggghts", "cases/sphere-bed", {"particles.count": 120,
-                                                   "contact.tangential": "liggghts"}),
-    ("sphere-hertz-impact-roll-limit", "cases/sphere-bed", {
-        "particles.count": 120, "material.rolling_friction": 0.05, "contact.limit_force": True,
-        "contact.wall_lever_arm": "midpoint"}),
-    ("sphere-linear-impact", "cases/sphere-bed", {
-        "particles.count": 120, "contact.model": "linear", "contact.youngs_modulus": None,
-        "contact.stiffness": 4000.0}),
-    ("sphere-linear-coulomb", "cases/sphere-bed", {
-        "particles.count": 120, "contact.model": "linear", "contact.youngs_modulus": None,
-        "contact.stiffness": 4000.0, "contact.tangential": "coulomb"}),
-    ("sphere-linear-liggghts", "cases/sphere-bed", {
-        "particles.count": 120, "contact.model": "linear", "contact.youngs_modulus": None,
-        "contact.stiffness": 4000.0, "contact.tangential": "liggghts"}),
+    (
+        "sphere-hertz-coulomb",
+        "cases/sphere-bed",
+        {"particles.count": 120, "contact.tangential": "coulomb"},
+    ),
+    (
+        "sphere-hertz-liggghts",
+        "cases/sphere-bed",
+        {"particles.count": 120, "contact.tangential": "liggghts"},
+    ),
+    (
+        "sphere-hertz-impact-roll-limit",
+        "cases/sphere-bed",
+        {
+            "particles.count": 120,
+            "material.rolling_friction": 0.05,
+            "contact.limit_force": True,
+            "contact.wall_lever_arm": "midpoint",
+        },
+    ),
+    (
+        "sphere-linear-impact",
+        "cases/sphere-bed",
+        {
+            "particles.count": 120,
+            "contact.model": "linear",
+            "contact.youngs_modulus": None,
+            "contact.stiffness": 4000.0,
+        },
+    ),
+    (
+        "sphere-linear-coulomb",
+        "cases/sphere-bed",
+        {
+            "particles.count": 120,
+            "contact.model": "linear",
+            "contact.youngs_modulus": None,
+            "contact.stiffness": 4000.0,
+            "contact.tangential": "coulomb",
+        },
+    ),
+    (
+        "sphere-linear-liggghts",
+        "cases/sphere-bed",
+        {
+            "particles.count": 120,
+            "contact.model": "linear",
+            "contact.youngs_modulus": None,
+            "contact.stiffness": 4000.0,
+            "contact.tangential": "liggghts",
+        },
+    ),
     ("screw-impact", "cases/screw-trough", {"particles.count": 24}),
-    ("screw-coulomb", "cases/screw-trough", {"particles.count": 24,
-                                             "contact.tangential": "coulomb"}),
+    (
+        "screw-coulomb",
+        "cases/screw-trough",
+        {"particles.count": 24, "contact.tangential": "coulomb"},
+    ),
     ("single-sphere", "cases/single-sphere", {}),
     ("u-trough", "cases/u-trough", {"particles.count": 40}),
     ("feeder", "cases/feeder", {}),
@@ -104,8 +143,11 @@ def main() -> None:
         equal = old["sha256"] == new["sha256"]
         same &= equal
         rows.append({"name": name, "equal": equal, "old": old, "new": new})
-        print(f"{name:32s} {'same' if equal else 'DIFFERENT'}  {old['sha256'][:12]} "
-              f"{new['sha256'][:12]}", flush=True)
+        print(
+            f"{name:32s} {'same' if equal else 'DIFFERENT'}  {old['sha256'][:12]} "
+            f"{new['sha256'][:12]}",
+            flush=True,
+        )
     if args.out:
         args.out.write_text(json.dumps({"steps": args.steps, "rows": rows}, indent=1) + "\n")
     raise SystemExit(0 if same else 1)
