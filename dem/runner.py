@@ -46,7 +46,7 @@ from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import ResultsWriter, package_versions
-from dem.io.tables import write_cycles_csv
+from dem.io.tables import CYCLES_CSV, sidecar_path, write_cycles_csv
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
 from dem.provenance import record
 from dem.scene import resolve
@@ -57,7 +57,8 @@ CHECKPOINT = "checkpoint.npz"
 SUMMARY = "summary.json"
 RESULTS = "results.h5"
 #: Files and folders a run writes; only these are removed by ``overwrite``.
-RUN_OUTPUTS = (SUMMARY, RESULTS, CHECKPOINT, PVD_NAME, FRAMES_DIR)
+RUN_OUTPUTS = (SUMMARY, RESULTS, CHECKPOINT, PVD_NAME, FRAMES_DIR, CYCLES_CSV,
+               str(sidecar_path(Path(CYCLES_CSV))))  # fmt: skip
 
 
 class RunInterrupted(Exception):
@@ -216,7 +217,7 @@ def _refuse_links(out_dir: Path) -> None:
 
 
 #: The files dem writes into ``frames/`` (:mod:`dem.io.vtk`); nothing else there is removed.
-FRAME_FILE_RE = re.compile(r"(particles_\d{6}|trough_\d{6}|trough)\.vtp")
+FRAME_FILE_RE = re.compile(r"(particles_\d{6}|grains_\d{6}|trough_\d{6}|trough)\.vtp")
 
 
 def _remove_frames(frames: Path) -> None:

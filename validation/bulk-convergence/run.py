@@ -352,7 +352,7 @@ def main() -> None:
     elif args.what == "stiffness":
         stiffness(args.bed, args.moduli or MODULI)
     elif args.what == "timestep":
-        timestep(args.bed, args.moduli or [5e8, 5e10])
+        timestep(args.bed, args.moduli or [5e8, 5e9])
     figures()
 
 
