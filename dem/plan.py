@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import config
+from dem import config, stiffness
 from dem.scene import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
@@ -457,6 +457,9 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
             "and memory here are those of the initial charge (particles.count)"
         )
         advice.append(Advice("note", "feeder", text))
+    stiff = stiffness.advice(scene)  # the bed's lowest mode against the drive (bulk study)
+    if stiff is not None:
+        advice.append(stiff)
     mem = memory_bytes(scene, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:

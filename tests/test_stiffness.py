@@ -1,0 +1,58 @@
+"""The bed-compliance rule (dem.stiffness): the estimate, its inverse and the warning it gives."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+from dem import stiffness
+from dem.case import load_case
+from dem.plan import plan
+from dem.scene import resolve
+
+CASES = Path(__file__).resolve().parents[1] / "cases"
+
+
+def test_one_grain_is_the_resting_contact_of_the_single_grain_study():
+    """One grain on the floor: omega_bed is the contact's own sqrt(S / m), with S the Hertz
+    tangent stiffness under the grain's weight, as validation/impact-law's compliant floor."""
+    case = load_case(CASES / "sphere-bed", {"particles.count": 1})
+    scene = resolve(case)
+    mode = stiffness.bed_mode(scene)
+    r, m = case.particles.radius, scene.grain_mass
+    y_star = case.contact.youngs_modulus / (2.0 * (1.0 - case.contact.poisson_ratio**2))
+    rest = (m * 9.81 / (4.0 / 3.0 * y_star * math.sqrt(r))) ** (2.0 / 3.0)
+    s = 2.0 * y_star * math.sqrt(r * rest)
+    assert mode.layers == 1.0
+    assert mode.contact_stiffness == pytest.approx(s, rel=1e-12)
+    assert mode.omega_bed == pytest.approx(math.sqrt(s / m), rel=1e-12)
+    assert mode.compliance == pytest.approx(case.drive.omega**2 * m / s, rel=1e-12)
+
+
+def test_compliance_falls_as_e_to_the_minus_two_thirds_and_inverts():
+    scene = resolve(load_case(CASES / "sphere-bed"))
+    base = stiffness.bed_mode(scene).compliance
+    stiffer = stiffness.bed_mode(scene, youngs_modulus=8.0 * scene.case.contact.youngs_modulus)
+    assert stiffer.compliance == pytest.approx(base / 4.0, rel=1e-9)
+    key, value = stiffness.stiffness_for(scene, base / 10.0)
+    assert key == "contact.youngs_modulus"
+    assert stiffness.bed_mode(scene, youngs_modulus=value).compliance == pytest.approx(
+        base / 10.0, rel=1e-9
+    )
+    linear = resolve(load_case(CASES / "single-sphere"))
+    key, value = stiffness.stiffness_for(linear, stiffness.bed_mode(linear).compliance / 2.0)
+    assert key == "contact.stiffness"
+    assert value == pytest.approx(2.0 * linear.case.contact.stiffness)
+
+
+def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_names():
+    data = stiffness.study()
+    assert data is not None, "dem/data/stiffness_convergence.json ships with dem"
+    soft = plan(load_case(CASES / "sphere-bed", {"contact.youngs_modulus": 5.0e7}))
+    warned = [a for a in soft.warnings() if a.key == "contact.youngs_modulus"]
+    assert warned and "validation/bulk-convergence" in warned[0].text
+    value = float(warned[0].text.rsplit(">= ", 1)[1])
+    ok = plan(load_case(CASES / "sphere-bed", {"contact.youngs_modulus": 1.01 * value}))
+    assert not [a for a in ok.warnings() if a.key == "contact.youngs_modulus"]
+    one = plan(load_case(CASES / "single-sphere"))
+    assert not [a for a in one.warnings() if a.key.startswith("contact.")]
