@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, write_case
 
+from dem import measure
 from dem.case import load_case
 from dem.runner import run_case
 
@@ -156,7 +157,8 @@ def test_a_feeder_run_prints_its_discharge_and_tables_it_per_cycle(tmp_path, cap
     summary = json.loads((out / "summary.json").read_text())
     f = summary["feeder"]
     line = [x for x in printed.splitlines() if x.startswith("discharge")]
-    assert len(line) == 1 and "kg/s" in line[0] and f"{f['discharge_rate']:.4g}" in line[0]
+    shown = measure.with_error(f["discharge_rate"], f["discharge_rate_stderr"], "kg/s")
+    assert len(line) == 1 and shown in line[0]  # the digits its error allows
     with (out / "cycles.csv").open(newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == summary["cycles"]
