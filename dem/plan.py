@@ -458,8 +458,8 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
         )
         advice.append(Advice("note", "feeder", text))
     stiff = stiffness.advice(scene)  # the bed's lowest mode against the drive (bulk study)
-    if stiff is not None:
-        advice.append(stiff)
+    if stiff is not None and not any(a.key == stiff.key and a.level == "warn" for a in advice):
+        advice.append(stiff)  # one warning per key: the speed-accuracy study's, if it has one
     mem = memory_bytes(scene, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import plan, setup
+from dem import plan, setup, stiffness
 from dem.case import load_case
 from dem.cli import main
 from dem.runner import run_case
@@ -46,8 +46,11 @@ def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
 
 @pytest.fixture
 def study(monkeypatch):
+    """The synthetic speed-accuracy study alone (the bed-compliance rule of dem.stiffness has
+    its own data and tests/test_stiffness.py)."""
     data = synthetic_study()
     monkeypatch.setattr(plan, "study_data", lambda: data)
+    monkeypatch.setattr(stiffness, "study", lambda: None)
     return data
 
 
