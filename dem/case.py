@@ -311,6 +311,8 @@ class Case:
         name: Name of the case directory.
         directory: Absolute path of the case directory.
         source: Absolute path of the case.toml it was read from.
+        overrides: The ``table.key`` values set over the file when it was read (``dem run
+            --set``, a sweep point), as given; the other fields already hold them.
 
     """
 
@@ -325,6 +327,7 @@ class Case:
     run: RunSpec
     output: OutputSpec
     feeder: FeederSpec | None = None
+    overrides: dict = field(default_factory=dict, compare=False)
 
     def with_drive(
         self,
@@ -400,6 +403,7 @@ class Case:
 
         data = plain(asdict(replace(self, particles=replace(self.particles, grain=None))))
         data["particles"].pop("grain")
+        data.pop("overrides")  # already in the values; summary.json records them apart
         return data
 
 
@@ -843,6 +847,7 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
         run=run,
         output=output,
         feeder=feeder,
+        overrides=dict(overrides or {}),
     )
     _check_feeder(case, table)
     _check_engine(case, table)

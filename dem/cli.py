@@ -398,7 +398,9 @@ def _cmd_run(args) -> int:
     from dem.replicas import run_replicas
     from dem.runner import RunInterrupted
 
-    overrides = {} if args.replicas is None else {"run.replicas": args.replicas}
+    overrides = _set_overrides(args.set)
+    if args.replicas is not None:
+        overrides["run.replicas"] = args.replicas
     case = load_case(args.case_dir, overrides)
     out = _writable_path("--out", args.out or case.directory / "output", folder=True)
     try:
@@ -456,12 +458,14 @@ def _print_summary(s: dict) -> None:
 def _resume_command(args, case, out: Path) -> str:
     """The ``dem run`` line that resumes this run: every option a resume must repeat.
 
-    The folder, the measured cycles (a resume is refused with others) and the frames setting
-    (``--no-frames``, ``--lab-frame``), and the threads if they were given.
+    The folder, the ``--set`` keys, the measured cycles (a resume is refused with others) and
+    the frames setting (``--no-frames``, ``--lab-frame``), and the threads if they were given.
     """
     import shlex
 
     parts = ["dem", "run", str(args.case_dir), "--out", str(out), "--resume"]
+    for text in args.set or ():
+        parts += ["--set", text]
     parts += ["--cycles", str(args.cycles if args.cycles is not None else case.run.cycles)]
     if args.no_frames:
         parts.append("--no-frames")
@@ -476,11 +480,28 @@ def _resume_command(args, case, out: Path) -> str:
     return shlex.join(parts)
 
 
+def _set_overrides(texts: list[str] | None) -> dict:
+    """``--set table.key=value`` options as load_case overrides (one value per key: several
+    values are a sweep, ``dem sweep``)."""
+    from dem.sweep import parse_set
+
+    overrides: dict = {}
+    for text in texts or ():
+        key, values = parse_set(text)
+        if len(values) != 1:
+            raise InputError(f"--set {key}", text.partition("=")[2],
+                             "one value (for several, run dem sweep with the same --set)")  # fmt: skip
+        if key in overrides:
+            raise InputError("--set", key, "each key at most once")
+        overrides[key] = values[0]
+    return overrides
+
+
 def _cmd_plan(args) -> int:
     from dem.case import load_case
     from dem.plan import plan
 
-    case = load_case(args.case_dir)
+    case = load_case(args.case_dir, _set_overrides(args.set))
     result = plan(case, threads=args.threads, cycles=args.cycles)
     if args.json:
         _print_json(result.as_dict())
@@ -693,6 +714,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="run a case directory (DEM)")
     p.add_argument("case_dir", help="directory holding case.toml")
     p.add_argument("--out", help="output directory (default CASE_DIR/output)")
+    p.add_argument(
+        "--set", action="append", metavar="TABLE.KEY=VALUE",
+        help="a case key set over case.toml, e.g. drive.angle=30 (repeatable; recorded in "
+        "summary.json)",
+    )  # fmt: skip
     p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
     mode = p.add_mutually_exclusive_group()
@@ -715,6 +741,10 @@ def build_parser() -> argparse.ArgumentParser:
         "plan", help="cost, memory, expected error and advice for a case, without running it"
     )
     p.add_argument("case_dir", help="directory holding case.toml")
+    p.add_argument(
+        "--set", action="append", metavar="TABLE.KEY=VALUE",
+        help="a case key set over case.toml, e.g. drive.angle=30 (repeatable)",
+    )  # fmt: skip
     p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
     p.add_argument("--json", action="store_true", help="print one JSON object")

@@ -888,6 +888,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
     provenance = record()  # versions, commit, date, host and load (the load bears on wall_time_s)
     return {
         "case": case.name,
+        "overrides": dict(case.overrides),
         "mean_velocity": stat.mean,
         "mean_velocity_stderr": stat.stderr,
         "mean_velocity_norm": stat.norm,
