@@ -568,7 +568,7 @@ def _cmd_report(args) -> int:
     for out in args.out_dirs:
         if not (Path(out) / "summary.json").is_file():
             raise InputError("OUT", out, "a run output folder holding summary.json")
-    dest = _writable_path("--dest", args.dest, folder=True) if args.dest else None
+    dest = _writable_path("--out", args.dest, folder=True) if args.dest else None
     paths = make_report([Path(p) for p in args.out_dirs], dest)
     for path in paths:
         print(f"wrote {path}")
@@ -803,7 +803,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")
     p.add_argument("out_dirs", nargs="+", help="run output folders (holding summary.json)")
-    p.add_argument("--dest", help="where to write the report (default OUT/report)")
+    p.add_argument("--out", "--dest", dest="dest",
+                   help="where to write the report (default OUT/report); --dest is an alias")
     p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("export", help="export a case to another code")

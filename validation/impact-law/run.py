@@ -204,9 +204,8 @@ def impacts():
     write_csv(pool_map(impact_row, jobs), "impacts.csv")
 
 
-def sliding(before=False):
-    """24 drives drawn at random over the sliding map (none of them tuned on), 6 stiffnesses;
-    ``before``: the same drives under "coulomb" at the Hertz stiffnesses, for comparison."""
+def _sliding_drives():
+    """24 drives drawn at random over the sliding map (none of them tuned on)."""
     rng = np.random.default_rng(25)
     drives = []
     while len(drives) < 24:
@@ -219,6 +218,13 @@ def sliding(before=False):
         pm = pointmass.velocity(d["throw_number"], d["angle"], d["friction"], d["inclination"])
         if abs(pm.velocity_norm) > 0.02 and pm.flight == 0.0:  # moves, and never leaves the floor
             drives.append(d)
+    return drives
+
+
+def sliding(before=False):
+    """The 24 drives of :func:`_sliding_drives` at 6 stiffnesses; ``before``: the same drives
+    under "coulomb" at the Hertz stiffnesses, for comparison."""
+    drives = _sliding_drives()
     if before:
         jobs = [("sphere", m, k, d, 0.8, "coulomb") for m, k in STIFFNESSES[:3] for d in drives]
         write_csv(pool_map(grain_velocity, jobs), "sliding_coulomb.csv")
@@ -285,6 +291,66 @@ def compliance():
             "error_vs_rigid": dem / rigid - 1.0, "error_vs_compliant": dem / v_compliant - 1.0,
         })  # fmt: skip
     write_csv(rows, "compliance.csv")
+
+
+#: The enduring stick's settings compared by ``run.py stick``: (alpha rad per step, zeta).
+STICK_SETTINGS = [(0.2, 0.7), (0.5, 0.7), (0.8, 0.5), (0.8, 0.7), (1.2, 0.5)]
+#: The beds whose grains hold many sticking contacts at once (shipped cases, as shipped).
+STICK_BEDS = ("sphere-bed", "screw-trough", "u-trough")
+
+
+def _set_stick(rate, zeta):
+    """Every law built after this call uses the stick (``rate``, ``zeta``) (a study knob, not
+    a case key: the stick is a numerical device sized by the step)."""
+    from dem.kernels import contacts
+
+    contacts.make_params.__kwdefaults__["stick_rate"] = rate
+    contacts.make_params.__kwdefaults__["stick_damping_ratio"] = zeta
+
+
+def stick_bed_row(job):
+    """One shipped bed as shipped, run with the stick ``(rate, zeta)``: finishes, or the
+    instability guard that stopped it; its velocity and the settled bed's jitter."""
+    import tempfile
+
+    from dem.runner import run_case
+
+    name, rate, zeta = job
+    _set_stick(rate, zeta)
+    t0 = time.perf_counter()
+    row = {"case": name, "stick_rate": rate, "stick_damping_ratio": zeta}
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            s = run_case(load_case(ROOT / "cases" / name), Path(tmp) / "out", threads=1,
+                         cycles=10, progress=False, frames=False)  # fmt: skip
+        except Exception as exc:  # the guards' errors are the result here
+            row.update(finished=False, error=f"{type(exc).__name__}: {exc}"[:300])
+        else:
+            row.update(finished=True, error="", velocity_norm=s["mean_velocity_norm"],
+                       stderr=s["mean_velocity_norm_stderr"], settle_cycles=s["settle_cycles"],
+                       max_overlap_fraction=s["max_overlap_fraction"])
+    row["wall_time_s"] = round(time.perf_counter() - t0, 1)
+    print(row, flush=True)
+    return row
+
+
+def stick_grain_row(job):
+    _set_stick(*job[-2:])
+    row = grain_velocity(job[:-2])
+    row.update(stick_rate=job[-2], stick_damping_ratio=job[-1])
+    return row
+
+
+def stick():
+    """The enduring stick's rate: a stiffer stick is closer to Coulomb's rigid stick (the
+    sliding map's soft end), but grains with many sticking contacts see their stiffnesses add
+    (alpha sqrt(n) per step): the shipped beds show where that stays stable."""
+    rows = pool_map(stick_bed_row, [(n, r, z) for r, z in STICK_SETTINGS for n in STICK_BEDS])
+    write_csv(rows, "stick_beds.csv")
+    rng_drives = _sliding_drives()
+    jobs = [("sphere", "hertz_mindlin", 5e7, d, 0.8, r, z)
+            for r, z in STICK_SETTINGS for d in rng_drives]  # fmt: skip
+    write_csv(pool_map(stick_grain_row, jobs), "stick_sliding.csv")
 
 
 def hopping():
@@ -424,7 +490,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "part",
-        choices=("impacts", "sliding", "sliding_before", "hopping", "compliance", "all", "figures"),
+        choices=("impacts", "sliding", "sliding_before", "hopping", "compliance", "stick", "all",
+                 "figures"),
     )
     args = parser.parse_args()
     parts = ("impacts", "sliding", "hopping") if args.part == "all" else (args.part,)
