@@ -161,7 +161,9 @@ class MaterialSpec:
     """Grain material, shared by grain-grain and grain-wall contacts.
 
     Attributes:
-        density: rho, kg/m^3.
+        density: rho, kg/m^3. Given in the file for spheres and for clumps without
+            ``particles.mass``; with a mass it is refused there and set here to the grain's own
+            density (mass / union volume), so every reader finds the density the run uses.
         friction: Coulomb coefficient mu >= 0.
         restitution_normal: eps_n in [0, 1]; 0 maps to critical damping.
         restitution_tangential: eps_t in [0, 1], the paper's Eq. (12): sets the point-mass
@@ -576,7 +578,7 @@ def resolve_drive(
 def _read_material(t: Table) -> MaterialSpec:
     t.check_known(_MATERIAL_KEYS)
     return MaterialSpec(
-        density=t.quantity("density"),
+        density=t.quantity("density", None),
         friction=t.quantity("friction"),
         restitution_normal=t.quantity("restitution_normal", 0.0, "restitution"),
         restitution_tangential=t.quantity("restitution_tangential", 0.8, "restitution"),
@@ -725,7 +727,23 @@ def _grain_diameter(particles: ParticlesSpec) -> float | None:
     return None
 
 
-def _build_grain(particles: ParticlesSpec, density: float, t: Table) -> ParticlesSpec:
+def _material_density(material: MaterialSpec, particles: ParticlesSpec, t: Table) -> MaterialSpec:
+    """``material.density`` is required unless ``particles.mass`` sets a clump's density, and
+    refused beside it (one of the two would be read and ignored).
+    """
+    by_mass = particles.shape != "sphere" and particles.mass is not None
+    if by_mass and material.density is not None:
+        raise t.error(
+            "density", material.density, "not given beside particles.mass: the mass and the "
+            "grain's volume set its density; remove one of the two",
+        )  # fmt: skip
+    if not by_mass and material.density is None:
+        raise t.error("density", None, "a value is required (the key is missing), or "
+                      "particles.mass for a screw or clump")  # fmt: skip
+    return material
+
+
+def _build_grain(particles: ParticlesSpec, density: float | None, t: Table) -> ParticlesSpec:
     """Attach the grain template of a screw or clump (mass if given, else the density)."""
     from dem import shapes
 
@@ -806,9 +824,11 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
     material = _read_material(table("material"))
     _check_inclination(trough, material, table("trough"))
     contact = _read_contact(table("contact"))
-    particles = _build_grain(
-        _read_particles(table("particles")), material.density, table("particles")
-    )
+    particles = _read_particles(table("particles"))
+    material = _material_density(material, particles, table("material"))
+    particles = _build_grain(particles, material.density, table("particles"))
+    if material.density is None:  # the grain's mass set it
+        material = replace(material, density=particles.grain.density)
     if contact.tangential == "coulomb":
         try:
             tangential.resolve(contact, material, particles)

@@ -482,7 +482,8 @@ def _resume_command(args, case, out: Path) -> str:
 
 def _set_overrides(texts: list[str] | None) -> dict:
     """``--set table.key=value`` options as load_case overrides (one value per key: several
-    values are a sweep, ``dem sweep``)."""
+    values are a sweep, ``dem sweep``).
+    """
     from dem.sweep import parse_set
 
     overrides: dict = {}
@@ -803,8 +804,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")
     p.add_argument("out_dirs", nargs="+", help="run output folders (holding summary.json)")
-    p.add_argument("--out", "--dest", dest="dest",
-                   help="where to write the report (default OUT/report); --dest is an alias")
+    p.add_argument(
+        "--out",
+        "--dest",
+        dest="dest",
+        help="where to write the report (default OUT/report); --dest is an alias",
+    )
     p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("export", help="export a case to another code")

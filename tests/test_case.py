@@ -272,6 +272,7 @@ def test_screw_and_clump_build_their_template(tmp_path):
             "particles.shank_radius": 0.0015,
             "particles.head_radius": 0.003,
             "particles.mass": 0.0025,
+            "material.density": None,  # the mass sets it
         }
     )
     (tmp_path / "screw").mkdir()
@@ -586,3 +587,26 @@ def test_more_frames_than_steps_per_cycle_is_refused_at_load(tmp_path):
     with pytest.raises(InputError, match="output.frames_per_cycle") as info:
         load_case(write_case(tmp_path, tables))
     assert "time steps per drive cycle" in str(info.value)
+
+
+def test_a_clumps_mass_sets_its_density_and_a_density_beside_it_is_refused():
+    """material.density beside particles.mass would be read and ignored: refused, by key."""
+    from small_case import SMALL_CASE, write_case
+
+    screws = SMALL_CASE.replace(
+        'shape = "sphere"\ncount = 120\nradius = 0.002',
+        'shape = "screw"\ncount = 10\nlength = 0.022\nshank_radius = 0.0018\nhead_radius = 0.0036\n'
+        "mass = 0.0025",
+    ).replace("length = 0.03", "length = 0.08")
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        with pytest.raises(InputError) as info:
+            load_case(write_case(Path(tmp) / "both", screws))
+        assert info.value.key == "material.density" and "particles.mass" in str(info.value)
+        case = load_case(write_case(Path(tmp) / "mass", screws.replace("density = 7800.0\n", "")))
+        grain = case.particles.grain
+        assert case.material.density == grain.density == pytest.approx(0.0025 / grain.volume)
+        with pytest.raises(InputError) as info:  # spheres need it
+            load_case(write_case(Path(tmp) / "none", SMALL_CASE.replace("density = 7800.0\n", "")))
+        assert info.value.key == "material.density" and "required" in str(info.value)

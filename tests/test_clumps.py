@@ -172,7 +172,6 @@ angle = 25.0
 throw_number = {gamma}
 
 [material]
-density = 7800.0
 friction = 0.35
 restitution_normal = {eps_n}
 

@@ -213,7 +213,12 @@ def test_a_checkpoint_of_a_feeder_resumes_bit_for_bit(tmp_path):
 
 
 def test_screws_are_fed_and_discharged_as_rigid_bodies(tmp_path):
-    text = FEEDER.split("[particles]")[0] + SCREWS + "[run]" + FEEDER.split("[run]")[1]
+    text = (
+        FEEDER.split("[particles]")[0].replace("density = 7800.0\n", "")
+        + SCREWS
+        + "[run]"
+        + FEEDER.split("[run]")[1]
+    )
     text = text.replace("length = 0.06", "length = 0.09").replace("width = 0.02", "width = 0.03")
     text = text.replace("feed_rate = 0.01", "feed_rate = 0.15").replace(
         "feed_length = 0.015", "feed_length = 0.03"

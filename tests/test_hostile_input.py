@@ -34,11 +34,15 @@ SCREW_KEYS = [
     "particles.length", "particles.shank_radius", "particles.head_radius", "particles.mass",
     "particles.max_bumpiness",
 ]  # fmt: skip
-SCREW_CASE = SMALL_CASE.replace(
-    'shape = "sphere"\ncount = 120\nradius = 0.002',
-    'shape = "screw"\ncount = 10\nlength = 0.022\nshank_radius = 0.0018\nhead_radius = 0.0036\n'
-    "mass = 0.0025",
-).replace("length = 0.03", "length = 0.08")
+SCREW_CASE = (
+    SMALL_CASE.replace("density = 7800.0\n", "")
+    .replace(
+        'shape = "sphere"\ncount = 120\nradius = 0.002',
+        'shape = "screw"\ncount = 10\nlength = 0.022\nshank_radius = 0.0018\nhead_radius = 0.0036\n'
+        "mass = 0.0025",
+    )
+    .replace("length = 0.03", "length = 0.08")
+)
 HOSTILE = {
     "nan": "nan",
     "inf": "inf",

@@ -13,11 +13,15 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 
-SCREW_CASE = SMALL_CASE.replace(
-    'shape = "sphere"\ncount = 120\nradius = 0.002',
-    'shape = "screw"\ncount = 10\nlength = 0.022\nshank_radius = 0.0018\nhead_radius = 0.0036\n'
-    "mass = 0.0025\nmax_bumpiness = {b}",
-).replace("length = 0.03", "length = 0.08")
+SCREW_CASE = (
+    SMALL_CASE.replace("density = 7800.0\n", "")
+    .replace(
+        'shape = "sphere"\ncount = 120\nradius = 0.002',
+        'shape = "screw"\ncount = 10\nlength = 0.022\nshank_radius = 0.0018\nhead_radius = 0.0036\n'
+        "mass = 0.0025\nmax_bumpiness = {b}",
+    )
+    .replace("length = 0.03", "length = 0.08")
+)
 
 
 def _dem(args, capsys) -> tuple[int, str]:
@@ -84,10 +88,14 @@ def test_a_clump_template_of_too_many_spheres_names_the_file(tmp_path, capsys):
     template = tmp_path / "case" / "big.spheres"
     template.parent.mkdir()
     template.write_text("".join(f"{0.001 * k} 0 0 0.0006\n" for k in range(1001)))
-    text = SMALL_CASE.replace(
-        'shape = "sphere"\ncount = 120\nradius = 0.002',
-        'shape = "clump"\ncount = 2\ntemplate = "big.spheres"\nmass = 0.0025',
-    ).replace("length = 0.03", "length = 2.0")
+    text = (
+        SMALL_CASE.replace("density = 7800.0\n", "")
+        .replace(
+            'shape = "sphere"\ncount = 120\nradius = 0.002',
+            'shape = "clump"\ncount = 2\ntemplate = "big.spheres"\nmass = 0.0025',
+        )
+        .replace("length = 0.03", "length = 2.0")
+    )
     code, err = _dem(["plan", str(write_case(tmp_path / "case", text))], capsys)
     _refused(code, err, "big.spheres", "1001", "at most 1000 member spheres")
 

@@ -56,7 +56,6 @@ angle = 25.0
 throw_number = 1.8
 
 [material]
-density = 7800.0
 friction = 0.35
 restitution_normal = 0.3
 

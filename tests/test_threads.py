@@ -27,7 +27,7 @@ START_STEPS = 400  # common start: contacts and their history exist when the com
 STEPS = 400  # compared
 SPEED = 0.5  # m/s, spread of the random initial velocities
 
-SCREW_CASE = SMALL_CASE.replace(
+SCREW_CASE = SMALL_CASE.replace("density = 7800.0\n", "").replace(
     """shape = "sphere"
 count = 120
 radius = 0.002""",

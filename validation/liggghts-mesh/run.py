@@ -118,6 +118,7 @@ def make_case(name: str, args):
             "particles.shank_radius": None,
             "particles.head_radius": None,
             "particles.mass": None,
+            "material.density": 7800.0,  # steel; the screws' mass set theirs
             "run.timestep": SPHERE_TIMESTEP,
         }
         if name == "flat-spheres":  # the kernel's flat floor and side walls, 60 mm apart
