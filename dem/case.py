@@ -728,8 +728,9 @@ def _grain_diameter(particles: ParticlesSpec) -> float | None:
 
 
 def _material_density(material: MaterialSpec, particles: ParticlesSpec, t: Table) -> MaterialSpec:
-    """``material.density`` is required unless ``particles.mass`` sets a clump's density, and
-    refused beside it (one of the two would be read and ignored).
+    """Require ``material.density`` unless ``particles.mass`` sets a clump's density.
+
+    Beside the mass it is refused: one of the two would be read and ignored.
     """
     by_mass = particles.shape != "sphere" and particles.mass is not None
     if by_mass and material.density is not None:

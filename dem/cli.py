@@ -481,8 +481,9 @@ def _resume_command(args, case, out: Path) -> str:
 
 
 def _set_overrides(texts: list[str] | None) -> dict:
-    """``--set table.key=value`` options as load_case overrides (one value per key: several
-    values are a sweep, ``dem sweep``).
+    """``--set table.key=value`` options as load_case overrides.
+
+    One value per key: several values are a sweep (``dem sweep``).
     """
     from dem.sweep import parse_set
 
@@ -490,8 +491,8 @@ def _set_overrides(texts: list[str] | None) -> dict:
     for text in texts or ():
         key, values = parse_set(text)
         if len(values) != 1:
-            raise InputError(f"--set {key}", text.partition("=")[2],
-                             "one value (for several, run dem sweep with the same --set)")  # fmt: skip
+            many = text.partition("=")[2]
+            raise InputError(f"--set {key}", many, "one value (several: dem sweep takes them)")
         if key in overrides:
             raise InputError("--set", key, "each key at most once")
         overrides[key] = values[0]

@@ -326,9 +326,14 @@ def stick_bed_row(job):
         except Exception as exc:  # the guards' errors are the result here
             row.update(finished=False, error=f"{type(exc).__name__}: {exc}"[:300])
         else:
-            row.update(finished=True, error="", velocity_norm=s["mean_velocity_norm"],
-                       stderr=s["mean_velocity_norm_stderr"], settle_cycles=s["settle_cycles"],
-                       max_overlap_fraction=s["max_overlap_fraction"])
+            row.update(
+                finished=True,
+                error="",
+                velocity_norm=s["mean_velocity_norm"],
+                stderr=s["mean_velocity_norm_stderr"],
+                settle_cycles=s["settle_cycles"],
+                max_overlap_fraction=s["max_overlap_fraction"],
+            )
     row["wall_time_s"] = round(time.perf_counter() - t0, 1)
     print(row, flush=True)
     return row
@@ -490,8 +495,16 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "part",
-        choices=("impacts", "sliding", "sliding_before", "hopping", "compliance", "stick", "all",
-                 "figures"),
+        choices=(
+            "impacts",
+            "sliding",
+            "sliding_before",
+            "hopping",
+            "compliance",
+            "stick",
+            "all",
+            "figures",
+        ),
     )
     args = parser.parse_args()
     parts = ("impacts", "sliding", "hopping") if args.part == "all" else (args.part,)
