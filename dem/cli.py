@@ -593,14 +593,7 @@ def _cmd_export_liggghts(args) -> int:
         raise InputError("--timestep", args.timestep, exc.allowed) from None  # not the case's
     timestep = scene.step.dt
     steps = int(round(case.run.cycles / case.drive.frequency / timestep))
-    settle = args.settle_cycles if args.settle_cycles is not None else case.run.settle_cycles
-    if settle is None:
-        raise InputError(
-            "--settle-cycles",
-            None,
-            'a whole number of driven cycles before measuring: the case says "auto", which a '
-            "deck cannot detect (a dem run of the case reports its number in summary.json)",
-        )
+    settle, settle_note = _export_settle_cycles(args, case)
     settle_steps = round(settle / (case.drive.frequency * timestep))
     out = _writable_path("OUT_DIR", args.out_dir, folder=True)
     written = [n for n in (DECK_NAME, CLUMP_FILE, MESH_FILE) if (out / n).exists()]
@@ -610,10 +603,52 @@ def _cmd_export_liggghts(args) -> int:
             "which the export would replace (pass --overwrite to replace them)",
         )  # fmt: skip
     path = write_deck(
-        scene, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps
-    )
-    print(f"wrote {path} (dt = {timestep:.4g} s, {steps} measured steps)")
+        scene, Path(args.out_dir), timestep=timestep, steps=steps, settle_steps=settle_steps,
+        settle_note=settle_note, dump=not args.no_dump,
+    )  # fmt: skip
+    print(f"wrote {path} (dt = {timestep:.4g} s, {settle} settling and {case.run.cycles} measured "
+          f"cycles, {steps} measured steps)")  # fmt: skip
+    if settle_note:
+        print(f"settle: {settle_note}")
     return 0
+
+
+def _export_settle_cycles(args, case) -> tuple[int, str | None]:
+    """Driven cycles before measuring in an exported deck, and a note where the case said "auto".
+
+    ``--settle-cycles``, else the case's number; for "auto" the number an earlier ``dem run`` of
+    this case detected (``--from-run``, else CASE_DIR/output), else
+    :data:`dem.config.DEM_EXPORT_SETTLE_CYCLES`.
+    """
+    import json
+
+    from dem.config import DEM_EXPORT_SETTLE_CYCLES
+
+    if args.settle_cycles is not None:
+        return args.settle_cycles, None
+    if case.run.settle_cycles is not None:
+        return case.run.settle_cycles, None
+    run_dir = Path(args.from_run) if args.from_run else case.directory / "output"
+    path = run_dir / "summary.json"
+    if path.is_file():
+        try:
+            s = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            s = None
+        if isinstance(s, dict) and s.get("case") == case.name and s.get("settle_cycles_auto"):
+            n = int(s["settle_cycles"])
+            return n, (f'run.settle_cycles = "auto": {n} cycles, the transient dem run detected '
+                       f"in {path}")  # fmt: skip
+        if args.from_run:
+            raise InputError("--from-run", str(run_dir), f"a dem run of case {case.name} with "
+                             'run.settle_cycles = "auto" (its summary.json says otherwise)')  # fmt: skip
+    elif args.from_run:
+        raise InputError("--from-run", str(run_dir), "a finished dem run's folder (summary.json)")
+    return DEM_EXPORT_SETTLE_CYCLES, (
+        f'run.settle_cycles = "auto": {DEM_EXPORT_SETTLE_CYCLES} cycles, dem\'s default for a deck '
+        "(no earlier dem run of the case reports its transient; the shipped cases' were 6-12 "
+        "cycles); --settle-cycles N or --from-run RUN_DIR to choose"
+    )
 
 
 def _cmd_calibrate(args) -> int:
@@ -821,8 +856,14 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--timestep", type=_number, help="dt in s (default: dem's for this case)")
     e.add_argument(
         "--settle-cycles", type=_whole0,
-        help="driven cycles before measuring (default: the case's; required for \"auto\")",
+        help="driven cycles before measuring (default: the case's; for \"auto\" what an earlier "
+        "dem run detected, else 20)",
     )  # fmt: skip
+    e.add_argument("--from-run", metavar="RUN_DIR",
+                   help='the dem run whose detected settling an "auto" case takes '
+                   "(default CASE_DIR/output)")  # fmt: skip
+    e.add_argument("--no-dump", action="store_true",
+                   help="no particle dump (default: output.frames_per_cycle a cycle)")
     e.add_argument(
         "--overwrite", action="store_true",
         help="replace a deck already in OUT_DIR (in.dem, grain.multisphere, trough.stl)",

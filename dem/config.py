@@ -71,6 +71,10 @@ DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 #: stick, soft enough that a clump with many members on the floor stays stable.
 DEM_STICK_RATE = 0.2
 DEM_STICK_DAMPING_RATIO = 0.7
+#: Driven cycles before measuring in an exported deck of a case whose ``run.settle_cycles`` is
+#: "auto" and no earlier dem run reports the detected number: the shipped bulk cases' detected
+#: transients were 6-12 cycles (their summary.json), so 20 covers them with margin.
+DEM_EXPORT_SETTLE_CYCLES = 20
 #: Neighbour lists are regrown to this factor times the needed size when they overflow.
 DEM_GROWTH_FACTOR = 1.5
 #: Instability checks run every this many steps.

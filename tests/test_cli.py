@@ -293,16 +293,44 @@ def test_calibrate_writes_the_closest_fit_and_fails_only_when_strict(tmp_path, c
     assert run(capsys, "calibrate", str(case_dir), "--dry-run", "--strict", "--plot", plot)[0] == 1
 
 
-def test_export_of_an_auto_settle_case_asks_for_the_settle_cycles(capsys, tmp_path):
-    code, _, err = run(capsys, "export", "liggghts", "cases/screw-trough", str(tmp_path / "a"))
-    assert code == 2 and "--settle-cycles" in err and "auto" in err
-    assert not (tmp_path / "a").exists()
+def test_export_of_an_auto_settle_case_takes_an_earlier_runs_count_or_a_stated_default(
+    capsys, tmp_path
+):
+    import json
+    import shutil
+
+    case_dir = tmp_path / "screw-trough"
+    shutil.copytree("cases/screw-trough", case_dir, ignore=shutil.ignore_patterns("output"))
+    code, out, err = run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "a"))
+    assert code == 0, err
+    deck = (tmp_path / "a" / "in.dem").read_text()
+    assert "20 cycles, dem's default" in deck and "20 cycles, dem's default" in out
+    # the run's own detected transient, from CASE_DIR/output (dem run's default folder)
+    (case_dir / "output").mkdir()
+    summary = {"case": "screw-trough", "settle_cycles_auto": True, "settle_cycles": 8}
+    (case_dir / "output" / "summary.json").write_text(json.dumps(summary))
+    assert run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "b"))[0] == 0
+    deck_b = (tmp_path / "b" / "in.dem").read_text()
+    assert "8 cycles, the transient dem run detected" in deck_b
+    dt = float(deck_b.split("\ntimestep ")[1].split()[0])
+    assert f"run {round(8 / (60.0 * dt))}\n" in deck_b  # the settle stage
+    # a particle dump every output frame (frames_per_cycle = 4)
+    dump = next(line for line in deck_b.splitlines() if line.startswith("dump "))
+    assert dump.split()[4] == str(round(1 / (60.0 * dt) / 4)) and "radius" in dump
+    # --from-run of another case is refused, naming it
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "summary.json").write_text(json.dumps({**summary, "case": "sphere-bed"}))
+    code, _, err = run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "c"),
+                       "--from-run", str(other))  # fmt: skip
+    assert code == 2 and "--from-run" in err and not (tmp_path / "c").exists()
     code, out, err = run(
-        capsys, "export", "liggghts", "cases/screw-trough", str(tmp_path / "b"),
-        "--settle-cycles", "10",
+        capsys, "export", "liggghts", str(case_dir), str(tmp_path / "d"),
+        "--settle-cycles", "10", "--no-dump",
     )  # fmt: skip
     assert code == 0, err
-    assert (tmp_path / "b" / "in.dem").is_file()
+    deck_d = (tmp_path / "d" / "in.dem").read_text()
+    assert "# settle:" not in deck_d and "\ndump " not in deck_d
 
 
 @pytest.mark.parametrize(

@@ -122,6 +122,8 @@ MIN_HERTZ_RESTITUTION = 0.06
 DECK_NAME = "in.dem"
 #: File the deck writes the windowed mean x-velocity to (columns: step, mean vx in m/s).
 VX_FILE = "vx_mean.txt"
+#: The particle dump's files, one per output frame (``*`` is the step; trough frame, SI units).
+DUMP_FILES = "dump*.liggghts"
 #: File a finite feeder's deck writes its balance to (:func:`read_balance`).
 BALANCE_FILE = "balance.txt"
 #: Neighbour skin as a fraction of the sphere radius.
@@ -515,6 +517,8 @@ def write_deck(
     fill_time: float | None = None,
     sample_steps: int | None = None,
     thermo_every: int | None = None,
+    settle_note: str | None = None,
+    dump: bool = True,
 ) -> Path:
     """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a case.
 
@@ -530,6 +534,11 @@ def write_deck(
         sample_steps: Window of the mean x-velocity written to ``vx_mean.txt``; default one
             output frame, 1 / (frequency * frames_per_cycle) s.
         thermo_every: Steps between thermo lines; default one drive cycle.
+        settle_note: Where the settle count came from (a comment in the deck), when the case
+            says "auto" and the caller chose it.
+        dump: Write a particle dump (``dump*.liggghts``, LIGGGHTS's ``custom`` text: id, type,
+            x y z, vx vy vz, radius) every output frame, ``output.frames_per_cycle`` per drive
+            cycle, from the drive's start: what dem run writes as VTK frames.
 
     Returns:
         Path of the deck.
@@ -603,8 +612,9 @@ def write_deck(
                 source=str(case.source),
             )
         settle_steps = round(case.run.settle_cycles * steps_per_cycle)
+    frame_steps = max(1, round(steps_per_cycle / case.output.frames_per_cycle))
     if sample_steps is None:
-        sample_steps = max(1, round(steps_per_cycle / case.output.frames_per_cycle))
+        sample_steps = frame_steps
     if thermo_every is None:
         thermo_every = max(1, round(steps_per_cycle))
 
@@ -711,7 +721,10 @@ def write_deck(
         f"# stages: fill {fill_steps} steps (static gravity), settle {settle_steps} driven steps, "
         f"measure {steps} driven steps; dt = {timestep} s",
         f"# output: {VX_FILE} (step, mean vx in m/s averaged over {sample_steps} steps), "
-        "log.liggghts",
+        "log.liggghts" + (f", {DUMP_FILES} (every {frame_steps} steps: "
+                          f"{case.output.frames_per_cycle} a cycle, from the drive's start)"
+                          if dump else ""),
+        *([f"# settle: {settle_note}"] if settle_note else []),
         "# frame: the trough's accelerating frame; walls still, effective gravity",
         "#   g(t) = (-g sin(alpha) + A w^2 sin(w tau) cos(phi), 0, "
         "-g cos(alpha) + A w^2 sin(w tau) sin(phi))",
@@ -772,6 +785,8 @@ def write_deck(
         "unfix grav",
         "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
         f"fix vxout all ave/time 1 {sample_steps} {sample_steps} c_vxm file {VX_FILE}",
+        *([f"dump frames all custom {frame_steps} {DUMP_FILES} id type x y z vx vy vz radius"]
+          if dump else []),
         *feed_lines,
         "",
         "# --- settle: driven, not measured",
