@@ -862,8 +862,11 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--from-run", metavar="RUN_DIR",
                    help='the dem run whose detected settling an "auto" case takes '
                    "(default CASE_DIR/output)")  # fmt: skip
-    e.add_argument("--no-dump", action="store_true",
-                   help="no particle dump (default: output.frames_per_cycle a cycle)")
+    e.add_argument(
+        "--no-dump",
+        action="store_true",
+        help="no particle dump (default: output.frames_per_cycle a cycle)",
+    )
     e.add_argument(
         "--overwrite", action="store_true",
         help="replace a deck already in OUT_DIR (in.dem, grain.multisphere, trough.stl)",

@@ -490,10 +490,7 @@ def _run_case(
         t0 = time.perf_counter()
         with _StopNow() as stop:
             stop.phase = "settling"
-            if progress:
-                print("dem: settling the fill (drive off, until at rest)", file=sys.stderr,
-                      flush=True)  # fmt: skip
-            settle_time = sim.settle()
+            settle_time = sim.settle(progress=_fill_bar(case) if progress else None)
             sim.start_drive()
         sim.stats[:] = 0.0
         loop = {
@@ -663,15 +660,14 @@ def _compile_first(case, progress: bool) -> None:
 
     if kernels.compiled(clumps=case.particles.shape != "sphere"):
         return
-    t0 = time.perf_counter()
-    if progress:
-        print("dem: compiling the DEM kernels for this machine, once (about a minute; they are "
-              "cached, later runs start at once) ...", file=sys.stderr, flush=True)  # fmt: skip
+    from dem.progress import Status
+
+    kind = "clump" if case.particles.shape != "sphere" else "sphere"
     small = replace(case, particles=replace(case.particles, count=min(2, case.particles.count)))
-    setup.from_case(small, check_limit=False).run(2)
-    if progress:
-        print(f"dem: kernels compiled in {time.perf_counter() - t0:.0f} s", file=sys.stderr,
-              flush=True)  # fmt: skip
+    message = (f"compiling the {kind} step kernels for this machine, once (numba, no cache yet; "
+               "about a minute, later runs start at once)")  # fmt: skip
+    with Status(message, "compiled", enabled=progress):
+        setup.from_case(small, check_limit=False).run(2)
 
 
 def _check_memory(case, estimate) -> None:
@@ -808,6 +804,26 @@ def _phase_bar(case, loop: dict):
                     desc=f"dem {case.name}: settling (until steady, at most)")  # fmt: skip
     return tqdm(total=settle, initial=loop["cycle"], unit="cycle",
                 desc=f"dem {case.name}: settling")  # fmt: skip
+
+
+def _fill_bar(case):
+    """The fill's settling (drive off) as a bar of simulated time up to the cap, with the rms
+    speed against the speed that counts as rest; a callback for :meth:`Simulation.settle`."""
+    from tqdm import tqdm
+
+    state: dict = {}
+
+    def update(elapsed: float, rms: float, threshold: float, done: bool) -> None:
+        if "bar" not in state:
+            state["bar"] = tqdm(total=round(config.DEM_SETTLE_MAX_TIME * 1e3), unit="ms",
+                                desc=f"dem {case.name}: resting the fill (drive off)")  # fmt: skip
+        bar = state["bar"]
+        bar.update(round(elapsed * 1e3) - bar.n)
+        bar.set_postfix_str(f"rms speed {rms:.2g} m/s, at rest below {threshold:.2g}")
+        if done:
+            bar.close()
+
+    return update
 
 
 def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> None:

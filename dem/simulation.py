@@ -672,10 +672,12 @@ class Simulation:
         """Root mean square sphere speed, m/s."""
         return float(np.sqrt(np.mean(np.einsum("ij,ij->i", self.spheres.v, self.spheres.v))))
 
-    def settle(self, *, max_time: float | None = None, chunk_time: float = 0.005) -> float:
+    def settle(self, *, max_time: float | None = None, chunk_time: float = 0.005,
+               progress=None) -> float:  # fmt: skip
         """Run with the drive off until the rms speed < DEM_SETTLE_SPEED_FRACTION sqrt(g r).
 
         Returns the simulated settling time, s; raises SimulationError after ``max_time``.
+        ``progress(elapsed_s, rms_speed, threshold, done)`` is called after every chunk.
         """
         max_time = config.DEM_SETTLE_MAX_TIME if max_time is None else max_time
         self.drive_on = False
@@ -685,7 +687,10 @@ class Simulation:
         start = self.time
         while self.time - start < max_time:
             self.run(chunk)
-            if self.rms_speed() < threshold:
+            rms = self.rms_speed()
+            if progress is not None:
+                progress(self.time - start, rms, threshold, rms < threshold)
+            if rms < threshold:
                 return self.time - start
         causes = []
         incline = math.degrees(math.atan2(-self.gravity[0], -self.gravity[2]))

@@ -250,7 +250,8 @@ def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, 
     monkeypatch.setattr(kernels, "compiled", lambda clumps=False: False)
     first = run_case(case, tmp_path / "b", progress=True, frames=False)
     err = capsys.readouterr().err
-    assert "compiling the DEM kernels" in err and "kernels compiled in" in err
+    assert "compiling the sphere step kernels" in err and ": compiled in" in err
+    assert "resting the fill (drive off)" in err and "at rest below" in err  # the fill's bar
     assert first["per_cycle_velocity"] == plain["per_cycle_velocity"]
 
 

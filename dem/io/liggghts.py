@@ -721,9 +721,13 @@ def write_deck(
         f"# stages: fill {fill_steps} steps (static gravity), settle {settle_steps} driven steps, "
         f"measure {steps} driven steps; dt = {timestep} s",
         f"# output: {VX_FILE} (step, mean vx in m/s averaged over {sample_steps} steps), "
-        "log.liggghts" + (f", {DUMP_FILES} (every {frame_steps} steps: "
-                          f"{case.output.frames_per_cycle} a cycle, from the drive's start)"
-                          if dump else ""),
+        "log.liggghts"
+        + (
+            f", {DUMP_FILES} (every {frame_steps} steps: "
+            f"{case.output.frames_per_cycle} a cycle, from the drive's start)"
+            if dump
+            else ""
+        ),
         *([f"# settle: {settle_note}"] if settle_note else []),
         "# frame: the trough's accelerating frame; walls still, effective gravity",
         "#   g(t) = (-g sin(alpha) + A w^2 sin(w tau) cos(phi), 0, "
@@ -785,8 +789,11 @@ def write_deck(
         "unfix grav",
         "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
         f"fix vxout all ave/time 1 {sample_steps} {sample_steps} c_vxm file {VX_FILE}",
-        *([f"dump frames all custom {frame_steps} {DUMP_FILES} id type x y z vx vy vz radius"]
-          if dump else []),
+        *(
+            [f"dump frames all custom {frame_steps} {DUMP_FILES} id type x y z vx vy vz radius"]
+            if dump
+            else []
+        ),
         *feed_lines,
         "",
         "# --- settle: driven, not measured",
