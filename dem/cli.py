@@ -640,8 +640,8 @@ def _export_settle_cycles(args, case) -> tuple[int, str | None]:
             return n, (f'run.settle_cycles = "auto": {n} cycles, the transient dem run detected '
                        f"in {path}")  # fmt: skip
         if args.from_run:
-            raise InputError("--from-run", str(run_dir), f"a dem run of case {case.name} with "
-                             'run.settle_cycles = "auto" (its summary.json says otherwise)')  # fmt: skip
+            why = 'run.settle_cycles = "auto" (its summary.json says otherwise)'
+            raise InputError("--from-run", str(run_dir), f"a dem run of case {case.name} with {why}")
     elif args.from_run:
         raise InputError("--from-run", str(run_dir), "a finished dem run's folder (summary.json)")
     return DEM_EXPORT_SETTLE_CYCLES, (

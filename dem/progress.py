@@ -20,6 +20,7 @@ class Status:
         enabled: False shows nothing (``progress=False`` of the callers).
         stream: Where to write (default stderr).
         interval: Seconds between rewrites of the line on a terminal.
+
     """
 
     def __init__(self, message: str, done: str = "done", *, enabled: bool = True,

@@ -807,8 +807,11 @@ def _phase_bar(case, loop: dict):
 
 
 def _fill_bar(case):
-    """The fill's settling (drive off) as a bar of simulated time up to the cap, with the rms
-    speed against the speed that counts as rest; a callback for :meth:`Simulation.settle`."""
+    """The fill's settling (drive off): a callback for :meth:`Simulation.settle`.
+
+    A bar of simulated time up to the cap, with the rms speed against the speed that counts as
+    rest.
+    """
     from tqdm import tqdm
 
     state: dict = {}
