@@ -641,7 +641,7 @@ def _export_settle_cycles(args, case) -> tuple[int, str | None]:
                        f"in {path}")  # fmt: skip
         if args.from_run:
             why = 'run.settle_cycles = "auto" (its summary.json says otherwise)'
-            raise InputError("--from-run", str(run_dir), f"a dem run of case {case.name} with {why}")
+            raise InputError("--from-run", str(run_dir), f"a dem run of {case.name} with {why}")
     elif args.from_run:
         raise InputError("--from-run", str(run_dir), "a finished dem run's folder (summary.json)")
     return DEM_EXPORT_SETTLE_CYCLES, (
