@@ -346,6 +346,54 @@ def stick_grain_row(job):
     return row
 
 
+#: Inclines of the creep test, as fractions of the friction angle (below it: no creep).
+CREEP_FRACTIONS = (0.5, 0.9)
+
+
+def stick_creep_row(job):
+    """Grains at rest on a floor tilted below the friction angle, drive off: a stable stick
+    holds them (the creep speed decays to nothing); a stick past its explicit stability limit
+    chatters against its Coulomb cap and creeps, or blows up. ``what`` is "screw" (one lying
+    screw, rotation free) or "bed" (the screw-trough fill, 200 screws, many sticking contacts
+    each). Returns the mean x-velocity over the last of 0.3 s and the rms speed."""
+    what, fraction, rate, zeta = job
+    _set_stick(rate, zeta)
+    incline = math.degrees(math.atan(fraction * 0.35))  # mu 0.35 in both
+    base = load_case(ROOT / "cases" / "screw-trough")
+    case = dataclasses.replace(
+        base, trough=dataclasses.replace(base.trough, inclination=incline)
+    )
+    row = {"what": what, "incline_deg": round(incline, 3), "friction_angle_fraction": fraction,
+           "stick_rate": rate, "stick_damping_ratio": zeta}  # fmt: skip
+    try:
+        if what == "screw":
+            case = dataclasses.replace(
+                case, particles=dataclasses.replace(case.particles, count=1),
+                run=dataclasses.replace(case.run, timestep=None),
+            )  # fmt: skip
+            sim = _single_screw_module().lying_simulation(case, "auto")
+        else:
+            sim = setup.from_case(case)
+        sim.settle()  # drive off, until at rest (refused if it never rests)
+        n = max(1, round(0.05 / sim.dt))
+        speeds = []
+        for _ in range(6):  # 0.3 s, drive off
+            sim.run(n)
+            speeds.append((sim.mean_velocity_x(), sim.rms_speed()))
+        row.update(finished=True, error="", creep_velocity_m_s=speeds[-1][0],
+                   rms_speed_m_s=speeds[-1][1], creep_velocity_first_m_s=speeds[0][0])  # fmt: skip
+    except Exception as exc:
+        row.update(finished=False, error=f"{type(exc).__name__}: {exc}"[:300])
+    print(row, flush=True)
+    return row
+
+
+def stick_creep():
+    jobs = [(w, f, r, z) for r, z in STICK_SETTINGS for w in ("screw", "bed")
+            for f in CREEP_FRACTIONS]  # fmt: skip
+    write_csv(pool_map(stick_creep_row, jobs), "stick_creep.csv")
+
+
 def stick():
     """The enduring stick's rate: a stiffer stick is closer to Coulomb's rigid stick (the
     sliding map's soft end), but grains with many sticking contacts see their stiffnesses add
@@ -500,6 +548,7 @@ def main():
             "sliding",
             "sliding_before",
             "hopping",
+            "stick_creep",
             "compliance",
             "stick",
             "all",
