@@ -294,7 +294,7 @@ def compliance():
 
 
 #: The enduring stick's settings compared by ``run.py stick``: (alpha rad per step, zeta).
-STICK_SETTINGS = [(0.2, 0.7), (0.5, 0.7), (0.8, 0.5), (0.8, 0.7), (1.2, 0.5)]
+STICK_SETTINGS = [(0.2, 0.7), (0.5, 0.7), (0.8, 0.5), (0.8, 0.7), (1.2, 0.5), (0.5, 0.5)]
 #: The beds whose grains hold many sticking contacts at once (shipped cases, as shipped).
 STICK_BEDS = ("sphere-bed", "screw-trough", "u-trough")
 
@@ -360,9 +360,7 @@ def stick_creep_row(job):
     _set_stick(rate, zeta)
     incline = math.degrees(math.atan(fraction * 0.35))  # mu 0.35 in both
     base = load_case(ROOT / "cases" / "screw-trough")
-    case = dataclasses.replace(
-        base, trough=dataclasses.replace(base.trough, inclination=incline)
-    )
+    case = dataclasses.replace(base, trough=dataclasses.replace(base.trough, inclination=incline))
     row = {"what": what, "incline_deg": round(incline, 3), "friction_angle_fraction": fraction,
            "stick_rate": rate, "stick_damping_ratio": zeta}  # fmt: skip
     try:
@@ -400,6 +398,7 @@ def stick():
     (alpha sqrt(n) per step): the shipped beds show where that stays stable."""
     rows = pool_map(stick_bed_row, [(n, r, z) for r, z in STICK_SETTINGS for n in STICK_BEDS])
     write_csv(rows, "stick_beds.csv")
+    stick_creep()
     rng_drives = _sliding_drives()
     jobs = [("sphere", "hertz_mindlin", 5e7, d, 0.8, r, z)
             for r, z in STICK_SETTINGS for d in rng_drives]  # fmt: skip
