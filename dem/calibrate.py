@@ -157,7 +157,7 @@ def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
     :data:`LANDING_STEPS` per cycle for ``transient`` cycles, then its landings over ``cycles``
     cycles are recorded (relative velocity just before touching). Empty below Gamma = 1.
     """
-    d, m = case.drive, case.material
+    d, m = case.drive, case.wall_material  # the point mass's landings: the floor's
     out = np.zeros((cycles * 8, 2))
     if d.second_amplitude > 0.0:  # two components: the point mass on the same motion
         args, length = elliptic.stepping_args(d.motion, case.trough.inclination)
@@ -186,6 +186,19 @@ def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
 MIN_INCIDENCE = 5.0
 #: Range of log(kappa) searched by :func:`calibrate`.
 LOG_KAPPA_RANGE = (math.log(1e-4), math.log(10.0))
+
+
+#: Width in ln(k_t / k_n) the golden-section refinement of the fit stops at.
+GOLDEN_TOLERANCE = 1e-3
+
+
+def _golden_evaluations(width: float, tol: float) -> int:
+    """Most evaluations :func:`_golden` makes on an interval ``width`` wide.
+
+    Two, then one per narrowing by the golden ratio (the other point is cached).
+    """
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    return 2 + max(0, math.ceil(math.log(tol / width) / math.log(ratio)))
 
 
 def _golden(f, a, b, tol):
@@ -343,7 +356,9 @@ def calibrate(
     :class:`dem.case.Case` resolved here.
 
     What a law leaves to fit, and whether it may be calibrated, is its registry row's
-    (:data:`dem.laws.TANGENTIAL_LAWS`).
+    (:data:`dem.laws.TANGENTIAL_LAWS`). ``progress(kappa, mean_eps_t, done, total)`` is called
+    after each evaluation (``total`` is the most the search can make: the grid, the start and
+    the golden section's bound).
 
     Raises:
         InputError: the law refuses calibration ("liggghts").
@@ -363,7 +378,7 @@ def calibrate(
         )
     from dem.kernels import contacts
 
-    target = case.material.restitution_tangential
+    target = case.wall_material.restitution_tangential  # impacts on the floor
     impacts = landings(case)
     if impacts.shape[0]:
         # a periodic orbit lands the same way every cycle: measure each distinct landing once
@@ -386,7 +401,7 @@ def calibrate(
         rng = np.random.default_rng(case.run.seed)
         quats = list(random_orientations(orientations, rng))
 
-    m = case.material
+    m = case.wall_material
     targets = bounded_targets(m.restitution_tangential, m.restitution_normal, m.friction,
                               impacts[:, 0])  # fmt: skip
     bounded = targets > target
@@ -424,21 +439,23 @@ def calibrate(
             deviation = np.nanmean(e_t, axis=1) - targets
             cache[log_kappa] = (float(np.sum(weights * deviation**2)), e_t, e_n)
             if progress is not None:
-                progress(kappa, float(np.nanmean(e_t)))
+                progress(kappa, float(np.nanmean(e_t)), len(cache), total)
         return cache[log_kappa][0]
 
     before = np.nanmean(_measure(scene, impacts, quats)[0], axis=1)
     # eps_t need not be monotone in kappa (a rolling grain's is not): scan the whole range
     # coarsely, then refine around the best point of the scan and the start
     grid = np.linspace(*LOG_KAPPA_RANGE, 16)
+    step = float(grid[1] - grid[0])
+    # evaluations: the grid, the start, and the golden section on two grid steps to 1e-3
+    total = len(grid) + 1 + _golden_evaluations(2.0 * step, GOLDEN_TOLERANCE)
     for x in grid:
         evaluate(float(x))
     x = math.log(start if start is not None else float(scene.law.params[contacts.P_KT_RATIO]))
     evaluate(x)
     x = min(cache, key=lambda k: cache[k][0])
-    step = float(grid[1] - grid[0])
     lo, hi = max(x - step, LOG_KAPPA_RANGE[0]), min(x + step, LOG_KAPPA_RANGE[1])
-    _golden(evaluate, lo, hi, 1e-3)
+    _golden(evaluate, lo, hi, GOLDEN_TOLERANCE)
     best_log = min(cache, key=lambda k: cache[k][0])  # the best point evaluated
     best = math.exp(best_log)
     _, e_t, e_n = cache[best_log]

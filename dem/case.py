@@ -181,6 +181,39 @@ class MaterialSpec:
 
 
 @dataclass(frozen=True)
+class WallSpec:
+    """Grain-wall interaction (floor, side walls, back wall, mesh triangles): ``[wall]``.
+
+    A value ``[wall]`` does not give is None here and the material's in use
+    (:attr:`Case.wall_material`), so a case whose material is changed (``dataclasses.replace``,
+    a study) keeps its walls of the new material. The contact stiffness is the material's (the
+    wall is as stiff as the grains, as in LIGGGHTS with one Young's modulus). The point-mass
+    model sees the wall's values: its grain touches only the floor.
+
+    Attributes:
+        friction: mu between a grain and a wall.
+        restitution_normal: eps_n of a grain-wall impact.
+        restitution_tangential: eps_t of a grain-wall impact (the paper's floor landing).
+        rolling_friction: mu_r between a grain and a wall.
+
+    """
+
+    friction: float | None = None
+    restitution_normal: float | None = None
+    restitution_tangential: float | None = None
+    rolling_friction: float | None = None
+
+    @property
+    def given(self) -> tuple[str, ...]:
+        """The keys ``[wall]`` gave."""
+        return tuple(k for k in _WALL_KEYS if getattr(self, k) is not None)
+
+    def over(self, material: MaterialSpec) -> MaterialSpec:
+        """``material`` with the values given here."""
+        return replace(material, **{k: getattr(self, k) for k in self.given})
+
+
+@dataclass(frozen=True)
 class ContactSpec:
     """Contact law selector and its coefficients.
 
@@ -330,6 +363,12 @@ class Case:
     output: OutputSpec
     feeder: FeederSpec | None = None
     overrides: dict = field(default_factory=dict, compare=False)
+    wall: WallSpec | None = None
+
+    @property
+    def wall_material(self) -> MaterialSpec:
+        """The material a grain-wall contact uses: the grains' with ``[wall]``'s values."""
+        return self.material if self.wall is None else self.wall.over(self.material)
 
     def with_drive(
         self,
@@ -493,18 +532,19 @@ def _read_mesh(t: Table) -> Path | None:
     return mesh
 
 
-def _check_inclination(trough: TroughSpec, material: MaterialSpec, t: Table) -> None:
-    """Refuse a trough steeper than the friction angle atan(mu), either way.
+def _check_inclination(trough: TroughSpec, floor: MaterialSpec, by_wall: bool, t: Table) -> None:
+    """Refuse a trough steeper than the floor's friction angle atan(mu), either way.
 
     There no friction holds a grain on the floor: the bed slides downhill ever faster, the
     periodic section has no steady conveying velocity to measure, and the run would end only when
     a grain outran the instability check. Refused, not warned: no run of it gives a result.
     """
-    limit = math.degrees(math.atan(material.friction))
+    limit = math.degrees(math.atan(floor.friction))
+    key = "wall.friction" if by_wall else "material.friction"
     if abs(trough.inclination) > limit:
         raise t.error(
             "inclination", trough.inclination,
-            f"within the friction angle atan(material.friction = {material.friction:g}) = "
+            f"within the friction angle atan({key} = {floor.friction:g}) = "
             f"{limit:.4g} deg: [-{limit:.4g}, {limit:.4g}] degrees (steeper, no friction holds a "
             "grain on the floor and the bed slides downhill ever faster)",
         )  # fmt: skip
@@ -573,6 +613,18 @@ def resolve_drive(
     else:
         amplitude = drive.amplitude(throw_number, frequency, angle, inclination)
     return DriveSpec(frequency, angle, amplitude, throw_number, given)
+
+
+_WALL_KEYS = ("friction", "restitution_normal", "restitution_tangential", "rolling_friction")
+
+
+def _read_wall(t: Table) -> WallSpec:
+    """``[wall]``: the keys given (the others are the material's)."""
+    t.check_known(_WALL_KEYS)
+    return WallSpec(**{
+        key: t.quantity(key, None, "restitution" if key.startswith("restitution") else None)
+        for key in _WALL_KEYS
+    })  # fmt: skip
 
 
 def _read_material(t: Table) -> MaterialSpec:
@@ -713,7 +765,9 @@ def _read_output(t: Table) -> OutputSpec:
     return OutputSpec(frames_per_cycle=t.whole("frames_per_cycle", 4))
 
 
-_TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output", "feeder")
+_TABLES = (
+    "trough", "drive", "material", "wall", "contact", "particles", "run", "output", "feeder",
+)  # fmt: skip
 
 
 def _grain_diameter(particles: ParticlesSpec) -> float | None:
@@ -823,7 +877,8 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
     trough = _read_trough(table("trough"))
     drive = _read_drive(table("drive"), trough.inclination)
     material = _read_material(table("material"))
-    _check_inclination(trough, material, table("trough"))
+    wall = _read_wall(table("wall"))
+    _check_inclination(trough, wall.over(material), "friction" in wall.given, table("trough"))
     contact = _read_contact(table("contact"))
     particles = _read_particles(table("particles"))
     material = _material_density(material, particles, table("material"))
@@ -869,6 +924,7 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
         output=output,
         feeder=feeder,
         overrides=dict(overrides or {}),
+        wall=wall,
     )
     _check_feeder(case, table)
     _check_engine(case, table)

@@ -663,15 +663,42 @@ def _cmd_calibrate(args) -> int:
     plot = _plot_path(args.plot, "calibration.png") if args.plot else None
     source = case.directory / CASE_FILE
     print(
-        f"dem calibrate {case.name}: eps_t target {case.material.restitution_tangential:g}, "
+        f"dem calibrate {case.name}: eps_t target {case.wall_material.restitution_tangential:g}, "
         f"virtual impacts of one grain over the point mass's landings",
         file=sys.stderr,
     )
 
-    def progress(kappa, eps):
-        print(f"  k_t / k_n = {kappa:<10.4g} mean eps_t = {eps:.4f}", file=sys.stderr)
+    import time
 
-    cal = calibrate(case, progress=progress)
+    trail = case.directory / "output" / "calibration_evaluations.csv"
+    trail.parent.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    tried: list[tuple[float, float]] = []
+    with open(trail, "w", encoding="utf-8") as fh:
+        fh.write("evaluation,tangential_stiffness_ratio,mean_eps_t,target_eps_t\n")
+
+    def progress(kappa, eps, done, total):
+        """Each evaluation: count, ETA, and a row of the trail kept if the search is stopped."""
+        tried.append((kappa, eps))
+        with open(trail, "a", encoding="utf-8") as fh:
+            fh.write(
+                f"{done},{kappa:.6g},{eps:.6g},{case.wall_material.restitution_tangential:g}\n"
+            )
+        spent = time.perf_counter() - started
+        eta = spent / done * max(total - done, 0)
+        print(f"  [{done:2d}/{total}] k_t / k_n = {kappa:<10.4g} mean eps_t = {eps:.4f}   "
+              f"{spent:.0f} s, at most {eta:.0f} s to go", file=sys.stderr)  # fmt: skip
+
+    try:
+        cal = calibrate(case, progress=progress)
+    except KeyboardInterrupt:
+        target = case.wall_material.restitution_tangential
+        best = min(tried, key=lambda t: abs(t[1] - target), default=None)
+        text = "" if best is None else (f"; the closest so far: k_t / k_n = {best[0]:.4g} "
+                                        f"(mean eps_t {best[1]:.4f} for {target:g})")  # fmt: skip
+        print(f"dem calibrate: stopped after {len(tried)} evaluations, case.toml unchanged; "
+              f"every evaluation is in {trail}{text}", file=sys.stderr)  # fmt: skip
+        return 130
     theta = cal.impacts[:, 0]
     print(f"impacts          {len(theta)}, incidence {theta.min():.1f}-{theta.max():.1f} deg")
     print("  incidence  speed   target  eps_t   residual")
@@ -707,7 +734,7 @@ def _cmd_calibrate(args) -> int:
     if plot is None:
         plot = case.directory / "output" / "calibration.png"
         plot.parent.mkdir(parents=True, exist_ok=True)
-    calibration_figure(cal, case.material.friction, plot)
+    calibration_figure(cal, case.wall_material.friction, plot)
     print(f"wrote {plot}")
     if not cal.fitted:
         print("case.toml unchanged: nothing to calibrate")
@@ -722,7 +749,9 @@ def _cmd_calibrate(args) -> int:
             "tangential_stiffness_ratio": float(f"{cal.kappa:.6g}"),
             "tangential_damping_ratio": cal.zeta_t,
         },
-        f"dem calibrate {stamp}: eps_t {cal.eps_t:.3f} for {cal.target:g}",
+        f"dem calibrate {stamp}: eps_t {cal.eps_t:.3f} for {cal.target:g} at Gamma "
+        f"{case.drive.throw_number:.6g}, phi {case.drive.angle:g} deg, mu "
+        f"{case.wall_material.friction:g}, alpha {case.trough.inclination:g} deg",
     )
     original = source.with_name(CASE_FILE + ".orig")
     if not original.exists():

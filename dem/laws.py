@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -206,6 +206,31 @@ def history_width(tangential: str, model: str = "hertz_mindlin") -> int:
     return NORMAL_LAWS[model].history_width + TANGENTIAL_LAWS[tangential].history_width
 
 
+def _params(case) -> np.ndarray:
+    """One row of kernel parameters: the case's contact law with ``case.material``."""
+    c, m = case.contact, case.material
+    return contacts.make_params(
+        model=c.model,
+        stiffness=c.stiffness or 0.0,
+        youngs_modulus=c.youngs_modulus or 0.0,
+        poisson_ratio=c.poisson_ratio,
+        restitution=m.restitution_normal,
+        friction=m.friction,
+        rolling_friction=m.rolling_friction,
+        limit_force=c.limit_force,
+        tangential=c.tangential,
+        wall_lever_arm=c.wall_lever_arm,
+        restitution_tangential=m.restitution_tangential,
+        **TANGENTIAL_LAWS[c.tangential].coefficients(case),
+    )
+
+
+def wall_params(params: np.ndarray) -> np.ndarray:
+    """The grain-wall row of a law's parameters: the second row, or the only one."""
+    n = contacts.N_PARAMS
+    return params[n : 2 * n] if params.shape[0] >= 2 * n else params
+
+
 @dataclass(frozen=True)
 class ContactLaw:
     """A contact law selector with its kernel parameters.
@@ -221,31 +246,25 @@ class ContactLaw:
 
     @classmethod
     def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.case.Case` (one material for grain-grain and grain-wall).
+        """Law of a :class:`dem.case.Case`: grain-grain, then grain-wall (``[wall]``).
 
-        The tangential law's row (:data:`TANGENTIAL_LAWS`) decides its coefficients: with
-        ``"coulomb"`` the tangential mass factor follows the grain (a rolling sphere 2/7,
-        rotation locked 1, a clump its contact mass over its mass) and an omitted
-        ``tangential_stiffness_ratio`` is derived from eps_t (:mod:`dem.tangential`).
+        ``params`` holds two rows of :data:`dem.kernels.contacts.N_PARAMS` floats: the
+        grain-grain law (the material) and the grain-wall law (the material with ``[wall]``'s
+        friction and restitutions, :attr:`dem.case.Case.wall_material`); the pair kernels read
+        the first, the wall kernels the second (:func:`wall_params`). The tangential law's row
+        (:data:`TANGENTIAL_LAWS`) decides its coefficients: with ``"coulomb"`` the tangential
+        mass factor follows the grain (a rolling sphere 2/7, rotation locked 1, a clump its
+        contact mass over its mass) and an omitted ``tangential_stiffness_ratio`` is derived
+        from eps_t (:mod:`dem.tangential`), each row from its own eps_t.
         """
-        c, m = case.contact, case.material
-        return cls(
-            model=c.model,
-            params=contacts.make_params(
-                model=c.model,
-                stiffness=c.stiffness or 0.0,
-                youngs_modulus=c.youngs_modulus or 0.0,
-                poisson_ratio=c.poisson_ratio,
-                restitution=m.restitution_normal,
-                friction=m.friction,
-                rolling_friction=m.rolling_friction,
-                limit_force=c.limit_force,
-                tangential=c.tangential,
-                wall_lever_arm=c.wall_lever_arm,
-                restitution_tangential=m.restitution_tangential,
-                **TANGENTIAL_LAWS[c.tangential].coefficients(case),
-            ),
-        )
+        wall_case = case if case.wall is None else replace(case, material=case.wall_material)
+        rows = [_params(case), _params(wall_case)]
+        return cls(model=case.contact.model, params=np.concatenate(rows))
+
+    @property
+    def wall_params(self) -> np.ndarray:
+        """The grain-wall row of ``params`` (:func:`wall_params`)."""
+        return wall_params(self.params)
 
     @property
     def tangential(self) -> str:

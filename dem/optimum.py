@@ -339,7 +339,7 @@ def replot(out: str | Path) -> None:
 
 
 def _pointmass(case, over, hold, bounds, pointmass_optimum):
-    m = case.material
+    m = case.wall_material  # the point mass touches the floor only
     pm_over = "angle" if over == "drive.angle" else "throw_number"
     held_values = {"throw_number": case.drive.throw_number, "amplitude": case.drive.amplitude}
     return pointmass_optimum(

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import asdict, dataclass, field
 from functools import cache
 from importlib import resources
@@ -66,6 +67,47 @@ class Advice:
     level: str
     key: str
     text: str
+
+
+#: ``dem calibrate``'s comment on the [contact] keys it writes: the drive it fitted them on.
+CALIBRATED_AT = re.compile(
+    r"#\s*dem calibrate [^:]*:.*? at Gamma (?P<gamma>[-+0-9.eE]+), phi (?P<phi>[-+0-9.eE]+) deg, "
+    r"mu (?P<mu>[-+0-9.eE]+), alpha (?P<alpha>[-+0-9.eE]+) deg"
+)
+
+
+def calibration_advice(case) -> Advice | None:
+    """A warning where ``[contact]`` holds values ``dem calibrate`` fitted on another drive.
+
+    A ``"coulomb"`` spring's eps_t depends on the incidence of the landings, so k_t / k_n fitted
+    at one drive gives another eps_t at another (0.1581 fitted at phi 25 deg, Gamma 1.8 gives
+    eps_t 0.824 at phi 30 deg, Gamma 2). The drive is read from the comment ``dem calibrate``
+    writes beside the keys; a case run with ``--set`` is compared as run.
+    """
+    try:
+        text = Path(case.source).read_text(encoding="utf-8")
+    except (OSError, TypeError):
+        return None
+    found = CALIBRATED_AT.search(text)
+    if found is None or case.contact.tangential != "coulomb":
+        return None
+    at = {k: float(v) for k, v in found.groupdict().items()}
+    d, mu = case.drive, case.wall_material.friction
+    now = {"gamma": d.throw_number, "phi": d.angle, "mu": mu, "alpha": case.trough.inclination}
+    tolerance = {"phi": 0.5, "mu": 0.005, "alpha": 0.05}  # Gamma: 1 % relative
+    differs = abs(now["gamma"] / at["gamma"] - 1.0) > 0.01 or any(
+        abs(now[k] - at[k]) > tol for k, tol in tolerance.items()
+    )
+    if not differs:
+        return None
+    return Advice(
+        "warn", "contact.tangential_stiffness_ratio",
+        f"dem calibrate fitted it at Gamma {at['gamma']:g}, phi {at['phi']:g} deg, mu "
+        f"{at['mu']:g}, alpha {at['alpha']:g} deg; this run is at Gamma {now['gamma']:.4g}, phi "
+        f"{now['phi']:g} deg, mu {now['mu']:g}, alpha {now['alpha']:g} deg, where its eps_t "
+        "differs (a \"coulomb\" spring's eps_t depends on the landing's incidence): run dem "
+        "calibrate again, or use contact.tangential = \"impact\", which needs no calibration",
+    )  # fmt: skip
 
 
 @dataclass
@@ -395,6 +437,11 @@ def unmeasured(case, data: dict, kind: str) -> list[str]:
             shown = repr(value) if isinstance(value, str) else f"{value:.4g}"
             study_shown = repr(ref) if isinstance(ref, str) else f"{ref:.4g}"
             out.append(f"{name} = {shown} (study: {study_shown})")
+    w = case.wall
+    for key in w.given if w is not None else ():
+        value, own = getattr(w, key), getattr(case.material, key)
+        if value != own:  # the study's walls were of the grains' material
+            out.append(f"wall.{key} = {value:.4g} (study: the material's, {own:.4g})")
     return out
 
 
@@ -460,6 +507,9 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     stiff = stiffness.advice(scene)  # the bed's lowest mode against the drive (bulk study)
     if stiff is not None and not any(a.key == stiff.key and a.level == "warn" for a in advice):
         advice.append(stiff)  # one warning per key: the speed-accuracy study's, if it has one
+    calibrated = calibration_advice(case)
+    if calibrated is not None:
+        advice.append(calibrated)
     mem = memory_bytes(scene, spheres, grains, threads)
     total = _physical_memory()
     if total and mem > 0.5 * total:
@@ -605,7 +655,7 @@ def _advise_cycles(statistical, within, cycles, advice) -> None:
 
 def _advise_ladder(case, data, kind, advice) -> None:
     """Which rung of the ladder (point mass, one grain, bed) already answers the question."""
-    d, m = case.drive, case.material
+    d, m = case.drive, case.wall_material  # the point mass touches the floor only
     command = (f"dem pointmass velocity --throw-number {d.throw_number:.4g} "
                f"--angle {d.angle:g} --friction {m.friction:g} "
                f"--inclination {case.trough.inclination:g} "

@@ -95,7 +95,7 @@ def _pointmass_bounded(case) -> float | None:
 
     if case.drive.second_amplitude > 0.0:
         return None
-    m = case.material
+    m = case.wall_material  # the point mass touches the floor only
     return pointmass.velocity(
         case.drive.throw_number, case.drive.angle, m.friction, case.trough.inclination,
         m.restitution_tangential, m.restitution_normal, impact="coulomb",
@@ -110,7 +110,7 @@ def _pointmass(case) -> tuple[float, str]:
     """
     from dem import pointmass
 
-    m = case.material
+    m = case.wall_material  # the point mass touches the floor only
     if case.drive.second_amplitude > 0.0:
         from dem.pointmass import elliptic
 
@@ -122,10 +122,10 @@ def _pointmass(case) -> tuple[float, str]:
     return pointmass.velocity(
         throw_number=case.drive.throw_number,
         angle=case.drive.angle,
-        friction=case.material.friction,
+        friction=case.wall_material.friction,
         inclination=case.trough.inclination,
-        eps_t=case.material.restitution_tangential,
-        eps_n=case.material.restitution_normal,
+        eps_t=case.wall_material.restitution_tangential,
+        eps_n=case.wall_material.restitution_normal,
     ).velocity_norm, "event-driven (the paper's model)"
 
 
@@ -490,6 +490,9 @@ def _run_case(
         t0 = time.perf_counter()
         with _StopNow() as stop:
             stop.phase = "settling"
+            if progress:
+                print("dem: settling the fill (drive off, until at rest)", file=sys.stderr,
+                      flush=True)  # fmt: skip
             settle_time = sim.settle(progress=_fill_bar(case) if progress else None)
             sim.start_drive()
         sim.stats[:] = 0.0
@@ -806,6 +809,15 @@ def _phase_bar(case, loop: dict):
                 desc=f"dem {case.name}: settling")  # fmt: skip
 
 
+def _wall_summary(case) -> dict:
+    """The grain-wall values in use, and which ``[wall]`` gave (the rest are the material's)."""
+    w = case.wall_material
+    return {"friction": w.friction, "restitution_normal": w.restitution_normal,
+            "restitution_tangential": w.restitution_tangential,
+            "rolling_friction": w.rolling_friction,
+            "given": list(case.wall.given) if case.wall is not None else []}  # fmt: skip
+
+
 def _fill_bar(case):
     """The fill's settling (drive off): a callback for :meth:`Simulation.settle`.
 
@@ -928,6 +940,7 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "angle": case.drive.angle,
         "inclination": case.trough.inclination,
         "friction": case.material.friction,
+        "wall": _wall_summary(case),
         "contact_model": case.contact.model,
         **sim.law.tangential_coefficients(),
         "grains": sim.n_grains,

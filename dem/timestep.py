@@ -19,7 +19,7 @@ import numpy as np
 from dem import config, fill
 from dem.errors import InputError
 from dem.kernels import contacts
-from dem.laws import ContactLaw
+from dem.laws import ContactLaw, wall_params
 
 __all__ = ["ContactLaw", "Timestep", "impact_speed_for", "timestep_for", "timestep_limits"]
 
@@ -52,16 +52,18 @@ def timestep_limits(
     of ``DEM_DT_RAYLEIGH_FRACTION`` of the Rayleigh time and ``DEM_DT_HERTZ_FRACTION`` of the
     Hertz collision time at ``impact_speed``; never above the stability limit.
     """
-    p = law.params
     if mass is None:
         mass = density * 4.0 / 3.0 * math.pi * radius**3
-    beta = p[contacts.P_BETA]
     tangential_factor = 3.5 if rotation else 1.0
     row = law.row
-    contacts_list = [(mass, radius)] + ([(0.5 * mass, 0.5 * radius)] if pairs else [])
+    wall = wall_params(law.params)  # the grain-wall law ([wall]); grain-grain is law.params
+    contacts_list = [(mass, radius, wall)]
+    if pairs:
+        contacts_list.append((0.5 * mass, 0.5 * radius, law.params))
     limit = math.inf
     auto = math.inf
-    for m_eff, r_eff in contacts_list:
+    for m_eff, r_eff, p in contacts_list:
+        beta = p[contacts.P_BETA]
         if law.model == "linear":
             kn = p[contacts.P_KN]
             root = 1.0

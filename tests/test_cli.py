@@ -267,6 +267,37 @@ def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
     assert 0.015 < contact.tangential_stiffness_ratio < 0.025  # eps_t 0.8 at the 34 deg landing
     assert contact.tangential_damping_ratio == 0.3
     assert "# N/m" in toml.read_text()  # the rest of the file, comments included, is kept
+    # every evaluation was kept as it came; the written keys record the drive they fit
+    trail = (case_dir / "output" / "calibration_evaluations.csv").read_text().splitlines()
+    assert trail[0].startswith("evaluation,tangential_stiffness_ratio") and len(trail) > 17
+    assert "at Gamma 1.8, phi 25 deg, mu 0.35, alpha 0 deg" in toml.read_text()
+    from dem.plan import plan
+
+    key = "contact.tangential_stiffness_ratio"
+    assert not [a for a in plan(load_case(case_dir)).advice if a.key == key]
+    other = plan(load_case(case_dir, {"drive.throw_number": 2.0})).advice
+    assert [a for a in other if a.key == key and a.level == "warn"]
+
+
+def test_calibrate_counts_its_evaluations_and_a_stop_keeps_them(tmp_path, capsys, monkeypatch):
+    import dem.calibrate
+
+    case_dir, toml = _single_sphere_copy(tmp_path, 1.8, "coulomb")
+    before = toml.read_text()
+    measure, calls = dem.calibrate._measure, {"n": 0}
+
+    def stopped_at_the_fifth(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 5:
+            raise KeyboardInterrupt
+        return measure(*args, **kwargs)
+
+    monkeypatch.setattr(dem.calibrate, "_measure", stopped_at_the_fifth)
+    code, _, err = run(capsys, "calibrate", str(case_dir), "--plot", str(tmp_path / "c.png"))
+    assert code == 130 and toml.read_text() == before
+    assert "[ 1/" in err and "to go" in err and "stopped after 3 evaluations" in err
+    trail = (case_dir / "output" / "calibration_evaluations.csv").read_text().splitlines()
+    assert len(trail) == 4  # the header and the three evaluations made
 
 
 def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):

@@ -23,6 +23,8 @@ SPHERE_KEYS = [
     "drive.second_angle", "drive.second_phase", "drive.ramp_cycles",
     "material.density", "material.friction", "material.restitution_normal",
     "material.restitution_tangential", "material.rolling_friction",
+    "wall.friction", "wall.restitution_normal", "wall.restitution_tangential",
+    "wall.rolling_friction",
     "contact.youngs_modulus", "contact.poisson_ratio", "contact.tangential_stiffness_ratio",
     "contact.tangential_damping_ratio",
     "particles.count", "particles.radius",

@@ -205,3 +205,25 @@ def test_plan_json_is_strict_json_with_null_for_what_was_not_measured(capsys):
     assert main(["plan", str(CASES_DIR / "screw-trough"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out, parse_constant=refuse)
     assert out["expected_error"] is None and "not measured" in out["error_source"]
+
+
+def test_plan_warns_when_calibrated_contact_values_belong_to_another_drive(tmp_path):
+    """dem calibrate's comment records the drive it fitted k_t / k_n on; another drive (here by
+    an override, as dem run --set makes) gets a warning naming both."""
+    from small_case import SMALL_CASE, write_case
+
+    from dem.case import load_case
+    from dem.plan import plan
+
+    text = SMALL_CASE.replace(
+        "youngs_modulus = 5.0e7",
+        'youngs_modulus = 5.0e7\ntangential = "coulomb"\n'
+        "tangential_stiffness_ratio = 0.1581  # dem calibrate 2026-11-26: eps_t 0.800 for 0.8 "
+        "at Gamma 3.06, phi 25 deg, mu 0.35, alpha 0 deg",
+    )
+    case_dir = write_case(tmp_path / "case", text)
+    here = plan(load_case(case_dir))
+    assert not [a for a in here.advice if a.key == "contact.tangential_stiffness_ratio"]
+    there = plan(load_case(case_dir, {"drive.angle": 30.0}))
+    [warn] = [a for a in there.advice if a.key == "contact.tangential_stiffness_ratio"]
+    assert warn.level == "warn" and "phi 25 deg" in warn.text and "phi 30 deg" in warn.text

@@ -108,7 +108,7 @@ from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
-from dem.laws import NORMAL_LAWS, TANGENTIAL_LAWS
+from dem.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
 from dem.mesh import load_mesh
 from dem.scene import Scene, resolve
 from dem.shapes import write_clump
@@ -199,7 +199,8 @@ def _contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, st
     """Return the property/global lines, the model string and the model settings."""
     case = scene.case
     lines = [
-        "# grains are atom type 1, walls type 2; one material for both",
+        "# grains are atom type 1, walls type 2; each matrix below is (1-1 1-2 2-1 2-2): "
+        "grain-grain the material, grain-wall [wall] (the material's where it gives nothing)",
     ]
     row = TANGENTIAL_LAWS[case.contact.tangential]
     if row.liggghts_as != row.name:
@@ -209,31 +210,37 @@ def _contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, st
         lines.append("# NOTE: " + note)
         if row.name != "coulomb":  # "coulomb" keeps its own k_t / k_n and zeta_t (below)
             case = case.with_tangential(row.liggghts_as)
-    contact, material = case.contact, case.material
+    contact, material, wall = case.contact, case.material, case.wall_material
     limit = "on" if contact.limit_force else "off"
-    mu = _fmt(material.friction)
+
+    def pair(grains: float, walls: float) -> str:
+        return " ".join(_fmt(x) for x in (grains, walls, walls, walls))
+
+    mu = pair(material.friction, wall.friction)
     if contact.wall_lever_arm == "surface":
         lines.append(
             "# NOTE: the case's wall contacts act at r - delta (contact.wall_lever_arm = "
             "'surface'); LIGGGHTS's walls at r - delta/2, as dem's wall_lever_arm = 'midpoint'"
         )
     lines += [
-        f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu} {mu} {mu} {mu}",
+        f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu}",
     ]
     if contact.model == "hertz_mindlin":
-        e_case = material.restitution_normal
-        e = max(e_case, MIN_HERTZ_RESTITUTION)
-        if e != e_case:
-            lines.append(
-                f"# NOTE: restitution_normal = {e_case} in the case; LIGGGHTS refuses e <= 0.05, "
-                f"so e = {e} is used here (use the same value on both sides of a comparison)"
-            )
-        y, nu, es = _fmt(contact.youngs_modulus), _fmt(contact.poisson_ratio), _fmt(e)
+        es = []
+        for e_case in (material.restitution_normal, wall.restitution_normal):
+            e = max(e_case, MIN_HERTZ_RESTITUTION)
+            if e != e_case and e_case not in es:
+                lines.append(
+                    f"# NOTE: restitution_normal = {e_case} in the case; LIGGGHTS refuses "
+                    f"e <= 0.05, so e = {e} is used here (use the same value on both sides of a "
+                    "comparison)"
+                )  # fmt: skip
+            es.append(e)
+        y, nu = _fmt(contact.youngs_modulus), _fmt(contact.poisson_ratio)
         lines += [
             f"fix m_Y all property/global youngsModulus peratomtype {y} {y}",
             f"fix m_nu all property/global poissonsRatio peratomtype {nu} {nu}",
-            f"fix m_e all property/global coefficientRestitution peratomtypepair 2 "
-            f"{es} {es} {es} {es}",
+            f"fix m_e all property/global coefficientRestitution peratomtypepair 2 {pair(*es)}",
         ]
         model = NORMAL_LAWS[contact.model].liggghts
         settings = f"limitForce {limit} tangential_damping on"
@@ -241,32 +248,37 @@ def _contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, st
         # the scene's law, or the law of the case switched to "liggghts" above (its own)
         law = scene.law if case is scene.case else ContactLaw.from_case(case)
         kn = contact.stiffness
-        kt = law.params[P_KT_RATIO] * kn
-        zeta = damping_ratio(material.restitution_normal)
+        rows = (law.params, wall_params(law.params))  # grain-grain, grain-wall
+        kts = [rows[0][P_KT_RATIO] * kn] + [rows[1][P_KT_RATIO] * kn] * 3
+        zetas = [damping_ratio(material.restitution_normal)]
+        zetas += [damping_ratio(wall.restitution_normal)] * 3
         # m* = m/2 grain-grain (1-1), m for grain-wall (1-2 and 2-1); type 2-2 never meets
         meff = (0.5 * sphere_mass, sphere_mass, sphere_mass, sphere_mass)
-        gn = [2.0 * zeta * math.sqrt(kn * m) for m in meff]
+        gn = [2.0 * z * math.sqrt(kn * m) for z, m in zip(zetas, meff, strict=True)]
         if contact.tangential == "liggghts":
             gt, gt_text = gn, "gamma_t = gamma_n (as dem's liggghts convention)"
         else:
-            zeta_t, f_t = law.params[P_ZETA_T], law.params[P_MASS_T]
-            gt = [2.0 * zeta_t * math.sqrt(kt * f_t * m) for m in meff]
-            gt_text = f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {zeta_t:.6g}, f_t = {f_t:.6g}"
+            gt = [
+                2.0 * row[P_ZETA_T] * math.sqrt(kt * row[P_MASS_T] * m)
+                for row, kt, m in zip((rows[0],) + (rows[1],) * 3, kts, meff, strict=True)
+            ]
+            gt_text = (f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {rows[0][P_ZETA_T]:.6g}, "
+                       f"f_t = {rows[0][P_MASS_T]:.6g}")  # fmt: skip
         lines += [
-            f"# linear spring-dashpot: zeta = {zeta:.6g} from e = {material.restitution_normal}, "
+            f"# linear spring-dashpot: zeta = {zetas[0]:.6g} (grain-wall {zetas[1]:.6g}) from e = "
+            f"{material.restitution_normal} (wall {wall.restitution_normal}), "
             "gamma_n = 2 zeta sqrt(k m*), m* = m/2 (1-1) or m (1-2); " + gt_text,
             f"fix m_kn all property/global kn peratomtypepair 2 {' '.join([_fmt(kn)] * 4)}",
-            f"fix m_kt all property/global kt peratomtypepair 2 {' '.join([_fmt(kt)] * 4)}",
+            "fix m_kt all property/global kt peratomtypepair 2 " + " ".join(map(_fmt, kts)),
             "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(_fmt, gn)),
             "fix m_gt all property/global gammat_abs peratomtypepair 2 " + " ".join(map(_fmt, gt)),
         ]
         model = NORMAL_LAWS[contact.model].liggghts
         settings = f"absolute_damping on limitForce {limit} tangential_damping on"
-    if material.rolling_friction > 0.0:
-        mr = _fmt(material.rolling_friction)
+    if material.rolling_friction > 0.0 or wall.rolling_friction > 0.0:
+        mr = pair(material.rolling_friction, wall.rolling_friction)
         lines.append(
-            f"fix m_mur all property/global coefficientRollingFriction peratomtypepair 2 "
-            f"{mr} {mr} {mr} {mr}"
+            f"fix m_mur all property/global coefficientRollingFriction peratomtypepair 2 {mr}"
         )
         model += " rolling_friction cdt"
     return lines, model, settings

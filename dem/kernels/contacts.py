@@ -595,6 +595,17 @@ def contact_force(
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
+def wall_row(p):
+    """The grain-wall law's parameters: the second row of ``p``, or ``p`` if it holds one law.
+
+    :class:`dem.laws.ContactLaw` packs the grain-grain row, then the grain-wall row.
+    """
+    if p.shape[0] >= 2 * N_PARAMS:
+        return p[N_PARAMS : 2 * N_PARAMS]
+    return p
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def add_wall_contact(
     model, p, nx, ny, nz, delta, v, omega, i, m, r, hist, row, dt, fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip

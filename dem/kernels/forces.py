@@ -29,7 +29,7 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contacts import add_wall_contact, contact_force_inlined
+from dem.kernels.contacts import add_wall_contact, contact_force_inlined, wall_row
 from dem.kernels.mesh import mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
@@ -214,6 +214,8 @@ def wall_forces(
 ):  # fmt: skip
     """(fx, ..., tz) plus the forces and torques of sphere i's wall contacts, N and N m.
 
+    The walls use the grain-wall law, the second row of ``p`` (:func:`wall_row`).
+
     A mesh trough (``mesh`` not None) replaces the floor and side walls by its triangles
     (:func:`dem.kernels.mesh.mesh_wall_forces`). Without one, ``mesh`` is None and numba
     compiles the kernels without the mesh code at all (a separate, cached specialisation for
@@ -226,11 +228,12 @@ def wall_forces(
     r = radius[i]
     m = mass[i]
     if mesh is not None:
+        pw = wall_row(p)
         fx, fy, fz, tx, ty, tz = mesh_wall_forces(
-            i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz
+            i, model, pw, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz
         )
         return _back_wall(
-            i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz
+            i, model, pw, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz
         )  # fmt: skip
     if (x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r
             and x[i, 0] - back >= r):  # fmt: skip
@@ -238,6 +241,7 @@ def wall_forces(
             for c in range(wall_hist.shape[1]):
                 wall_hist[row, c] = 0.0
         return fx, fy, fz, tx, ty, tz
+    pw = wall_row(p)  # the grain-wall law ([wall])
     for w in range(N_WALLS - 1):
         nz = 0.0
         ny = 0.0
@@ -257,10 +261,10 @@ def wall_forces(
                 wall_hist[row, c] = 0.0
             continue
         fx, fy, fz, tx, ty, tz = add_wall_contact(
-            model, p, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
+            model, pw, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
             fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
-    return _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz)
+    return _back_wall(i, model, pw, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, tx, ty, tz)
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
