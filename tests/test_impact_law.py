@@ -187,3 +187,32 @@ def test_hopping_block_follows_the_coulomb_bounded_point_mass(gamma, e_t):
     case = _case(value=1.6e7, e_t=e_t).with_drive(angle=25.0, throw_number=gamma)
     v = _block_velocity(case)
     assert v == pytest.approx(coulomb_bounded_velocity(gamma, 25.0, 0.35, e_t), abs=0.02)
+
+
+def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
+    """rms speed of 40 screws at rest on a floor tilted to 0.9 of the friction angle, drive
+    off, 0.1 s after their fill came to rest (validation/impact-law stick_creep.csv is the
+    200-screw version)."""
+    if stick_rate is not None:
+        defaults = dict(contacts.make_params.__kwdefaults__, stick_rate=stick_rate)
+        monkeypatch.setattr(contacts.make_params, "__kwdefaults__", defaults)
+    incline = math.degrees(math.atan(0.9 * 0.35))
+    case = load_case("cases/screw-trough", {
+        "particles.count": 40, "trough.length": 0.05, "trough.width": 0.04,
+        "trough.inclination": incline,
+    })  # fmt: skip
+    sim = setup.from_case(case)
+    sim.settle()
+    sim.run(round(0.1 / sim.dt))
+    return sim.rms_speed()
+
+
+@pytest.mark.validation
+def test_a_screw_bed_at_rest_below_the_friction_angle_stays_at_rest_under_the_default_stick(
+    monkeypatch,
+):
+    """The default stick (0.5 rad a step) holds a bed whose screws share several sticking
+    contacts; a stick past the explicit limit (1.2 rad a step) chatters against its Coulomb cap
+    and never rests (no instability guard sees it: the cap bounds it)."""
+    assert _tilted_screw_bed_speed(monkeypatch) < 1e-9
+    assert _tilted_screw_bed_speed(monkeypatch, stick_rate=1.2) > 1e-6
