@@ -189,6 +189,58 @@ def timestep(bed: str, moduli: list[float]) -> None:
     _record(f"timestep_{bed}", {"rows": rows})
 
 
+#: Samples of the bed's vertical centre of mass per drive period, and the periods sampled.
+SPECTRUM_SAMPLES, SPECTRUM_CYCLES, SPECTRUM_SETTLE = 64, 20, 10
+
+
+def spectrum(bed: str, moduli: list[float]) -> None:
+    """The bed's vertical centre of mass against E: its power at each drive harmonic.
+
+    One fill per E (seed 1, dt as the stiffness sweep), settled, driven SPECTRUM_SETTLE cycles,
+    then sampled SPECTRUM_SAMPLES times a period over SPECTRUM_CYCLES periods; the Fourier
+    amplitude of z_com at harmonics 1-12 of the drive, beside the bed's lowest vertical mode
+    (:func:`dem.stiffness.bed_mode`) in drive harmonics. A bed mode near harmonic k amplifies
+    harmonic k: where the velocity's band over E lines up with that, the band is the resonance.
+    """
+    from dem import setup, stiffness
+    from dem.scene import resolve
+
+    rows = []
+    for youngs in moduli:
+        case = _bed_case(bed, youngs)  # seed 1; setup fills one bed
+        mode = stiffness.bed_mode(resolve(case))
+        sim = setup.from_case(case)
+        sim.settle()
+        sim.start_drive()
+        period = sim.trough.period
+        sim.run(round(SPECTRUM_SETTLE * period / sim.dt))
+        every = max(1, round(period / sim.dt / SPECTRUM_SAMPLES))
+        n = round(SPECTRUM_CYCLES * period / (every * sim.dt))
+        z = np.empty(n)
+        for k in range(n):
+            sim.run(every)
+            if sim.bodies is not None:
+                b = sim.bodies
+                z[k] = np.sum(b.mass * b.x[:, 2]) / np.sum(b.mass)
+            else:
+                sp = sim.spheres
+                z[k] = np.sum(sp.mass * sp.x[:, 2]) / np.sum(sp.mass)
+        amp = np.abs(np.fft.rfft(z - z.mean())) * 2.0 / n
+        freq = np.fft.rfftfreq(n, every * sim.dt) * period  # in drive harmonics
+        row = {"bed": bed, "youngs_modulus_pa": youngs,
+               "bed_mode_harmonic": mode.omega_bed / case.drive.omega,
+               "z_rms_m": float(np.std(z))}  # fmt: skip
+        for h in range(1, 13):
+            row[f"amplitude_h{h}_m"] = float(amp[int(np.argmin(np.abs(freq - h)))])
+        rows.append(row)
+        print(f"{bed} E = {youngs:.0e}: bed mode at {row['bed_mode_harmonic']:.2f} f, "
+              + ", ".join(f"h{h} {row[f'amplitude_h{h}_m']:.2e}" for h in range(1, 9)),
+              flush=True)  # fmt: skip
+    _write_csv(HERE / f"spectrum_{bed}.csv", rows)
+    _record(f"spectrum_{bed}", {"rows": len(rows), "samples_per_period": SPECTRUM_SAMPLES,
+                                "cycles": SPECTRUM_CYCLES})  # fmt: skip
+
+
 def _row(bed, youngs, fraction, case, s) -> dict:
     return {
         "bed": bed, "youngs_modulus_pa": youngs, "dt_fraction_of_limit": fraction,
@@ -412,7 +464,16 @@ def _record(name: str, result: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parts = ["coverage", "persistence", "stiffness", "timestep", "fit", "rule", "figures"]
+    parts = [
+        "coverage",
+        "persistence",
+        "stiffness",
+        "timestep",
+        "spectrum",
+        "fit",
+        "rule",
+        "figures",
+    ]
     parser.add_argument("what", choices=parts)
     parser.add_argument("bed", nargs="?", default="sphere-bed",
                         choices=["sphere-bed", "screw-trough"])  # fmt: skip
@@ -431,6 +492,8 @@ def main() -> None:
         rule()
     elif args.what == "timestep":
         timestep(args.bed, args.moduli or [5e8, 5e9])
+    elif args.what == "spectrum":
+        spectrum(args.bed, args.moduli or MODULI[:5])
     figures()
 
 
