@@ -254,6 +254,11 @@ def _row(bed, youngs, fraction, case, s) -> dict:
     }  # fmt: skip
 
 
+#: Where the fit is rejected, the rigid limit is the mean of the points below this compliance
+#: (where the sphere bed, whose fit holds, is within 1.5 % of its limit).
+MEAN_COMPLIANCE = 0.01
+#: A held-out point further than this many of its standard errors from the fit rejects the fit.
+HELD_OUT_Z = 3.0
 #: Points of the rigid-limit fit: where the bed's compliance (omega / omega_bed)^2 is below this
 #: (:func:`dem.stiffness.bed_mode`), the response is linear in it.
 FIT_COMPLIANCE = 0.025
@@ -296,6 +301,25 @@ def rigid_limit(rows: list[dict], bed: str) -> dict:
     (v0, b0), _, _ = fit(train, 2.0 / 3.0)
     predicted = v0 + b0 * e[held] ** (-2.0 / 3.0)
     total = math.hypot(err, (max(form) - min(form)) / 2.0)
+    z_held = float((v[held] - predicted) / s[held])
+    if abs(z_held) > HELD_OUT_Z:
+        # the form fails on the point it did not see: the stiff points scatter beyond their
+        # error bars (few fills against a large fill-to-fill spread), so no trend in E is
+        # resolved there; their plain mean, with the error of their scatter, is the estimate
+        flat = c < MEAN_COMPLIANCE
+        stiff = v[flat]
+        return {
+            "form": f"mean of the points with (omega / omega_bed)^2 < {MEAN_COMPLIANCE}: the fit "
+                    f"v_inf + b E^(-2/3) failed its held-out check (z = {z_held:.1f}, chi^2 "
+                    f"{chi2:.1f} on {int(use.sum() - 2)} dof)",
+            "fitted_youngs_pa": [float(x) for x in e[flat]],
+            "held_out_youngs_pa": float(e[held]), "held_out_z": z_held,
+            "rejected_fit_v_inf_m_s": float(v_inf),
+            "v_inf_m_s": float(np.mean(stiff)),
+            "v_inf_stderr_m_s": float(np.std(stiff, ddof=1) / math.sqrt(stiff.size)),
+            "scatter_m_s": float(np.std(stiff, ddof=1)), "chi2": chi2,
+            "dof": int(use.sum() - 2),
+        }  # fmt: skip
     return {
         "form": "v(E) = v_inf + b E^(-2/3), weighted least squares on the points with "
                 f"(omega / omega_bed)^2 < {FIT_COMPLIANCE}",
@@ -303,7 +327,7 @@ def rigid_limit(rows: list[dict], bed: str) -> dict:
         "held_out_youngs_pa": float(e[held]),
         "held_out_measured_m_s": float(v[held]), "held_out_stderr_m_s": float(s[held]),
         "held_out_predicted_m_s": float(predicted),
-        "held_out_z": float((v[held] - predicted) / s[held]),
+        "held_out_z": z_held,
         "v_inf_m_s": float(v_inf), "v_inf_stderr_m_s": float(total),
         "v_inf_stat_m_s": float(err), "v_inf_exponents_1_3_and_1_m_s": [float(x) for x in form],
         "p": 2.0 / 3.0, "c": float(b), "chi2": chi2, "dof": int(use.sum() - 2),
@@ -325,8 +349,9 @@ def rule() -> None:
     """The stiffness rule dem warns by: compliance (omega / omega_bed)^2 against the error.
 
     Per bed and E: c from :func:`dem.stiffness.bed_mode`, the error v / v_inf - 1 against the
-    fitted rigid limit. The limit is the largest c below which every measured point of both
-    beds lies within 2 % of its rigid limit; written to dem/data/stiffness_convergence.json.
+    fitted rigid limit. The limit is the largest c below which no measured point of either bed
+    misses its rigid limit by more than 2 % beyond two of its standard errors (a 3-fill point
+    of the screws scatters by 1-2 %); written to dem/data/stiffness_convergence.json.
     """
     from dem import stiffness
     from dem.scene import resolve
@@ -351,7 +376,9 @@ def rule() -> None:
             })  # fmt: skip
     if not rows:
         return
-    bad = [r["compliance"] for r in rows if abs(r["error_vs_rigid"]) > 0.02]
+    # beyond 2 % by more than two of its standard errors: measured to miss, not noise
+    bad = [r["compliance"] for r in rows
+           if abs(r["error_vs_rigid"]) - 2.0 * r["error_stderr"] > 0.02]  # fmt: skip
     limit = min(bad) if bad else max(r["compliance"] for r in rows)
     good = [r for r in rows if r["compliance"] < limit]
     limit = max(r["compliance"] for r in good) if good else limit
@@ -361,7 +388,8 @@ def rule() -> None:
             f"{r['bed']} at E = {r['youngs_modulus_pa']:.0e} Pa: c = {r['compliance']:.3f}, "
             f"{100 * r['error_vs_rigid']:+.1f} %"
             for r in sorted(
-                (r for r in rows if abs(r["error_vs_rigid"]) > 0.02), key=lambda r: r["compliance"]
+                (r for r in rows if abs(r["error_vs_rigid"]) - 2.0 * r["error_stderr"] > 0.02),
+                key=lambda r: r["compliance"],
             )[:2]
         )
         + f"; within 2 % at c <= {limit:.4f}",  # fmt: skip
@@ -399,8 +427,10 @@ def figures() -> None:
             fit = record.get(f"stiffness_{bed}", {})
             if "v_inf_m_s" in fit:
                 grid = np.geomspace(min(fit["fitted_youngs_pa"]), 1e12, 100)
-                ax.plot(grid, fit["v_inf_m_s"] + fit["c"] * grid ** (-fit["p"]), "-",
-                        label=f"fit, v_inf = {fit['v_inf_m_s']:.4f} +- "
+                shape = grid ** (-fit["p"]) * fit["c"] if "c" in fit else 0.0 * grid
+                what = "fit" if "c" in fit else "mean of the stiff points"
+                ax.plot(grid, fit["v_inf_m_s"] + shape, "-",
+                        label=f"{what}, v_inf = {fit['v_inf_m_s']:.4f} +- "
                               f"{fit['v_inf_stderr_m_s']:.4f} m/s")  # fmt: skip
                 ax.axhspan(
                     fit["v_inf_m_s"] - 1.96 * fit["v_inf_stderr_m_s"],
