@@ -12,6 +12,7 @@ import warnings
 from pathlib import Path
 
 from dem import __version__
+from dem.config import DEM_EXPORT_SETTLE_CYCLES
 from dem.errors import InputError, SimulationError
 from dem.io.files import replace_file, replace_text
 from dem.quantities import QUANTITIES
@@ -622,7 +623,6 @@ def _export_settle_cycles(args, case) -> tuple[int, str | None]:
     """
     import json
 
-    from dem.config import DEM_EXPORT_SETTLE_CYCLES
 
     if args.settle_cycles is not None:
         return args.settle_cycles, None
@@ -886,7 +886,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument(
         "--settle-cycles", type=_whole0,
         help="driven cycles before measuring (default: the case's; for \"auto\" what an earlier "
-        "dem run detected, else 20)",
+        f"dem run detected, else {DEM_EXPORT_SETTLE_CYCLES})",
     )  # fmt: skip
     e.add_argument("--from-run", metavar="RUN_DIR",
                    help='the dem run whose detected settling an "auto" case takes '
