@@ -623,7 +623,6 @@ def _export_settle_cycles(args, case) -> tuple[int, str | None]:
     """
     import json
 
-
     if args.settle_cycles is not None:
         return args.settle_cycles, None
     if case.run.settle_cycles is not None:
