@@ -151,5 +151,14 @@ DEM_OMP_WAIT_POLICY: str | None = None
 #: while the choice holds, and keep the faster; False leaves the thread count alone.
 DEM_THREAD_GUARD = True
 DEM_THREAD_GUARD_PERIOD = 8
-#: ... timing only chunks of at least this many steps.
+#: ... timing only chunks of at least this many steps ...
 DEM_THREAD_GUARD_MIN_STEPS = 100
+#: ... and running a try of the other choice for this many steps (a try on N threads beside busy
+#: processes runs many times slower than one thread: a short try keeps its cost small).
+DEM_THREAD_GUARD_TRY_STEPS = 100
+#: After a try that confirmed the choice, the next waits until the tries have cost at most this
+#: fraction of the steps run (a try of N threads that ran 20x slower than one waits about 190
+#: chunks) ...
+DEM_THREAD_GUARD_TRY_COST = 0.02
+#: ... and at most this many chunks (so that a machine that frees up is noticed).
+DEM_THREAD_GUARD_MAX_WAIT = 400

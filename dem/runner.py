@@ -51,7 +51,7 @@ from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
 from dem.provenance import record
 from dem.scene import resolve
 from dem.simulation import Simulation
-from dem.threads import ThreadGuard
+from dem.threads import ThreadGuard, starting_threads
 
 CHECKPOINT = "checkpoint.npz"
 SUMMARY = "summary.json"
@@ -76,6 +76,13 @@ class RunInterrupted(Exception):
             )
         else:
             super().__init__(f"{name} at cycle {cycle}; checkpoint written to {checkpoint}")
+
+
+def _note(text: str) -> None:
+    """One line on stderr that leaves a progress bar in place."""
+    from tqdm import tqdm
+
+    tqdm.write(f"dem: {text}", file=sys.stderr)
 
 
 def _set_threads(threads: int | None) -> int:
@@ -475,7 +482,8 @@ def _run_case(
                   flush=True)  # fmt: skip
         sim = setup.from_case(scene)
     if config.DEM_THREAD_GUARD and n_threads > 1:
-        sim.guard = ThreadGuard(n_threads)
+        sim.guard = ThreadGuard(n_threads, start=starting_threads(n_threads),
+                                note=_note if progress else None)  # fmt: skip
     if resume:
         try:
             checkpoint_io.load_state(sim, state)
@@ -609,11 +617,6 @@ def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
     if sim.guard is not None:
         sim.guard.restore()
         summary["thread_guard"] = sim.guard.as_dict()
-        share = summary["thread_guard"]["fraction_on_one_thread"]
-        if progress and share > 0.5:
-            print(f"dem: {n_threads} threads ran slower than one here (another process on the "
-                  f"cores?): {share:.0%} of the steps ran on one thread",
-                  file=sys.stderr)  # fmt: skip
     write_cycles_csv(out_dir, summary)  # before summary.json: a summary means the table is there
     # strict JSON (an undefined value, a one-cycle run's stderr, is null, not NaN), written whole
     replace_text(out_dir / SUMMARY, json_text(summary) + "\n")

@@ -353,6 +353,10 @@ class Simulation:
                 # (a million spheres take a minute for those); a feeder keeps its exchange
                 # chunks, so that a resumed run exchanges on the same steps
                 chunk = min(chunk, max(1, int(config.DEM_STOP_LATENCY_S / self._step_seconds)))
+            if guard is not None and feeder is None and guard.trying:
+                # a try of the other thread count may be the slow one: keep it short (a feeder
+                # keeps its exchange chunks, so that the exchanges fall on the same steps)
+                chunk = min(chunk, config.DEM_THREAD_GUARD_TRY_STEPS)
             if feeder is not None:
                 self.stats[2] += chunk * self.total_mass
             t0 = time.perf_counter()

@@ -8,49 +8,102 @@ busy process: 2 threads 0.2-0.4e7 particle-steps/s, 1 thread 1.6e7; validation/p
 (``numba.set_num_threads``), and then runs at one thread's full speed.
 
 :class:`ThreadGuard` times each chunk of steps (``DEM_CHECK_INTERVAL``) on the thread count it
-chose: the first two chunks on N threads (the first, which pays one-time costs, is not timed),
-the third on one, then on whichever was faster per step
-(the choice it keeps is re-timed every chunk, so it leaves a choice that slows down at once).
-Since load comes and goes, it tries the other choice again after ``DEM_THREAD_GUARD_PERIOD``
-chunks; each try that confirms the choice doubles the wait (up to 8 periods), a try that
-overturns it resets the wait. The trajectory and every reported value are the same on any number
-of threads (the momentum sums are taken in fixed chunks), so the guard changes only the wall
-time. Its cost is one chunk in 8 to one in 64 run on the slower choice (one in 8 throughout cost
-the idle sphere bed a tenth of its two-thread rate: validation/performance/README.md).
+chose. It starts on N threads, or on one where the load average leaves fewer than N cores free
+(:func:`starting_threads`): the first two chunks on that choice (the first, which pays one-time
+costs, is not timed), the third a short try (``DEM_THREAD_GUARD_TRY_STEPS``) of the other, then on
+whichever was faster per step (the choice it keeps is re-timed every chunk, so it leaves a choice
+that slows down at once). Since load comes and goes, it tries the other choice again after
+``DEM_THREAD_GUARD_PERIOD`` chunks; each try that confirms the choice doubles the wait (up to 8
+periods), and a try that confirms it and ran k times slower waits at least until such tries cost
+``DEM_THREAD_GUARD_TRY_COST`` of the run (at most ``DEM_THREAD_GUARD_MAX_WAIT`` chunks); a try
+that overturns it resets the wait. The trajectory and every reported value are the same on any
+number of threads (the momentum sums are taken in fixed chunks), so the guard changes only the
+wall time. The first move to one thread is noted in one line (``note``). Measured fill to
+summary beside 0, 1 and 3 busy processes: validation/performance/threads_busy.py.
 """
 
 from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
 
 import numba
 
 from dem import config
 
 
-class ThreadGuard:
-    """Chooses, chunk by chunk, between ``threads`` and one thread by their measured speed."""
+def busy_cores() -> float:
+    """Cores other processes keep busy: the 1-minute load average (0 where it is unknown)."""
+    try:
+        return max(os.getloadavg()[0], 0.0)
+    except OSError:  # no load average on this platform
+        return 0.0
 
-    def __init__(self, threads: int, period: int | None = None):
+
+def starting_threads(threads: int, cores: int | None = None, busy: float | None = None) -> int:
+    """``threads``, or one where the load leaves fewer than ``threads`` cores free.
+
+    A core counts as free when less than half of it is busy (1-minute load average). The load
+    average lags (it still shows a job that ended a minute ago); the guard corrects a wrong start
+    within three chunks.
+    """
+    cores = int(cores or os.cpu_count() or 1)
+    busy = busy_cores() if busy is None else float(busy)
+    return threads if cores - busy >= threads - 0.5 else 1
+
+
+class ThreadGuard:
+    """Chooses, chunk by chunk, between ``threads`` and one thread by their measured speed.
+
+    ``start``: the count of the first chunks (default ``threads``; the runner passes
+    :func:`starting_threads`). ``note``: called with one line of text the first time the guard
+    moves a run onto one thread (the runner prints it), and at the start if ``start`` is 1.
+    """
+
+    def __init__(self, threads: int, period: int | None = None, *, start: int | None = None,
+                 note: Callable[[str], None] | None = None):  # fmt: skip
         self.threads = int(threads)
+        self.start = self.threads if start is None else int(start)
+        if self.start not in (1, self.threads):
+            raise ValueError(f"start must be 1 or {self.threads}, not {self.start}")
         self.period = int(period or config.DEM_THREAD_GUARD_PERIOD)
         self.chunks = 0
         self.seconds_per_step: dict[int, float] = {}
         self.steps = {self.threads: 0, 1: 0}
         self.wait = self.period  # chunks from one try of the other choice to the next
-        self.next_try = 2  # the third chunk tries one thread (the first is not timed)
+        self.next_try = 2  # the third chunk tries the other choice (the first is not timed)
         self._tried: int | None = None  # the choice a try interrupted
+        self.note = note
+        self._noted = False
+        if self.start == 1 and self.threads > 1:
+            self._say(
+                f"{busy_cores():.1f} of {os.cpu_count()} cores busy (load average): starting "
+                f"on one thread, trying {self.threads} now and then"
+            )
+
+    def _say(self, text: str) -> None:
+        if self.note is not None and not self._noted:
+            self.note(text)
+        self._noted = True
+
+    @property
+    def trying(self) -> bool:
+        """Whether the next chunk tries the choice that is not the best (a short chunk will do)."""
+        return self.chunks == self.next_try
 
     @property
     def best(self) -> int:
         """The thread count that was faster per step (``threads`` until both were measured)."""
         if len(self.seconds_per_step) < 2:
-            return self.threads
+            return self.start
         return min(self.seconds_per_step, key=self.seconds_per_step.get)
 
     def choose(self) -> int:
         """Thread count for the next chunk (also set in numba)."""
         self._tried = None
         if self.chunks == 0:
-            k = self.threads
+            k = self.start
         elif self.chunks == self.next_try:
             self._tried = self.best
             k = 1 if self.best != 1 else self.threads  # try the other choice
@@ -66,9 +119,22 @@ class ThreadGuard:
         # the first chunk pays once (cache loads, the inbox's first touch): not a fair time
         if self.chunks > 1 and steps >= config.DEM_THREAD_GUARD_MIN_STEPS and seconds > 0.0:
             self.seconds_per_step[threads] = seconds / steps
+        if self.best == 1 and self.threads > 1:
+            self._say(
+                f"{self.threads} threads ran slower than one (another process on the cores?): "
+                f"going on with one thread, trying {self.threads} now and then"
+            )
         if self._tried is not None:
             held = self.best == self._tried
             self.wait = min(2 * self.wait, 8 * self.period) if held else self.period
+            if held and len(self.seconds_per_step) == 2:
+                # a try on the slow choice cost (slowdown - 1) x its steps: wait long enough
+                # that tries cost at most DEM_THREAD_GUARD_TRY_COST of the run (beside busy
+                # processes N threads can run 10-50x slower than one)
+                slow = max(self.seconds_per_step.values()) / min(self.seconds_per_step.values())
+                lost = (slow - 1.0) * steps / config.DEM_THREAD_GUARD_TRY_COST
+                self.wait = max(self.wait, math.ceil(lost / config.DEM_CHECK_INTERVAL))
+                self.wait = min(self.wait, config.DEM_THREAD_GUARD_MAX_WAIT)
             self.next_try = self.chunks + self.wait
             self._tried = None
 

@@ -109,17 +109,23 @@ def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
     guard = threads.ThreadGuard(2, period=4)
     slow = {2: 3.0, 1: 1.0}  # seconds per 1000 steps: a busy machine, one thread is faster
     for _ in range(16):
+        n = config.DEM_THREAD_GUARD_TRY_STEPS if guard.trying else 1000
         k = guard.choose()
-        guard.record(k, 1000, slow[k])
+        guard.record(k, n, slow[k] * n / 1000)
     # N threads first (untimed) and second, one thread third (it wins: the next try 4 chunks
     # after it), then one thread; the try at chunk 7 confirms it: the next waits 8 chunks
     assert chosen == [2, 2, 1, 1, 1, 1, 1, 2, 1, 1, 1, 1, 1, 1, 1, 1]
-    assert guard.best == 1 and guard.as_dict()["fraction_on_one_thread"] == 13 / 16
+    try_steps = config.DEM_THREAD_GUARD_TRY_STEPS
+    on_one = try_steps + 12 * 1000  # the short try at chunk 2, then 12 full chunks
+    on_two = 2 * 1000 + try_steps  # the first two chunks, the short try at chunk 7
+    share = guard.as_dict()["fraction_on_one_thread"]
+    assert guard.best == 1 and share == on_one / (on_one + on_two)
     chosen.clear()
     fast = threads.ThreadGuard(2, period=4)
     for _ in range(40):
+        n = config.DEM_THREAD_GUARD_TRY_STEPS if fast.trying else 1000
         k = fast.choose()
-        fast.record(k, 1000, {2: 1.0, 1: 1.8}[k])
+        fast.record(k, n, {2: 1.0, 1: 1.8}[k] * n / 1000)
     # tries of one thread at chunks 2, 11, 28: the wait doubles (8, 16, ...) while two hold
     assert [c for c, k in enumerate(chosen) if k == 1] == [2, 11, 28] and fast.best == 2
     chosen.clear()
@@ -129,6 +135,62 @@ def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
         turn.record(k, 1000, ({2: 1.0, 1: 1.8} if c < 6 else {2: 3.0, 1: 1.0})[k])
     # chunk 6 on two threads is slow: the guard leaves at once (no wait for a try)
     assert chosen[:10] == [2, 2, 1, 2, 2, 2, 2, 1, 1, 1]
+    chosen.clear()
+    busy = threads.ThreadGuard(2, period=4)  # two threads 20x slower: tries wait for their cost
+    for _ in range(400):
+        n = config.DEM_THREAD_GUARD_TRY_STEPS if busy.trying else config.DEM_CHECK_INTERVAL
+        k = busy.choose()
+        busy.record(k, n, {2: 20.0, 1: 1.0}[k] * n)
+    tries = [c for c, k in enumerate(chosen) if k == 2][2:]  # after the first two chunks
+    lost = sum(19.0 * config.DEM_THREAD_GUARD_TRY_STEPS for _ in tries)
+    assert len(tries) >= 2 and lost / (400 * config.DEM_CHECK_INTERVAL) < 0.05
+
+
+def test_the_guard_starts_on_one_thread_where_the_load_leaves_no_core_free(monkeypatch):
+    from dem import threads
+
+    assert threads.starting_threads(2, cores=2, busy=0.3) == 2
+    assert threads.starting_threads(2, cores=2, busy=0.6) == 1  # a core half busy is not free
+    assert threads.starting_threads(2, cores=2, busy=3.0) == 1
+    assert threads.starting_threads(4, cores=16, busy=3.0) == 4
+    chosen, notes = [], []
+    monkeypatch.setattr(threads.numba, "set_num_threads", chosen.append)
+    guard = threads.ThreadGuard(2, period=4, start=1, note=notes.append)
+    assert len(notes) == 1 and "starting on one thread" in notes[0]
+    for _ in range(6):
+        k = guard.choose()
+        guard.record(k, 1000, {2: 1.0, 1: 1.8}[k])  # the machine was free after all
+    assert chosen == [1, 1, 2, 2, 2, 2] and guard.best == 2 and len(notes) == 1
+    with pytest.raises(ValueError, match="start"):
+        threads.ThreadGuard(4, start=2)
+
+
+def test_the_guard_notes_the_move_to_one_thread_once(monkeypatch):
+    from dem import threads
+
+    notes = []
+    monkeypatch.setattr(threads.numba, "set_num_threads", lambda k: None)
+    guard = threads.ThreadGuard(2, period=2, note=notes.append)
+    for _ in range(30):
+        k = guard.choose()
+        guard.record(k, 1000, {2: 3.0, 1: 1.0}[k])
+    assert len(notes) == 1 and "2 threads ran slower than one" in notes[0]
+
+
+def test_a_try_of_the_other_thread_count_runs_a_short_chunk(tmp_path, monkeypatch):
+    """The guard's try may be the slow choice: Simulation.run gives it a short chunk."""
+    from dem import threads
+
+    monkeypatch.setattr(threads.numba, "set_num_threads", lambda k: None)
+    sim = setup.from_case(load_case(write_case(tmp_path / "case")))
+    sim.guard = threads.ThreadGuard(2, period=4)
+    sizes = []
+    real = sim._advance
+    monkeypatch.setattr(sim, "_advance", lambda n: (sizes.append(n), real(n)))
+    sim.run(6 * config.DEM_CHECK_INTERVAL)
+    assert sizes[2] == config.DEM_THREAD_GUARD_TRY_STEPS  # the third chunk tries one thread
+    assert sizes[:2] == [config.DEM_CHECK_INTERVAL] * 2
+    assert sum(sizes) == 6 * config.DEM_CHECK_INTERVAL
 
 
 def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
