@@ -50,6 +50,13 @@ def run(case: str, extra: list[str], out: Path, cycles: int | None) -> tuple[flo
     return wall, json.loads((out / "summary.json").read_text())
 
 
+def _slowdown(seconds_per_step: dict) -> float:
+    """Seconds per step on N threads over one, as the guard last timed them (NaN if untimed)."""
+    one = seconds_per_step.get("1")
+    many = [v for k, v in seconds_per_step.items() if k != "1"]
+    return many[0] / one if one and many else float("nan")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2)
@@ -84,6 +91,10 @@ def main() -> int:
                             "wall_time_s": round(wall, 2),
                             "fraction_on_one_thread": round(
                                 guard.get("fraction_on_one_thread", 0.0), 3),
+                            "slowdown_n_threads_over_1": round(
+                                _slowdown(guard.get("seconds_per_step", {})), 2),
+                            "settle_wall_s": round(s["settle_wall_time_s"], 2),
+                            "cycles_wall_s": round(s["wall_time_s"], 2),
                             "load_1min_before": round(load, 2),
                             "velocity_m_per_s": s["mean_velocity"],
                         })  # fmt: skip
