@@ -16,6 +16,7 @@ radians by the code that uses them.
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import tomllib
@@ -981,18 +982,43 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
 def set_contact_keys(path: Path, values: dict[str, float], comment: str) -> str:
     """Return the text of the case file ``path`` with ``values`` set in its [contact] table.
 
-    Existing lines of those keys in the table are replaced; the new lines follow the table's
-    header with ``comment``; the rest of the file (comments, order) is kept. A missing
-    [contact] table is appended.
+    As :func:`set_case_keys` with every key in [contact].
+    """
+    return set_case_keys(path, {f"contact.{k}": v for k, v in values.items()}, comment)
+
+
+def set_case_keys(path: Path, values: dict[str, object], comment: str) -> str:
+    """Return the text of the case file ``path`` with ``values`` ({"table.key": value}) set.
+
+    Existing lines of those keys in their table are replaced; the new lines follow the table's
+    header with ``comment``; the rest of the file (comments, order) is kept. A missing table is
+    appended. Values are written as TOML: numbers, strings and booleans.
     """
     lines = Path(path).read_text(encoding="utf-8").splitlines()
-    header = re.compile(r"^\s*\[\s*contact\s*\]\s*(#.*)?$")
     any_header = re.compile(r"^\s*\[")
-    new = [f"{key} = {value!r}  # {comment}" for key, value in values.items()]
-    start = next((i for i, line in enumerate(lines) if header.match(line)), None)
-    if start is None:
-        return "\n".join([*lines, "", "[contact]", *new]) + "\n"
-    end = next((i for i in range(start + 1, len(lines)) if any_header.match(lines[i])), len(lines))
-    own = re.compile(r"^\s*(" + "|".join(map(re.escape, values)) + r")\s*=")
-    body = [line for line in lines[start + 1 : end] if not own.match(line)]
-    return "\n".join([*lines[: start + 1], *new, *body, *lines[end:]]) + "\n"
+    tables: dict[str, dict[str, object]] = {}
+    for dotted, value in values.items():
+        table, _, key = dotted.rpartition(".")
+        tables.setdefault(table, {})[key] = value
+    for table, keys in tables.items():
+        header = re.compile(r"^\s*\[\s*" + re.escape(table) + r"\s*\]\s*(#.*)?$")
+        new = [f"{key} = {_toml_value(value)}  # {comment}" for key, value in keys.items()]
+        start = next((i for i, line in enumerate(lines) if header.match(line)), None)
+        if start is None:
+            lines = [*lines, "", f"[{table}]", *new]
+            continue
+        end = next(
+            (i for i in range(start + 1, len(lines)) if any_header.match(lines[i])), len(lines)
+        )
+        own = re.compile(r"^\s*(" + "|".join(map(re.escape, keys)) + r")\s*=")
+        body = [line for line in lines[start + 1 : end] if not own.match(line)]
+        lines = [*lines[: start + 1], *new, *body, *lines[end:]]
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)  # a TOML basic string
+    return repr(value)

@@ -504,7 +504,20 @@ def _cmd_plan(args) -> int:
     from dem.case import load_case
     from dem.plan import plan
 
-    case = load_case(args.case_dir, _set_overrides(args.set))
+    overrides = _set_overrides(args.set)
+    if args.suggest:
+        from dem.plan import suggest
+
+        done = suggest(args.case_dir, args.suggest, overrides, threads=args.threads,
+                       cycles=args.cycles)  # fmt: skip
+        if args.json:
+            before, after = done.before.as_dict(), done.after.as_dict()
+            _print_json({"path": str(done.path), "changes": done.changes, "before": before,
+                         "after": after})  # fmt: skip
+        else:
+            print(done.text())
+        return 0
+    case = load_case(args.case_dir, overrides)
     result = plan(case, threads=args.threads, cycles=args.cycles)
     if args.json:
         _print_json(result.as_dict())
@@ -813,6 +826,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cycles", type=_whole, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=_whole, help="numba threads (default: all cores)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--suggest", metavar="OUT_DIR",
+        help="write the case the advice recommends (every advice with a value applied) into "
+        "OUT_DIR, a new folder",
+    )  # fmt: skip
     p.set_defaults(func=_cmd_plan)
 
     p = sub.add_parser("sweep", help="run a grid of cases on Dask and gather one table")

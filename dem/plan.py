@@ -35,6 +35,7 @@ from dataclasses import asdict, dataclass, field
 from functools import cache
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -50,6 +51,24 @@ FAR = 2.0
 STEP_OVERHEAD_S = 2.0e-6
 #: Particle-steps per second on one thread where the study's figure is missing.
 FALLBACK_RATE = 5.0e6
+#: Start-up of ``dem run`` (imports, loading the cached kernels, the point mass, summary), s.
+#: The figures below were measured on the project's 2-core VM (validation/performance,
+#: plan_check.py and its README); another machine scales them all alike, roughly.
+STARTUP_S = 3.0
+#: Compiling the step kernels where numba's cache holds none yet for this kind of scene (a
+#: fresh clone, or the first mesh trough), s: with an empty NUMBA_CACHE_DIR, the whole run's
+#: extra time: 56 s (sphere-bed) and 66 s (screw-trough).
+COMPILE_S = {"sphere": 56.0, "clump": 66.0}
+#: Building the scene and placing its grains, s: this much (for clumps mostly sampling the
+#: grain's contact mass; measured 1.2-2.3 s for 150-2000 screws, 0.3 s for 1500-15000 spheres)
+#: ...
+FILL_S = {"sphere": 0.3, "clump": 2.0}
+#: ... and this much per grain (random sequential placement).
+FILL_S_PER_GRAIN = {"sphere": 2e-5, "clump": 2e-4}
+#: A frame (VTK files and the results.h5 rows): this much, s ...
+FRAME_S = 0.008
+#: ... and this much per sphere (1500 spheres 12 ms, 15000 spheres 54 ms a frame).
+FRAME_S_PER_SPHERE = 3.0e-6
 
 
 class PlanWarning(UserWarning):
@@ -61,12 +80,14 @@ class Advice:
     """One piece of advice about a case key.
 
     ``level`` is "warn" (the case asks for far more or less than it needs, or leaves the studied
-    range) or "note"; ``key`` is the case key it concerns.
+    range) or "note"; ``key`` is the case key it concerns; ``value`` the value the advice sets
+    the key to (None where it names none): ``dem plan --suggest`` applies these.
     """
 
     level: str
     key: str
     text: str
+    value: float | int | str | None = None
 
 
 #: ``dem calibrate``'s comment on the [contact] keys it writes: the drive it fitted them on.
@@ -132,6 +153,10 @@ class Plan:
     particle_steps_per_s: float
     rate_source: str
     wall_time_s: float
+    compile_s: float
+    fill_s: float
+    frames: int
+    frames_s: float
     expected_error: float
     error_parts: dict[str, float]
     error_source: str
@@ -159,8 +184,15 @@ class Plan:
             f" {self.steps:.3g} steps in all",
             f"  memory            {_size(self.memory_bytes)} "
             f"({self.memory_bytes / self.spheres:.0f} B per sphere)",
-            f"  wall time         about {_duration(self.wall_time_s)} on {self.threads} thread(s) "
-            f"at {self.particle_steps_per_s:.2g} particle-steps/s ({self.rate_source})",
+            f"  wall time         about {_duration(self.wall_time_s)} on {self.threads} thread(s)"
+            + (
+                f": compiling {_duration(self.compile_s)} (no numba cache yet, once per machine),"
+                if self.compile_s
+                else ":"
+            )
+            + f" filling {_duration(self.fill_s)}, {self.frames} frames "
+            f"{_duration(self.frames_s)}, steps at "
+            f"{self.particle_steps_per_s:.2g} particle-steps/s ({self.rate_source})",
             f"  expected error    {100 * self.expected_error:.1f} % of the bulk velocity ("
             + ", ".join(f"{k} {100 * v:.1f} %" for k, v in self.error_parts.items())
             + f"; {self.error_source})"
@@ -445,10 +477,13 @@ def unmeasured(case, data: dict, kind: str) -> list[str]:
     return out
 
 
-def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan:
+def plan(
+    case, *, threads: int | None = None, cycles: int | None = None, frames: bool = True
+) -> Plan:
     """The plan of a :class:`dem.scene.Scene`, or of a :class:`dem.case.Case` resolved here.
 
-    No fill, no dynamics.
+    No fill, no dynamics. ``frames``: the run writes its VTK and HDF5 frames (``dem run
+    --no-frames`` does not).
     """
     scene = resolve(case)
     case = scene.case
@@ -473,6 +508,15 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
     steps = int(settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
     particle_steps = float(spheres) * steps
     speed, source = rate(case, threads, data)
+    from dem import kernels
+
+    shape = "sphere" if pt.shape == "sphere" else "clump"
+    cached = kernels.compiled(clumps=shape == "clump", mesh=case.trough.mesh is not None)
+    compile_s = 0.0 if cached else COMPILE_S[shape]
+    fill_s = FILL_S[shape] + grains * FILL_S_PER_GRAIN[shape]
+    n_frames = 1 + (settle + cycles) * case.output.frames_per_cycle if frames else 0
+    frames_s = n_frames * (FRAME_S + spheres * FRAME_S_PER_SPHERE)
+    startup = STARTUP_S
     advice: list[Advice] = []
     away = unmeasured(case, data, kind) if data else []
     if data and away:
@@ -521,7 +565,9 @@ def plan(case, *, threads: int | None = None, cycles: int | None = None) -> Plan
         steps_per_cycle=per_cycle, settle_cycles=settle, settle_cycles_auto=auto_settle,
         cycles=cycles, steps=steps, particle_steps=particle_steps, memory_bytes=mem,
         threads=threads, particle_steps_per_s=speed, rate_source=source,
-        wall_time_s=particle_steps / speed + steps * STEP_OVERHEAD_S,
+        wall_time_s=startup + compile_s + fill_s + particle_steps / speed
+        + steps * STEP_OVERHEAD_S + frames_s,
+        compile_s=compile_s, fill_s=fill_s, frames=n_frames, frames_s=frames_s,
         expected_error=expected, error_parts=parts,
         error_source=error_source, advice=advice,
     )  # fmt: skip
@@ -588,6 +634,18 @@ def _physical_memory() -> int | None:
         return None
 
 
+def _up(x: float) -> float:
+    """``x`` rounded up to 3 significant digits (a limit met, not missed by rounding)."""
+    digits = 2 - math.floor(math.log10(abs(x)))
+    return float(math.ceil(x * 10.0**digits) / 10.0**digits)
+
+
+def _down(x: float) -> float:
+    """``x`` rounded down to 3 significant digits."""
+    digits = 2 - math.floor(math.log10(abs(x)))
+    return float(math.floor(x * 10.0**digits) / 10.0**digits)
+
+
 def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
     """Stiffer or finer than the answer needs (far more), or past what stayed accurate."""
     cheap = data["cheapest"]
@@ -597,26 +655,26 @@ def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
             advice.append(Advice("warn", "contact.youngs_modulus",
                 f"{e_equiv:.3g} Pa is far stiffer than the answer needs: the study stayed within "
                 f"{TOLERANCE:.0%} down to {e_ok:.3g} Pa, about "
-                f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps"))  # fmt: skip
+                f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps", _up(e_ok)))  # fmt: skip
         elif e_equiv < e_ok / FAR:
             advice.append(Advice("warn", "contact.youngs_modulus",
                 f"{e_equiv:.3g} Pa is softer than the study found accurate ({e_ok:.3g} Pa "
-                f"stayed within {TOLERANCE:.0%})"))  # fmt: skip
+                f"stayed within {TOLERANCE:.0%})", _up(e_ok)))  # fmt: skip
     f_ok = cheap["timestep_fraction"]
     if case.run.timestep is not None and fraction < f_ok / FAR:
         advice.append(Advice("warn", "run.timestep",
             f"{step.dt:.3g} s ({fraction:.2f} x limit) is far finer than the answer needs: "
             f"{f_ok:.2f} x limit ({f_ok * step.limit:.3g} s) stayed within "
-            f"{TOLERANCE:.0%}"))  # fmt: skip
+            f"{TOLERANCE:.0%}", _down(f_ok * step.limit)))  # fmt: skip
     elif fraction > f_ok * 1.001:
         advice.append(Advice("warn", "run.timestep",
             f"{fraction:.2f} x limit is coarser than the study found accurate "
-            f"({f_ok:.2f} x limit)"))  # fmt: skip
+            f"({f_ok:.2f} x limit)", _down(f_ok * step.limit)))  # fmt: skip
     elif case.run.timestep is None and f_ok > FAR * fraction:
         advice.append(Advice("note", "run.timestep",
             f"the automatic step is {fraction:.2f} x limit; {f_ok:.2f} x limit "
             f"(run.timestep = {f_ok * step.limit:.3g}) stayed within {TOLERANCE:.0%} at "
-            f"{f_ok / fraction:.1f}x less cost"))  # fmt: skip
+            f"{f_ok / fraction:.1f}x less cost", _down(f_ok * step.limit)))  # fmt: skip
 
 
 def _advise_section(case, data, g_len, advice) -> None:
@@ -626,13 +684,14 @@ def _advise_section(case, data, g_len, advice) -> None:
         advice.append(Advice("warn", "trough.length",
             f"{case.trough.length:g} m is {n_len:.1f} grain lengths, shorter than the "
             f"{min_len:.1f} the study needed to stay within {TOLERANCE:.0%}: the periodic "
-            "section holds too few grains along the flow"))  # fmt: skip
+            "section holds too few grains along the flow", _up(min_len * g_len)))  # fmt: skip
     min_w = data["cheapest"]["section_width_grains"]
     n_w = case.trough.width / g_len
     if n_w < min_w * 0.999:
         advice.append(Advice("warn", "trough.width",
             f"{case.trough.width:g} m is {n_w:.1f} grain lengths, narrower than the "
-            f"{min_w:.1f} the study needed: the side walls set the answer"))  # fmt: skip
+            f"{min_w:.1f} the study needed: the side walls set the answer",
+            _up(min_w * g_len)))  # fmt: skip
 
 
 def _advise_cycles(statistical, within, cycles, advice) -> None:
@@ -640,7 +699,7 @@ def _advise_cycles(statistical, within, cycles, advice) -> None:
         need = int(math.ceil(cycles * (within / TOLERANCE) ** 2))
         advice.append(Advice("warn", "run.cycles",
             f"{cycles} cycles leave a statistical error of {100 * within:.1f} %: "
-            f"about {need} reach {TOLERANCE:.0%}"))  # fmt: skip
+            f"about {need} reach {TOLERANCE:.0%}", need))  # fmt: skip
     elif statistical > TOLERANCE:
         advice.append(Advice("note", "run.seed",
             f"one fill scatters by {100 * statistical:.1f} % from the next (the study's "
@@ -650,7 +709,7 @@ def _advise_cycles(statistical, within, cycles, advice) -> None:
         need = max(20, int(math.ceil(cycles * (8 * within / TOLERANCE) ** 2)))
         advice.append(Advice("note", "run.cycles",
             f"{cycles} cycles give {100 * within:.2f} %, far below {TOLERANCE:.0%}: "
-            f"{need} would do"))  # fmt: skip
+            f"{need} would do", need))  # fmt: skip
 
 
 def _advise_ladder(case, data, kind, advice) -> None:
@@ -688,3 +747,137 @@ def write_study_data(path: Path, data: dict) -> None:
     text = json.dumps(finite_or_none(data), indent=1, sort_keys=True, allow_nan=False)
     path.write_text(text + "\n")
     study_data.cache_clear()
+
+
+# --- dem plan --suggest ----------------------------------------------------------------------
+
+#: Rounds of apply-and-plan again before ``suggest`` gives up on advice that keeps moving.
+SUGGEST_ROUNDS = 4
+
+
+@dataclass
+class Suggestion:
+    """What :func:`suggest` wrote: the keys it set and the plans before and after."""
+
+    path: Path
+    changes: dict[str, Any]
+    before: Plan
+    after: Plan
+
+    def text(self) -> str:
+        """The suggestion as ``dem plan --suggest`` prints it."""
+        if not self.changes:
+            return f"no advice names a value to set: wrote {self.path} as it was"
+        b, a = self.before, self.after
+        lines = [f"wrote {self.path}, with:"]
+        lines += [f"  {key} = {value!r}" for key, value in self.changes.items()]
+        lines.append(
+            f"wall time about {_duration(a.wall_time_s)} (was {_duration(b.wall_time_s)}, "
+            f"{a.wall_time_s / b.wall_time_s:.2g}x)"
+        )
+        if math.isfinite(a.expected_error) or math.isfinite(b.expected_error):
+            lines.append(
+                f"expected error {100 * a.expected_error:.1f} % (was "
+                f"{100 * b.expected_error:.1f} %)"
+            )
+        return "\n".join(lines)
+
+
+def suggest(
+    case_dir: str | Path,
+    out_dir: str | Path,
+    overrides: dict | None = None,
+    *,
+    threads: int | None = None,
+    cycles: int | None = None,
+) -> Suggestion:
+    """Write the case the plan recommends into ``out_dir``: every advice with a value applied.
+
+    The advice of the case (with ``overrides``, as ``--set``) is applied, the result planned
+    again, and so on until no advice names a new value (at most ``SUGGEST_ROUNDS`` rounds); advice
+    that moves a key back to an earlier value is an error, not a suggestion. ``out_dir`` gets
+    the case folder's files (not its outputs) and a case.toml with the changed keys, each with a
+    comment; a relative ``trough.mesh`` is rewritten to reach the same file. The written case is
+    loaded and planned before this returns. ``out_dir`` must not hold a case.toml already.
+    """
+    import datetime
+    import os
+    import shutil
+
+    from dem.case import CASE_FILE, load_case, set_case_keys
+    from dem.errors import InputError
+
+    case_dir = Path(case_dir).expanduser().resolve()
+    source = case_dir / CASE_FILE if case_dir.is_dir() else case_dir
+    case_dir = source.parent
+    out = Path(out_dir).expanduser().resolve()
+    if (out / CASE_FILE).exists():
+        raise InputError("--suggest", str(out), "a folder without a case.toml (none is replaced)")
+    if out == case_dir or case_dir in out.parents:
+        raise InputError("--suggest", str(out), "a folder outside the case folder")
+    overrides = dict(overrides or {})
+    case = load_case(source, overrides)
+    before = plan(case, threads=threads, cycles=cycles)
+    changes: dict[str, Any] = dict(overrides)
+    seen: dict[str, list] = {}
+    current = before
+    for _ in range(SUGGEST_ROUNDS):
+        todo = {
+            a.key: a.value
+            for a in current.advice
+            if a.value is not None and changes.get(a.key) != a.value
+        }
+        if not todo:
+            break
+        for key, value in todo.items():
+            if value in seen.get(key, []):
+                raise InputError(
+                    key, value, "advice that settles: applied together, the plan's advice "
+                    f"moves {key} back and forth ({', '.join(map(repr, seen[key]))}); set it "
+                    "with --set and plan again",
+                )  # fmt: skip
+            seen.setdefault(key, []).append(value)
+        stiffer = {"contact.youngs_modulus", "contact.stiffness"} & set(todo)
+        if stiffer and "run.timestep" not in todo and current.timestep_auto != current.timestep:
+            # a step set by hand keeps its fraction of the stability limit, which moves with
+            # the stiffness (the automatic step follows by itself)
+            automatic = load_case(source, changes | todo | {"run.timestep": None})
+            limit = resolve(automatic).step.limit
+            todo["run.timestep"] = _down(current.timestep / current.timestep_limit * limit)
+        changes.update(todo)
+        current = plan(load_case(source, changes), threads=threads, cycles=cycles)
+    else:
+        raise InputError("--suggest", str(source), "advice that settles within "
+                         f"{SUGGEST_ROUNDS} rounds: {changes}")  # fmt: skip
+    mesh = case.trough.mesh
+    if mesh is not None and "trough.mesh" not in changes:
+        changes["trough.mesh"] = os.path.relpath(mesh, out)
+    out.mkdir(parents=True, exist_ok=True)
+    for item in case_dir.iterdir():  # the case's own files (grain meshes...), not its outputs
+        if item.name in (CASE_FILE, "README.md") or item.is_dir():
+            continue  # the README describes the case as it was
+        if not (out / item.name).exists():
+            shutil.copy2(item, out / item.name)
+    stamp = datetime.date.today().isoformat()
+    was = {k: _case_value(case, k) for k in changes}
+    text_lines = set_case_keys(source, changes, f"dem plan --suggest {stamp}").splitlines()
+    for i, line in enumerate(text_lines):  # each changed key's comment says what it was
+        for key, old in was.items():
+            name = key.rpartition(".")[2]
+            if line.startswith(f"{name} = ") and line.endswith(f"# dem plan --suggest {stamp}"):
+                text_lines[i] = f"{line}, was {old}"
+    (out / CASE_FILE).write_text("\n".join(text_lines) + "\n", encoding="utf-8")
+    after = plan(load_case(out), threads=threads, cycles=cycles)
+    return Suggestion(out / CASE_FILE, {k: v for k, v in changes.items()}, before, after)
+
+
+def _case_value(case, dotted: str) -> str:
+    """The case's value of ``table.key`` as text (``automatic`` for an automatic step)."""
+    obj = case
+    for part in dotted.split("."):
+        obj = getattr(obj, part, None)
+    if dotted == "run.timestep" and obj is None:
+        return "automatic"
+    if isinstance(obj, Path):
+        return str(obj)
+    return "unset" if obj is None else repr(obj)

@@ -384,7 +384,8 @@ def run_case(case, out_dir: Path, **kwargs) -> dict:
         _prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(kwargs.get("threads"))
     scene = resolve(case)
-    estimate = plan.plan(scene, threads=n_threads, cycles=kwargs.get("cycles"))
+    estimate = plan.plan(scene, threads=n_threads, cycles=kwargs.get("cycles"),
+                         frames=kwargs.get("frames", True))  # fmt: skip
     _check_memory(scene.case, estimate)
     _check_duration(scene.case, estimate)
     made = not out_dir.exists()
@@ -441,7 +442,7 @@ def _run_case(
         raise InputError("--cycles", cycles, "a whole number >= 1")
     out_dir = Path(out_dir)
     n_threads = _set_threads(threads)
-    estimate = plan.plan(scene, threads=n_threads, cycles=cycles)
+    estimate = plan.plan(scene, threads=n_threads, cycles=cycles, frames=frames)
     _prepare_output(out_dir, overwrite=overwrite, resume=resume)
     if not resume:
         _warn_plan(estimate)
@@ -475,12 +476,16 @@ def _run_case(
                 f"the interrupted run has {loop['cycles']}: resume with the same",
             )
     with _StopNow() as stop:
+        t0 = time.perf_counter()
         _compile_first(case, progress)
+        compile_wall = time.perf_counter() - t0
         stop.phase = "filling"
         if progress:
             print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
                   flush=True)  # fmt: skip
+        t0 = time.perf_counter()
         sim = setup.from_case(scene)
+        fill_wall = time.perf_counter() - t0
     if config.DEM_THREAD_GUARD and n_threads > 1:
         sim.guard = ThreadGuard(n_threads, start=starting_threads(n_threads),
                                 note=_note if progress else None)  # fmt: skip
@@ -517,6 +522,9 @@ def _run_case(
             "wall_time_s": 0.0,
             "settle_time_s": settle_time,
             "settle_wall_time_s": time.perf_counter() - t0,
+            "compile_wall_time_s": compile_wall,
+            "fill_wall_time_s": fill_wall,
+            "frames_wall_time_s": 0.0,
             "per_cycle": [],
             "vtk_entries": [],
             "h5_cycles": 0,
@@ -540,13 +548,15 @@ def _run_case(
         resume_at=(loop["h5_cycles"], loop["h5_frames"]) if resume else None,
         ragged=sim.feeder is not None,
     )
+    loop.setdefault("frames_wall_time_s", 0.0)  # older checkpoints
     if frames and not resume:
-        _write_frame(sim, vtk, results)
+        _write_frame(sim, vtk, results, loop)
         loop["vtk_entries"] = vtk.entries
         loop["h5_frames"] = 1
 
     period = sim.trough.period
     bar = _phase_bar(case, loop) if progress else None
+    summary = None
     # SIGINT/SIGTERM are recorded, not fatal, until summary.json is on disk: the summary's
     # point-mass model compiles for seconds on a fresh machine, and a signal there used to end
     # the run with no summary, no checkpoint and no message. After the last cycle the summary
@@ -569,7 +579,7 @@ def _run_case(
                     _checkpoint(checkpoint, sim, loop)
                     raise RunInterrupted(flag.signum, checkpoint, loop["cycle"])
                 if frames:
-                    _write_frame(sim, vtk, results)
+                    _write_frame(sim, vtk, results, loop)
                     loop["h5_frames"] += 1
                     loop["vtk_entries"] = vtk.entries
                 loop["chunk"] = k + 1
@@ -597,6 +607,11 @@ def _run_case(
     finally:
         if bar is not None:
             bar.close()
+        if vtk is not None and summary is None:  # stopped: the collection lists every frame
+            try:
+                vtk.close()
+            except OSError:  # a full disk: the error that stopped the run is the one to report
+                pass
     if late is not None and progress:
         print(f"dem: {signal.Signals(late).name} arrived after the last cycle: the run finished "
               f"its summary first ({out_dir / SUMMARY})", file=sys.stderr)  # fmt: skip
@@ -664,11 +679,12 @@ def _compile_first(case, progress: bool) -> None:
 
     from dem import kernels
 
-    if kernels.compiled(clumps=case.particles.shape != "sphere"):
+    if kernels.compiled(clumps=case.particles.shape != "sphere", mesh=case.trough.mesh is not None):
         return
     from dem.progress import Status
 
     kind = "clump" if case.particles.shape != "sphere" else "sphere"
+    kind += " mesh-trough" if case.trough.mesh is not None else ""
     small = replace(case, particles=replace(case.particles, count=min(2, case.particles.count)))
     message = (f"compiling the {kind} step kernels for this machine, once (numba, no cache yet; "
                "about a minute, later runs start at once)")  # fmt: skip
@@ -757,7 +773,13 @@ def _checkpoint(path: Path, sim: Simulation, loop: dict) -> None:
     checkpoint_io.write(path, sim, loop)
 
 
-def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
+def _write_frame(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter, loop) -> None:
+    t0 = time.perf_counter()
+    _write_frame_files(sim, vtk, results)
+    loop["frames_wall_time_s"] += time.perf_counter() - t0
+
+
+def _write_frame_files(sim: Simulation, vtk: VTKSeriesWriter, results: ResultsWriter) -> None:
     s = sim.spheres
     orientation = sim.bodies.q if sim.bodies is not None else None
     counts = sim.contact_counts()
@@ -959,6 +981,11 @@ def _summary(case, sim: Simulation, loop: dict, cycles: int, n_threads: int) -> 
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "settle_time_s": loop["settle_time_s"],
         "settle_wall_time_s": loop["settle_wall_time_s"],
+        # compile and fill of the process that filled the trough; frames of every process
+        "compile_wall_time_s": loop.get("compile_wall_time_s"),
+        "fill_wall_time_s": loop.get("fill_wall_time_s"),
+        "frames_wall_time_s": loop.get("frames_wall_time_s"),
+        "frames_written": loop["h5_frames"] if loop.get("frames") else 0,
         "wall_time_s": wall,
         "particle_steps_per_s": sim.spheres.n * loop["steps"] / wall if wall > 0 else None,
         "neighbour_builds": sim.pairs.builds,

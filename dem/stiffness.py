@@ -102,7 +102,7 @@ def advice(scene):
 
     One grain (no bed) gets none: validation/impact-law covers it.
     """
-    from dem.plan import Advice
+    from dem.plan import Advice, _up
 
     data = study()
     if data is None or scene.case.particles.count < 2:
@@ -119,5 +119,6 @@ def advice(scene):
         f"{mode.layers:.1f} layers) is close enough to the drive that the bed conveys unlike "
         f"the rigid material: (omega / omega_bed)^2 = {mode.compliance:.3f} > {limit:.3f}, where "
         f"validation/bulk-convergence measured more than 2 % from the rigid limit "
-        f"({data['evidence']}); set {key} >= {value:.3g}",
+        f"({data['evidence']}); set {key} >= {_up(value):.3g}",
+        _up(value),
     )

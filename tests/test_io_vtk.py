@@ -106,11 +106,34 @@ def test_positions_wrapped_into_periodic_section(tmp_path):
     assert np.allclose(mesh.points[:, 0], [0.09, 0.05, 0.03], atol=1e-7)
 
 
+def test_the_collection_is_rewritten_on_a_schedule_not_after_every_frame(tmp_path, monkeypatch):
+    """Rewriting particles.pvd (O(frames)) after each frame made a long run O(frames^2)."""
+    from dem.io import vtk
+
+    now = [0.0]
+    monkeypatch.setattr(vtk, "_clock", lambda: now[0])
+    rewrites = []
+    real = VTKSeriesWriter._write_pvd
+    monkeypatch.setattr(VTKSeriesWriter, "_write_pvd", lambda self: (rewrites.append(
+        len(self._entries)), real(self)))  # fmt: skip
+    w = VTKSeriesWriter(tmp_path, L, W, 0.0)
+    rng = np.random.default_rng(3)
+    for k in range(300):
+        now[0] += 0.02  # a frame every 20 ms: a rewrite at most once a second
+        w.write_frame(0.001 * k, **_frame(rng, 4))
+    assert rewrites[0] == 1 and 5 <= len(rewrites) <= 8
+    w.close()
+    root = ET.parse(tmp_path / "particles.pvd").getroot()
+    assert len(root.findall("./Collection/DataSet")) == 2 * 300  # all frames once closed
+
+
 def test_pvd_valid_after_kill(tmp_path):
     # a child process writes three frames and is killed without close()
     code = (
         "import os, signal, numpy as np\n"
+        "from dem.io import vtk\n"
         "from dem.io.vtk import VTKSeriesWriter\n"
+        "vtk.PVD_REWRITE_MIN_S = vtk.PVD_REWRITE_FACTOR = 0.0\n"  # rewritten after every frame
         f"w = VTKSeriesWriter({str(tmp_path)!r}, {L}, {W}, 0.0)\n"
         "n = 20\n"
         "for k in range(3):\n"

@@ -158,8 +158,73 @@ def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
     )
     after = plan.plan(case, threads=1)
     assert after.particle_steps_per_s == 1.0e6 and "last run" in after.rate_source
-    overhead = after.steps * plan.STEP_OVERHEAD_S
+    overhead = after.steps * plan.STEP_OVERHEAD_S + plan.STARTUP_S + after.compile_s
+    overhead += after.fill_s + after.frames_s
     assert after.wall_time_s == pytest.approx(after.particle_steps / 1.0e6 + overhead)
+
+
+def test_wall_time_adds_the_compile_only_where_the_cache_is_cold(tmp_path, monkeypatch, study):
+    from dem import kernels
+
+    case = small(tmp_path)
+    monkeypatch.setattr(kernels, "compiled", lambda clumps=False, mesh=False: True)
+    warm = plan.plan(case, threads=1)
+    monkeypatch.setattr(kernels, "compiled", lambda clumps=False, mesh=False: False)
+    cold = plan.plan(case, threads=1)
+    assert warm.compile_s == 0.0 and cold.compile_s == plan.COMPILE_S["sphere"]
+    assert cold.wall_time_s - warm.wall_time_s == pytest.approx(plan.COMPILE_S["sphere"])
+    assert "no numba cache yet" in cold.text() and "no numba cache" not in warm.text()
+    fill = plan.FILL_S["sphere"] + 120 * plan.FILL_S_PER_GRAIN["sphere"]
+    assert cold.fill_s == pytest.approx(fill)
+    frames = 1 + (cold.settle_cycles + cold.cycles) * case.output.frames_per_cycle
+    assert cold.frames == frames and plan.plan(case, threads=1, frames=False).frames == 0
+
+
+def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
+    """The shipped 5e7 sphere bed: the stiffness rule asks for more; applied, it asks nothing."""
+    out = tmp_path / "suggested"
+    assert main(["plan", str(CASES_DIR / "sphere-bed"), "--suggest", str(out)]) == 0
+    printed = capsys.readouterr().out
+    before = plan.plan(load_case(CASES_DIR / "sphere-bed"))
+    warned = [a for a in before.advice if a.key == "contact.youngs_modulus"]
+    assert warned and warned[0].value is not None and "contact.youngs_modulus" in printed
+    case = load_case(out)  # it loads
+    assert case.contact.youngs_modulus == warned[0].value
+    after = plan.plan(case)
+    assert not [a for a in after.advice if a.value is not None], after.text()
+    assert "# dem plan --suggest" in (out / "case.toml").read_text()
+    assert "was 50000000.0" in (out / "case.toml").read_text()
+    assert not (out / "README.md").exists()  # it describes the case as it was
+    # nothing is replaced: a second suggestion into the same folder is refused
+    assert main(["plan", str(CASES_DIR / "sphere-bed"), "--suggest", str(out)]) == 2
+    assert "--suggest" in capsys.readouterr().err
+
+
+def test_suggest_keeps_a_mesh_trough_and_the_set_keys(tmp_path, capsys):
+    out = tmp_path / "deep" / "u"
+    argv = ["plan", str(CASES_DIR / "u-trough"), "--set", "run.cycles=30", "--suggest", str(out)]
+    assert main(argv) == 0
+    case = load_case(out)
+    assert case.trough.mesh == load_case(CASES_DIR / "u-trough").trough.mesh
+    assert case.run.cycles == 30
+
+
+def test_suggest_refuses_advice_that_moves_a_key_back_and_forth(tmp_path, monkeypatch):
+    from dem.errors import InputError
+
+    calls = iter(range(100))
+
+    def flip(case, **kw):  # advice that alternates between two values
+        value = [1e8, 2e8][next(calls) % 2]
+        return dataclasses.replace(
+            real(case, **kw), advice=[plan.Advice("warn", "contact.youngs_modulus", "x", value)]
+        )
+
+    real = plan.plan
+    monkeypatch.setattr(plan, "plan", flip)
+    with pytest.raises(InputError, match="back and forth"):
+        plan.suggest(CASES_DIR / "sphere-bed", tmp_path / "s")
+    assert not (tmp_path / "s").exists()  # nothing written
 
 
 def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):

@@ -239,6 +239,41 @@ def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_pa
         assert np.isfinite(res["cycles"]["mean_velocity"]).all()
 
 
+def test_the_compile_check_tells_a_mesh_trough_variant_from_a_flat_one(tmp_path):
+    """numba compiles the step kernel once per variant (mesh arrays or None as its last
+    argument): a cache holding only one must not count as holding the other."""
+    import pickle
+
+    from dem.kernels import _holds_variant
+
+    class T:  # a numba type as the index pickles it: only its text is read
+        def __init__(self, text):
+            self.text = text
+
+        def __str__(self):
+            return self.text
+
+    def index(*lasts):
+        path = tmp_path / f"i{len(list(tmp_path.iterdir()))}.nbi"
+        keys = {((T("int64"), T(last)), "target", "flags"): "x.nbc" for last in lasts}
+        with open(path, "wb") as fh:
+            pickle.dump("0.68.1", fh)
+            fh.write(pickle.dumps((b"stamp", keys)))
+        return path
+
+    flat, meshed, both = (
+        index("none"),
+        index("MeshArrays(array(float64, 3d, C))"),
+        index("none", "MeshArrays(array(float64, 3d, C))"),
+    )
+    assert _holds_variant(flat, mesh=False) and not _holds_variant(flat, mesh=True)
+    assert _holds_variant(meshed, mesh=True) and not _holds_variant(meshed, mesh=False)
+    assert _holds_variant(both, mesh=True) and _holds_variant(both, mesh=False)
+    garbled = tmp_path / "garbled.nbi"
+    garbled.write_bytes(b"not a pickle")
+    assert _holds_variant(garbled, mesh=True)  # unreadable: assume compiled (nothing is lost)
+
+
 def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, monkeypatch,
                                                                      capsys):  # fmt: skip
     """The warm-up compiles on two separate grains: the run's own grains never see it."""
@@ -247,7 +282,7 @@ def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, 
     case = load_case(write_case(tmp_path / "case"))
     plain = run_case(case, tmp_path / "a", progress=False, frames=False)
     assert kernels.compiled(clumps=False)  # the cache now holds the sphere kernels
-    monkeypatch.setattr(kernels, "compiled", lambda clumps=False: False)
+    monkeypatch.setattr(kernels, "compiled", lambda clumps=False, mesh=False: False)
     first = run_case(case, tmp_path / "b", progress=True, frames=False)
     err = capsys.readouterr().err
     assert "compiling the sphere step kernels" in err and ": compiled in" in err

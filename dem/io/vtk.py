@@ -69,6 +69,7 @@ import errno
 import math
 import os
 import re
+import time
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -79,6 +80,11 @@ from dem.io.files import replace_file, replace_text
 from dem.trough import Trough
 
 PVD_NAME = "particles.pvd"
+#: The collection is rewritten after a frame when this many seconds have passed since the last
+#: rewrite ... (ParaView opening a running series sees the frames of up to then)
+PVD_REWRITE_MIN_S = 1.0
+#: ... and this many times the last rewrite's own cost (so rewrites cost at most 1/50 of the run)
+PVD_REWRITE_FACTOR = 50.0
 FRAMES_DIR = "frames"
 #: The trough's file in the trough frame, shared by every frame.
 TROUGH_FILE = "trough.vtp"
@@ -203,6 +209,11 @@ class VTKSeriesWriter:
         else:
             self._trough_mesh = mesh_polydata(mesh.tri, back_wall=back_wall)
         self._trough_written = False  # trough frame: TROUGH_FILE written by this writer
+        # the collection lists every frame, so writing it costs O(frames): it is rewritten after
+        # a frame only once PVD_REWRITE_FACTOR times its last cost has passed (and on close), so
+        # that the rewrites cost at most about 1/PVD_REWRITE_FACTOR of the run, not O(frames^2)
+        self._pvd_written_at = -math.inf
+        self._pvd_cost = 0.0
         # frames with a grains file: a resumed run's from its files, a new run's none (a grains
         # file an earlier run left is removed: only this writer's are listed)
         self._grain_frames: set[int] = set()
@@ -325,7 +336,9 @@ class VTKSeriesWriter:
         save_vtp(mesh, self.frames_dir / p_name)
         t_name = self._write_trough(index, shift)
         self._entries.append((float(time), p_name, t_name))
-        self._write_pvd()
+        due = max(PVD_REWRITE_MIN_S, PVD_REWRITE_FACTOR * self._pvd_cost)
+        if _clock() - self._pvd_written_at >= due:
+            self._write_pvd()
         return self.frames_dir / p_name
 
     def _field_data(self, mesh: pv.PolyData, time: float, shift, drive_v) -> None:
@@ -398,6 +411,7 @@ class VTKSeriesWriter:
         return name
 
     def _write_pvd(self) -> None:
+        start = _clock()
         lines = [
             '<?xml version="1.0"?>',
             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
@@ -414,6 +428,13 @@ class VTKSeriesWriter:
                              f"name={block} file={file}/>")  # fmt: skip
         lines += ["  </Collection>", "</VTKFile>", ""]
         replace_text(self.pvd_path, "\n".join(lines), encoding="ascii")
+        self._pvd_written_at = _clock()
+        self._pvd_cost = self._pvd_written_at - start
+
+
+def _clock() -> float:
+    """Wall-clock seconds (monotonic) for the collection's rewrite schedule."""
+    return time.monotonic()
 
 
 def paraview_script() -> Path:

@@ -54,17 +54,39 @@ def _drop_stale_cache() -> None:
 _drop_stale_cache()
 
 
-def compiled(clumps: bool = False) -> bool:
-    """True if numba's on-disk cache holds the step kernel (of clumps if ``clumps``).
+def compiled(clumps: bool = False, mesh: bool = False) -> bool:
+    """True if numba's on-disk cache holds the step kernel for this kind of scene.
 
-    A first run on a machine compiles the kernels (about a minute) and caches them next to their
-    sources (or under NUMBA_CACHE_DIR); ``dem run`` says so before it starts.
+    ``clumps``: the clump kernel (else the spheres'); ``mesh``: its variant for a mesh trough
+    (a mesh trough passes the mesh arrays where a flat one passes None, so numba compiles each
+    variant once, about a minute). A first run on a machine compiles the kernels and caches them
+    next to their sources (or under NUMBA_CACHE_DIR); ``dem run`` says so before it starts, and
+    ``dem plan`` counts the time.
     """
     name = "integrate.advance_clumps-*.nbi" if clumps else "integrate.advance-*.nbi"
     here = Path(__file__).resolve().parent
     places = [here / "__pycache__"]
-    if numba.config.CACHE_DIR:
-        places += list(Path(numba.config.CACHE_DIR).rglob("__pycache__")) + [
-            Path(numba.config.CACHE_DIR)
-        ]
-    return any(any(p.rglob(name)) for p in places if p.is_dir())
+    if numba.config.CACHE_DIR:  # numba then caches there only
+        places = [Path(numba.config.CACHE_DIR)]
+    indexes = [i for p in places if p.is_dir() for i in p.rglob(name)]
+    return any(_holds_variant(i, mesh) for i in indexes)
+
+
+def _holds_variant(index: Path, mesh: bool) -> bool:
+    """Whether a numba cache index lists the step kernel with (or without) the mesh arrays.
+
+    The index is numba's pickle (its version, then the source stamp and the overloads keyed by
+    signature); the step kernel's last argument is ``MeshArrays`` or ``none``. An index this
+    cannot read counts as holding every variant (the check only decides what is said and
+    estimated, never what runs).
+    """
+    import pickle
+
+    try:
+        with open(index, "rb") as fh:
+            pickle.load(fh)  # numba's version
+            _stamp, overloads = pickle.loads(fh.read())
+        lasts = [str(key[0][-1]) for key in overloads]
+    except Exception:  # another numba's format: assume compiled
+        return True
+    return any(last.startswith("MeshArrays") == mesh for last in lasts)
