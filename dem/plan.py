@@ -11,11 +11,12 @@ Where the numbers come from:
 - memory: the state's arrays allocated as a run allocates them (zeros, so nothing is touched),
   with the pair list at its starting capacity (and, on several threads, the parallel pair
   loop's inbox);
-- wall time: particle-steps (spheres x steps: the drive-off settle, the settling cycles and the
+- wall time: start-up, the compile where numba's cache lacks this kind of scene, the fill, the
+  frames, and particle-steps (spheres x steps: the drive-off settle, the settling cycles and the
   measured cycles) over a rate: the rate the last run of this case measured on this machine
-  (``CASE_DIR/output/summary.json``), else the rate the speed-accuracy study measured for the
-  grain kind (``dem/data/speed_accuracy.json``: one thread beside one busy process on a 2-core
-  machine; a free core runs about 1.5x faster);
+  (``CASE_DIR/output/summary.json``), else the rate of the shipped cases of this grain kind on
+  the project's idle 2-core VM (``RATE_1THREAD``; checked against every shipped case by
+  validation/performance/plan_check.py);
 - expected error: the study (validation/speed_accuracy/) varied one setting at a time around the
   shipped cases (``cases/sphere-bed`` for spheres, ``cases/screw-trough`` for screws and other
   clumps) and measured the bulk velocity against a converged reference. The error of a case is
@@ -46,27 +47,34 @@ from dem.scene import resolve
 TOLERANCE = 0.02
 #: Stiffness or step this many times finer than the cheapest acceptable one is "far more".
 FAR = 2.0
-#: Cost of a step apart from its particles, s (the study's one-grain rung: 1.2 s for 5.7e5
-#: steps of one sphere); it dominates only for a few grains.
-STEP_OVERHEAD_S = 2.0e-6
-#: Particle-steps per second on one thread where the study's figure is missing.
-FALLBACK_RATE = 5.0e6
+#: Cost of a step apart from its particles, s (cases/single-sphere: 1.64e6 steps of one sphere in
+#: 7.1 s, plan_check.py); it dominates only for a few grains.
+STEP_OVERHEAD_S = 4.0e-6
+#: Particle-steps per second on one thread where no run of the case has measured it: the
+#: shipped cases on the project's idle 2-core VM (2026-11-26, plan_check.py: sphere-bed 9.3e6 on
+#: 2 threads; screw-trough 1.4e7 sphere-steps/s) ...
+RATE_1THREAD = {"sphere": 5.5e6, "clump": 8.2e6}
+#: ... times this on a mesh trough (u-trough 4.3e6, v-trough 6.2e6 against the flat 1.4e7).
+MESH_RATE_FACTOR = 0.4
+#: Settling cycles an automatic settle ("auto") takes, as the shipped beds took them under the
+#: default law (sphere-bed 10; screw-trough 6, u-trough 8, v-trough 6).
+AUTO_SETTLE_CYCLES = {"sphere": 10, "clump": 7}
 #: Start-up of ``dem run`` (imports, loading the cached kernels, the point mass, summary), s.
 #: The figures below were measured on the project's 2-core VM (validation/performance,
 #: plan_check.py and its README); another machine scales them all alike, roughly.
 STARTUP_S = 3.0
 #: Compiling the step kernels where numba's cache holds none yet for this kind of scene (a
 #: fresh clone, or the first mesh trough), s: with an empty NUMBA_CACHE_DIR, the whole run's
-#: extra time: 56 s (sphere-bed) and 66 s (screw-trough).
-COMPILE_S = {"sphere": 56.0, "clump": 66.0}
-#: Building the scene and placing its grains, s: this much (for clumps mostly sampling the
-#: grain's contact mass; measured 1.2-2.3 s for 150-2000 screws, 0.3 s for 1500-15000 spheres)
-#: ...
-FILL_S = {"sphere": 0.3, "clump": 2.0}
+#: extra time: 56 s (sphere-bed) and 61 s (screw-trough), of which the step kernels 46 and 53.
+COMPILE_S = {"sphere": 56.0, "clump": 61.0}
+#: Building the scene and placing its grains, s: this much ... (in a run, after the compile
+#: check has loaded the kernels: 0.14 s for 1500 spheres, 0.07-0.28 s for 150-200 screws)
+FILL_S = {"sphere": 0.05, "clump": 0.05}
 #: ... and this much per grain (random sequential placement).
-FILL_S_PER_GRAIN = {"sphere": 2e-5, "clump": 2e-4}
-#: A frame (VTK files and the results.h5 rows): this much, s ...
-FRAME_S = 0.008
+FILL_S_PER_GRAIN = {"sphere": 6e-5, "clump": 1e-3}
+#: A frame (VTK files and the results.h5 rows): this much, s (a clump's frame has a grains
+#: file too: sphere-bed 12 ms, screw-trough 16 ms, the feeder 22 ms a frame) ...
+FRAME_S = {"sphere": 0.008, "clump": 0.012}
 #: ... and this much per sphere (1500 spheres 12 ms, 15000 spheres 54 ms a frame).
 FRAME_S_PER_SPHERE = 3.0e-6
 
@@ -340,10 +348,10 @@ def rate(case, threads: int, data: dict | None) -> tuple[float, str]:
                 return _scale(measured, used, threads), f"measured by the last run, {last}"
         except (ValueError, KeyError, TypeError):
             pass  # an older or partial summary: fall back to the study
-    if data is None:
-        return _scale(FALLBACK_RATE, 1, threads), "a typical rate (no study data)"
-    one = data["particle_steps_per_s_1thread"]
-    return _scale(one, 1, threads), "the speed-accuracy study's rate for this grain kind"
+    kind = "sphere" if case.particles.shape == "sphere" else "clump"
+    one = RATE_1THREAD[kind] * (MESH_RATE_FACTOR if case.trough.mesh is not None else 1.0)
+    where = ", a mesh trough" if case.trough.mesh is not None else ""
+    return _scale(one, 1, threads), f"the rate of the shipped {kind} cases{where} on a 2-core VM"
 
 
 def _scale(rate_used: float, used: int, threads: int) -> float:
@@ -501,8 +509,8 @@ def plan(
     auto_settle = case.run.settle_cycles is None
     if not auto_settle:
         settle = case.run.settle_cycles
-    elif grains > 1 and data:
-        settle = int(round(data["settle_cycles"]))
+    elif grains > 1:
+        settle = AUTO_SETTLE_CYCLES["sphere" if pt.shape == "sphere" else "clump"]
     else:
         settle = config.DEM_AUTO_SETTLE_MIN_CYCLES
     steps = int(settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
@@ -515,7 +523,7 @@ def plan(
     compile_s = 0.0 if cached else COMPILE_S[shape]
     fill_s = FILL_S[shape] + grains * FILL_S_PER_GRAIN[shape]
     n_frames = 1 + (settle + cycles) * case.output.frames_per_cycle if frames else 0
-    frames_s = n_frames * (FRAME_S + spheres * FRAME_S_PER_SPHERE)
+    frames_s = n_frames * (FRAME_S[shape] + spheres * FRAME_S_PER_SPHERE)
     startup = STARTUP_S
     advice: list[Advice] = []
     away = unmeasured(case, data, kind) if data else []

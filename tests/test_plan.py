@@ -151,7 +151,7 @@ def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
     case = small(tmp_path)
     directory = case.directory
     before = plan.plan(case, threads=1)
-    assert "study" in before.rate_source
+    assert "shipped sphere cases" in before.rate_source
     (directory / "output").mkdir()
     (directory / "output" / "summary.json").write_text(
         json.dumps({"particle_steps_per_s": 1.0e6, "threads": 1, "spheres": 120})
