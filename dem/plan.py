@@ -222,6 +222,8 @@ def _size(n: float) -> str:
 
 
 def _duration(s: float) -> str:
+    if s < 10:
+        return f"{s:.2g} s"
     if s < 120:
         return f"{s:.0f} s"
     if s < 7200:
