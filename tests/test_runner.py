@@ -239,6 +239,16 @@ def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_pa
         assert np.isfinite(res["cycles"]["mean_velocity"]).all()
 
 
+class TypeText:
+    """A numba type as a cache index pickles it: the compile check reads only its text."""
+
+    def __init__(self, text):
+        self.text = text
+
+    def __str__(self):
+        return self.text
+
+
 def test_the_compile_check_tells_a_mesh_trough_variant_from_a_flat_one(tmp_path):
     """numba compiles the step kernel once per variant (mesh arrays or None as its last
     argument): a cache holding only one must not count as holding the other."""
@@ -246,16 +256,9 @@ def test_the_compile_check_tells_a_mesh_trough_variant_from_a_flat_one(tmp_path)
 
     from dem.kernels import _holds_variant
 
-    class T:  # a numba type as the index pickles it: only its text is read
-        def __init__(self, text):
-            self.text = text
-
-        def __str__(self):
-            return self.text
-
     def index(*lasts):
         path = tmp_path / f"i{len(list(tmp_path.iterdir()))}.nbi"
-        keys = {((T("int64"), T(last)), "target", "flags"): "x.nbc" for last in lasts}
+        keys = {((TypeText("int64"), TypeText(last)), "target", "flags"): "x.nbc" for last in lasts}
         with open(path, "wb") as fh:
             pickle.dump("0.68.1", fh)
             fh.write(pickle.dumps((b"stamp", keys)))
