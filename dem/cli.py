@@ -451,6 +451,17 @@ def _print_summary(s: dict) -> None:
          "per m of width)")  # fmt: skip
     for text in feeder_lines(s.get("feeder")):  # the discharge: a feeder's answer
         print(text)
+    stiff = s.get("stiffness")
+    if stiff:
+        sign = "<=" if stiff["converged"] else ">"
+        ratio = f"(omega / omega_bed)^2 = {stiff['compliance']:.2g} {sign} "
+        ratio += f"{stiff['compliance_limit']:.2g}"
+        if stiff["converged"]:
+            line("stiffness", f"stiff enough for the rigid material's bulk velocity, {ratio}")
+        else:
+            line("stiffness", f"TOO SOFT for the rigid material's answer: {ratio}, where the "
+                 "bulk study measured more than 2 % off; set "
+                 f"{stiff['key']} >= {stiff['value']:.3g}")  # fmt: skip
     rate = s.get("particle_steps_per_s")
     line("cost", f"dt {s['timestep']:.3g} s, {s['steps']} steps, {s['wall_time_s']:.0f} s"
          + (f", {rate:.3g} particle-steps/s" if rate else ""))  # fmt: skip

@@ -41,7 +41,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import config, measure, plan, setup
+from dem import config, measure, plan, setup, stiffness
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
@@ -625,6 +625,9 @@ def _finish(case, sim, loop, cycles, n_threads, estimate, out_dir, results, vtk,
     """
     summary = _summary(case, sim, loop, cycles, n_threads)
     summary["plan"] = estimate.as_dict()
+    # the bed's stiffness against the bulk study's rule: how far this answer may be from the
+    # rigid material's (validation/bulk-convergence)
+    summary["stiffness"] = stiffness.assessment(resolve(case))
     # the deepest overlap at the checks; above the accuracy bound a warning, not a stop
     summary["max_overlap"] = sim.overlap_summary()
     summary["max_overlap_fraction"] = summary["max_overlap"]["fraction"]

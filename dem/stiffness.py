@@ -122,3 +122,28 @@ def advice(scene):
         f"({data['evidence']}); set {key} >= {_up(value):.3g}",
         _up(value),
     )
+
+
+def assessment(scene) -> dict | None:
+    """Whether the bed is stiff enough for the rigid material's answer, for summary.json.
+
+    None for one grain or without the study's data; else the bed's compliance c, the study's
+    limit, ``converged`` (c <= limit), and where it is not, the key and the value to set.
+    """
+    data = study()
+    if data is None or scene.case.particles.count < 2:
+        return None
+    from dem.plan import _up
+
+    limit = data["compliance_limit"]
+    mode = bed_mode(scene)
+    out = {
+        "converged": mode.compliance <= limit,
+        "compliance": mode.compliance,
+        "compliance_limit": limit,
+        "bed_mode_hz": mode.omega_bed / (2 * math.pi),
+    }
+    if not out["converged"]:
+        key, value = stiffness_for(scene, limit)
+        out |= {"key": key, "value": _up(value)}
+    return out

@@ -56,3 +56,29 @@ def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_na
     assert not [a for a in ok.warnings() if a.key == "contact.youngs_modulus"]
     one = plan(load_case(CASES / "single-sphere"))
     assert not [a for a in one.warnings() if a.key.startswith("contact.")]
+
+
+def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(capsys):
+    """summary.json's ``stiffness`` and the terminal's line: the shipped 5e7 Pa sphere bed is
+    too soft and names the value its warning names; at that value it is stiff enough."""
+    from dem.cli import _print_summary
+
+    soft = resolve(load_case(CASES / "sphere-bed"))
+    found = stiffness.assessment(soft)
+    warned = stiffness.advice(soft)
+    assert found["converged"] is False and found["compliance"] > found["compliance_limit"]
+    assert (found["key"], found["value"]) == (warned.key, warned.value)
+    stiff = resolve(load_case(CASES / "sphere-bed", {found["key"]: found["value"]}))
+    assert stiffness.assessment(stiff)["converged"] is True
+    assert stiffness.assessment(resolve(load_case(CASES / "single-sphere"))) is None
+    summary = {
+        "mean_velocity": 0.1206, "mean_velocity_stderr": 0.0015, "mean_velocity_norm": 0.706,
+        "mean_velocity_norm_stderr": 0.009, "mass_flow_rate": 0.47,
+        "mass_flow_rate_per_width": 11.8, "timestep": 6.5e-6, "steps": 77250,
+        "wall_time_s": 16.0, "stiffness": found,
+    }  # fmt: skip
+    _print_summary(summary)
+    out = capsys.readouterr().out
+    assert "TOO SOFT" in out and f"{found['key']} >= {found['value']:.3g}" in out
+    _print_summary(summary | {"stiffness": stiffness.assessment(stiff)})
+    assert "stiff enough" in capsys.readouterr().out
