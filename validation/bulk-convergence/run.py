@@ -8,6 +8,7 @@ Runs go to scratch/ (ignored by git); a rerun reuses finished replicas (``--resu
     .venv/bin/python validation/bulk-convergence/run.py stiffness sphere-bed     # ~20 min
     .venv/bin/python validation/bulk-convergence/run.py stiffness screw-trough   # ~20 min
     .venv/bin/python validation/bulk-convergence/run.py timestep sphere-bed      # dt check
+    .venv/bin/python validation/bulk-convergence/run.py section screw-trough     # 2x section
     .venv/bin/python validation/bulk-convergence/run.py figures
 
 Everything goes through the public API a user has: ``dem.case.load_case`` with overrides, and
@@ -187,6 +188,40 @@ def timestep(bed: str, moduli: list[float]) -> None:
     path = HERE / f"timestep_{bed}.csv"
     _write_csv(path, rows)
     _record(f"timestep_{bed}", {"rows": rows})
+
+
+def section(bed: str, moduli: list[float], factors: list[float]) -> None:
+    """The bed in a section ``factor`` times longer (and as many times the grains: the same
+    depth), at the given moduli, against the shipped section's point of the stiffness sweep."""
+    base = {float(r["youngs_modulus_pa"]): r for r in _read_csv(HERE / f"stiffness_{bed}.csv")}
+    path = HERE / f"section_{bed}.csv"
+    rows = _read_csv(path) if path.is_file() else []
+    for youngs in moduli:
+        for factor in factors:
+            shipped = _bed_case(bed, youngs)
+            over = {"trough.length": shipped.trough.length * factor,
+                    "particles.count": int(round(shipped.particles.count * factor))}  # fmt: skip
+            keys = {"contact.youngs_modulus": youngs, "run.cycles": CYCLES,
+                    "run.replicas": REPLICAS, "run.timestep": shipped.run.timestep}  # fmt: skip
+            case = load_case(ROOT / "cases" / bed, keys | over)
+            summary = _run(case, SCRATCH / f"{bed}_E{youngs:.0e}_section{factor:g}")
+            row = _row(bed, youngs, DT_FRACTION, case, summary)
+            ref = base[youngs]
+            v0, e0 = float(ref["mean_velocity_m_s"]), float(ref["stderr_m_s"])
+            v, e = row["mean_velocity_m_s"], row["stderr_m_s"]
+            row |= {"section_factor": factor, "trough_length_m": case.trough.length,
+                    "grains": case.particles.count, "shipped_section_m_s": v0,
+                    "difference": v / v0 - 1.0,
+                    "difference_stderr": math.hypot(e / v0, e0 * v / v0**2)}  # fmt: skip
+            rows = [r for r in rows if not (float(r["youngs_modulus_pa"]) == youngs
+                                             and float(r["section_factor"]) == factor)]  # fmt: skip
+            rows.append(row)
+            print(f"{bed} E = {youngs:.0e}, section x{factor:g}: v = "
+                  f"{row['mean_velocity_m_s']:.5f} +- {row['stderr_m_s']:.5f} m/s, "
+                  f"{100 * row['difference']:+.2f} +- {100 * row['difference_stderr']:.2f} % "
+                  "against the shipped section", flush=True)  # fmt: skip
+    _write_csv(path, rows)
+    _record(f"section_{bed}", {"rows": rows})
 
 
 #: Samples of the bed's vertical centre of mass per drive period, and the periods sampled.
@@ -500,6 +535,7 @@ def main() -> None:
         "stiffness",
         "timestep",
         "spectrum",
+        "section",
         "fit",
         "rule",
         "figures",
@@ -508,6 +544,8 @@ def main() -> None:
     parser.add_argument("bed", nargs="?", default="sphere-bed",
                         choices=["sphere-bed", "screw-trough"])  # fmt: skip
     parser.add_argument("--moduli", type=float, nargs="+", default=None)
+    parser.add_argument("--factors", type=float, nargs="+", default=[2.0],
+                        help="section: section lengths over the shipped one")  # fmt: skip
     args = parser.parse_args()
     SCRATCH.mkdir(exist_ok=True)
     if args.what == "coverage":
@@ -522,6 +560,8 @@ def main() -> None:
         rule()
     elif args.what == "timestep":
         timestep(args.bed, args.moduli or [5e8, 5e9])
+    elif args.what == "section":
+        section(args.bed, args.moduli or [2e9], args.factors)
     elif args.what == "spectrum":
         spectrum(args.bed, args.moduli or MODULI[:5])
     figures()
