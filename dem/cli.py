@@ -456,11 +456,18 @@ def _print_summary(s: dict) -> None:
         sign = "<=" if stiff["converged"] else ">"
         ratio = f"(omega / omega_bed)^2 = {stiff['compliance']:.2g} {sign} "
         ratio += f"{stiff['compliance_limit']:.2g}"
+        near = "; ".join(
+            f"{m['bed']} at E = {m['youngs_modulus_pa']:.0e} Pa (c = {m['compliance']:.2g}): "
+            f"{100 * m['error_vs_rigid']:+.1f} +- {100 * m['error_stderr']:.1f} %"
+            for m in stiff.get("measured") or []
+        )
+        near = f" (the bulk study against the rigid limit, near this c: {near})" if near else ""
         if stiff["converged"]:
-            line("stiffness", f"stiff enough for the rigid material's bulk velocity, {ratio}")
+            line("stiffness", f"stiff enough for the rigid material's bulk velocity, {ratio}"
+                 + near)  # fmt: skip
         else:
-            line("stiffness", f"TOO SOFT for the rigid material's answer: {ratio}, where the "
-                 "bulk study measured more than 2 % off; set "
+            line("stiffness", f"TOO SOFT for the rigid material's answer: {ratio}, beyond "
+                 f"which the bulk study measured more than 2 % off{near}; set "
                  f"{stiff['key']} >= {stiff['value']:.3g}")  # fmt: skip
     rate = s.get("particle_steps_per_s")
     line("cost", f"dt {s['timestep']:.3g} s, {s['steps']} steps, {s['wall_time_s']:.0f} s"

@@ -146,4 +146,24 @@ def assessment(scene) -> dict | None:
     if not out["converged"]:
         key, value = stiffness_for(scene, limit)
         out |= {"key": key, "value": _up(value)}
+    out["measured"] = measured_near(data, mode.compliance)
     return out
+
+
+def measured_near(data: dict, compliance: float, within: float = 1.5) -> list[dict]:
+    """What the bulk study measured near this compliance: per bed, its point of closest c.
+
+    Only points within a factor ``within`` of ``compliance``: each row has the bed, its Young's
+    modulus, c, and the velocity's relative error against that bed's rigid limit with its
+    standard error.
+    """
+    best: dict[str, dict] = {}
+    for row in data.get("rows", []):
+        ratio = abs(math.log(row["compliance"] / compliance))
+        if ratio <= math.log(within) and (
+            row["bed"] not in best or ratio < abs(math.log(best[row["bed"]]["compliance"]
+                                                           / compliance))
+        ):  # fmt: skip
+            best[row["bed"]] = row
+    keys = ("bed", "youngs_modulus_pa", "compliance", "error_vs_rigid", "error_stderr")
+    return [{k: r[k] for k in keys} for r in best.values()]

@@ -80,5 +80,9 @@ def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(cap
     _print_summary(summary)
     out = capsys.readouterr().out
     assert "TOO SOFT" in out and f"{found['key']} >= {found['value']:.3g}" in out
+    # the study's own point at this stiffness: the shipped sphere bed, 20 % slow
+    own = [m for m in found["measured"] if m["bed"] == "sphere-bed"]
+    assert own and own[0]["youngs_modulus_pa"] == 5e7 and own[0]["error_vs_rigid"] < -0.1
+    assert "sphere-bed at E = 5e+07 Pa" in out
     _print_summary(summary | {"stiffness": stiffness.assessment(stiff)})
     assert "stiff enough" in capsys.readouterr().out
