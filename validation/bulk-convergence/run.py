@@ -9,6 +9,7 @@ Runs go to scratch/ (ignored by git); a rerun reuses finished replicas (``--resu
     .venv/bin/python validation/bulk-convergence/run.py stiffness screw-trough   # ~20 min
     .venv/bin/python validation/bulk-convergence/run.py timestep sphere-bed      # dt check
     .venv/bin/python validation/bulk-convergence/run.py section screw-trough     # 2x section
+    .venv/bin/python validation/bulk-convergence/run.py fills screw-trough       # 5 more fills
     .venv/bin/python validation/bulk-convergence/run.py figures
 
 Everything goes through the public API a user has: ``dem.case.load_case`` with overrides, and
@@ -222,6 +223,45 @@ def section(bed: str, moduli: list[float], factors: list[float]) -> None:
                   "against the shipped section", flush=True)  # fmt: skip
     _write_csv(path, rows)
     _record(f"section_{bed}", {"rows": rows})
+
+
+def fills(bed: str, moduli: list[float], seed: int, replicas: int) -> None:
+    """More fills at the given moduli (seeds ``seed`` .. ``seed + replicas - 1``), pooled with
+    the stiffness sweep's fills of the same E and step: the mean over all fills with the
+    standard error of their scatter (each fill's own noise is inside that scatter)."""
+    base = {float(r["youngs_modulus_pa"]): r for r in _read_csv(HERE / f"stiffness_{bed}.csv")}
+    path = HERE / f"fills_{bed}.csv"
+    rows = _read_csv(path) if path.is_file() else []
+    for youngs in moduli:
+        case = _bed_case(bed, youngs)
+        case = load_case(case.source, {**_bed_keys(youngs, case), "run.seed": seed,
+                                       "run.replicas": replicas})  # fmt: skip
+        summary = _run(case, SCRATCH / f"{bed}_E{youngs:.0e}_seed{seed}x{replicas}")
+        old = [float(v) for v in base[youngs]["per_replica_m_s"].split()]
+        new = [r["mean_velocity"] for r in summary["per_replica"]]
+        values = np.array(old + new)
+        row = {
+            "bed": bed, "youngs_modulus_pa": youngs, "dt_fraction_of_limit": DT_FRACTION,
+            "fills": len(values), "seeds": f"1-{len(old)}, {seed}-{seed + replicas - 1}",
+            "mean_velocity_m_s": float(values.mean()),
+            "stderr_m_s": float(values.std(ddof=1) / math.sqrt(len(values))),
+            "fill_to_fill_sd_m_s": float(values.std(ddof=1)),
+            "per_fill_m_s": " ".join(f"{v:.6g}" for v in values),
+            "cpu_s_new_fills": summary["wall_time_s"],
+        }  # fmt: skip
+        rows = [r for r in rows if float(r["youngs_modulus_pa"]) != youngs] + [row]
+        print(f"{bed} E = {youngs:.0e}: {len(values)} fills, v = {row['mean_velocity_m_s']:.5f}"
+              f" +- {row['stderr_m_s']:.5f} m/s (sd {row['fill_to_fill_sd_m_s']:.5f})",
+              flush=True)  # fmt: skip
+    rows.sort(key=lambda r: float(r["youngs_modulus_pa"]))
+    _write_csv(path, rows)
+    _record(f"fills_{bed}", {"rows": rows})
+
+
+def _bed_keys(youngs: float, case) -> dict:
+    """The overrides of :func:`_bed_case` (its step included), to add more to them."""
+    return {"contact.youngs_modulus": youngs, "run.cycles": CYCLES,
+            "run.timestep": case.run.timestep}  # fmt: skip
 
 
 #: Samples of the bed's vertical centre of mass per drive period, and the periods sampled.
@@ -536,6 +576,7 @@ def main() -> None:
         "timestep",
         "spectrum",
         "section",
+        "fills",
         "fit",
         "rule",
         "figures",
@@ -546,6 +587,8 @@ def main() -> None:
     parser.add_argument("--moduli", type=float, nargs="+", default=None)
     parser.add_argument("--factors", type=float, nargs="+", default=[2.0],
                         help="section: section lengths over the shipped one")  # fmt: skip
+    parser.add_argument("--seed", type=int, default=4, help="fills: the first new seed")
+    parser.add_argument("--replicas", type=int, default=5, help="fills: new fills per E")
     args = parser.parse_args()
     SCRATCH.mkdir(exist_ok=True)
     if args.what == "coverage":
@@ -560,6 +603,8 @@ def main() -> None:
         rule()
     elif args.what == "timestep":
         timestep(args.bed, args.moduli or [5e8, 5e9])
+    elif args.what == "fills":
+        fills(args.bed, args.moduli or [2e9, 5e9, 2e10], args.seed, args.replicas)
     elif args.what == "section":
         section(args.bed, args.moduli or [2e9], args.factors)
     elif args.what == "spectrum":
