@@ -830,7 +830,7 @@ def suggest(
     before = plan(case, threads=threads, cycles=cycles)
     changes: dict[str, Any] = dict(overrides)
     seen: dict[str, list] = {}
-    current = before
+    current, current_case = before, case
     for _ in range(SUGGEST_ROUNDS):
         todo = {
             a.key: a.value
@@ -848,14 +848,15 @@ def suggest(
                 )  # fmt: skip
             seen.setdefault(key, []).append(value)
         stiffer = {"contact.youngs_modulus", "contact.stiffness"} & set(todo)
-        if stiffer and "run.timestep" not in todo and current.timestep_auto != current.timestep:
+        if stiffer and "run.timestep" not in todo and current_case.run.timestep is not None:
             # a step set by hand keeps its fraction of the stability limit, which moves with
             # the stiffness (the automatic step follows by itself)
             automatic = load_case(source, changes | todo | {"run.timestep": None})
             limit = resolve(automatic).step.limit
             todo["run.timestep"] = _down(current.timestep / current.timestep_limit * limit)
         changes.update(todo)
-        current = plan(load_case(source, changes), threads=threads, cycles=cycles)
+        current_case = load_case(source, changes)
+        current = plan(current_case, threads=threads, cycles=cycles)
     else:
         raise InputError("--suggest", str(source), "advice that settles within "
                          f"{SUGGEST_ROUNDS} rounds: {changes}")  # fmt: skip
@@ -869,7 +870,8 @@ def suggest(
         if not (out / item.name).exists():
             shutil.copy2(item, out / item.name)
     stamp = datetime.date.today().isoformat()
-    was = {k: _case_value(case, k) for k in changes}
+    as_filed = load_case(source) if overrides else case  # "was": the file's value, not --set's
+    was = {k: _case_value(as_filed, k) for k in changes}
     text_lines = set_case_keys(source, changes, f"dem plan --suggest {stamp}").splitlines()
     for i, line in enumerate(text_lines):  # each changed key's comment says what it was
         for key, old in was.items():

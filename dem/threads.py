@@ -94,7 +94,7 @@ class ThreadGuard:
 
     @property
     def best(self) -> int:
-        """The thread count that was faster per step (``threads`` until both were measured)."""
+        """The thread count that was faster per step (``start`` until both were measured)."""
         if len(self.seconds_per_step) < 2:
             return self.start
         return min(self.seconds_per_step, key=self.seconds_per_step.get)

@@ -4,6 +4,7 @@ import dataclasses
 import json
 import math
 import tracemalloc
+from datetime import date
 from pathlib import Path
 
 import pytest
@@ -207,6 +208,10 @@ def test_suggest_keeps_a_mesh_trough_and_the_set_keys(tmp_path, capsys):
     case = load_case(out)
     assert case.trough.mesh == load_case(CASES_DIR / "u-trough").trough.mesh
     assert case.run.cycles == 30
+    cycles_line = [line for line in (out / "case.toml").read_text().splitlines()
+                   if line.startswith("cycles = ")]  # fmt: skip
+    filed = load_case(CASES_DIR / "u-trough").run.cycles
+    assert cycles_line == [f"cycles = 30  # dem plan --suggest {date.today()}, was {filed!r}"]
 
 
 def test_suggest_refuses_advice_that_moves_a_key_back_and_forth(tmp_path, monkeypatch):
