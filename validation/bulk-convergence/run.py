@@ -409,12 +409,28 @@ def rigid_limit(rows: list[dict], bed: str) -> dict:
     }  # fmt: skip
 
 
+def stiffness_rows(bed: str) -> list[dict]:
+    """The stiffness sweep of ``bed``, each E pooled with the extra fills of ``run.py fills``
+    where it has them (same E and step: the mean over all fills, the standard error of their
+    scatter)."""
+    rows = _read_csv(HERE / f"stiffness_{bed}.csv")
+    path = HERE / f"fills_{bed}.csv"
+    more = {float(r["youngs_modulus_pa"]): r for r in _read_csv(path)} if path.is_file() else {}
+    for r in rows:
+        f = more.get(float(r["youngs_modulus_pa"]))
+        if f is not None:
+            r.update({"mean_velocity_m_s": f["mean_velocity_m_s"], "stderr_m_s": f["stderr_m_s"],
+                      "replicas": f["fills"], "per_replica_m_s": f["per_fill_m_s"]})  # fmt: skip
+    return rows
+
+
 def refit() -> None:
-    """The rigid-limit fit of every bed whose table is here, from the tables alone."""
+    """The rigid-limit fit of every bed whose table is here, from the tables alone (each E
+    pooled with its extra fills, :func:`stiffness_rows`)."""
     for bed in ("sphere-bed", "screw-trough"):
         path = HERE / f"stiffness_{bed}.csv"
         if path.is_file():
-            rows = _read_csv(path)
+            rows = stiffness_rows(bed)
             fit = rigid_limit(rows, bed)
             _record(f"stiffness_{bed}", {"rows": len(rows), "dt_fraction": DT_FRACTION, **fit})
             print(bed, json.dumps(fit, indent=1))
@@ -432,13 +448,20 @@ def rule() -> None:
     from dem.scene import resolve
 
     record = _read_record()
-    rows = []
+    rows, limits = [], {}
     for bed in ("sphere-bed", "screw-trough"):
         fit = record.get(f"stiffness_{bed}", {})
         path = HERE / f"stiffness_{bed}.csv"
         if "v_inf_m_s" not in fit or not path.is_file():
             continue
-        for r in _read_csv(path):
+        drive = load_case(ROOT / "cases" / bed).drive
+        scale = drive.amplitude * drive.omega * math.cos(math.radians(drive.angle))
+        limits[bed] = {
+            "velocity_m_s": fit["v_inf_m_s"], "stderr_m_s": fit["v_inf_stderr_m_s"],
+            "velocity_norm": fit["v_inf_m_s"] / scale,
+            "stderr_norm": fit["v_inf_stderr_m_s"] / scale, "form": fit["form"],
+        }  # fmt: skip
+        for r in stiffness_rows(bed):
             youngs = float(r["youngs_modulus_pa"])
             scene = resolve(load_case(ROOT / "cases" / bed, {"contact.youngs_modulus": youngs,
                                                              "run.timestep": "auto"}))  # fmt: skip
@@ -469,7 +492,8 @@ def rule() -> None:
         )
         + f"; within 2 % at c <= {limit:.4f}",  # fmt: skip
         "rows": rows,
-        "source": "validation/bulk-convergence/run.py rule",
+        "rigid_limits": limits,
+        "source": "validation/bulk-convergence/run.py fit; run.py rule",
         "provenance": provenance.record(),
     }
     _write_csv(HERE / "rule.csv", rows)

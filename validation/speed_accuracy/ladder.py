@@ -1,13 +1,18 @@
-"""The model ladder: point mass, one grain, sphere bed, screw bed; the cost and answer of each.
+"""The model ladder: point mass, one grain, the bed soft, shipped and stiff; cost and answer.
 
     .venv/bin/python validation/speed_accuracy/ladder.py
 
 Each rung answers the same question, v / (A omega cos phi) at the case's drive and material:
 the paper's point mass (dem.pointmass.velocity, event-driven), one DEM grain alone on the trough
-(``particles.count = 1``), and the bed. The error of every rung is taken against the bed's
-reference (study.py), so the table says how far down the ladder a question can be answered.
+(``particles.count = 1``), the bed at 5e7 Pa (the LIGGGHTS-parity stiffness,
+validation/liggghts-bulk), the bed at its shipped settings (2e9 Pa, the base fills), and the
+bed at 5e10 Pa (the stiffest point of validation/bulk-convergence). The error of every rung is
+taken against the bed's rigid limit (study.py), so the table says how far down the ladder a
+question can be answered. The 5e7 and 5e10 Pa rungs are validation/bulk-convergence's sweep
+points (dt = 0.5 of the limit, their fills pooled); their cost is one fill's CPU time there.
 """
 
+import math
 import time
 
 from study import (
@@ -22,7 +27,7 @@ from study import (
     ensure,
     print_table,
     reference,
-    reference_points,
+    rigid_limit,
     support_points,
     table,
     write_csv,
@@ -36,8 +41,39 @@ POINTS = [
     for case in CASES
     for p in [Point("ladder", case, "one grain", "one grain", {"particles.count": 1})]
     + default_points("ladder", case, FILL_SEEDS[case])
-    + reference_points("ladder", case)
 ]
+#: The bulk-convergence sweep points shown as rungs: Young's modulus, label.
+SWEEP_RUNGS = ((5e7, "bed, 5e7 Pa (LIGGGHTS parity)"), (5e10, "bed, 5e10 Pa (stiffest)"))
+
+
+def sweep_rows() -> list[dict]:
+    """The soft and the stiff bed from validation/bulk-convergence, as ladder rows."""
+    import csv
+
+    out = []
+    for name in CASES:
+        ref = rigid_limit(name)
+        path = ROOT / "validation" / "bulk-convergence" / f"stiffness_{name}.csv"
+        with open(path) as fh:
+            rows = {float(r["youngs_modulus_pa"]): r for r in csv.DictReader(fh)}
+        scale = float(rows[5e7]["mean_velocity_m_s"]) / float(rows[5e7]["mean_velocity_norm"])
+        for e, label in SWEEP_RUNGS:
+            r = rows[e]
+            v = float(r["mean_velocity_norm"])
+            err = v - ref["velocity_norm"]
+            wall = float(r["cpu_s"]) / int(r["replicas"])
+            out.append({"case": name, "study": "ladder", "label": label, "x": label, "seed": "",
+                        "fills": int(r["replicas"]), "velocity_norm": v,
+                        "stderr": float(r["stderr_m_s"]) / scale,
+                        "reference": ref["velocity_norm"], "error": err,
+                        "relative_error": err / ref["velocity_norm"],
+                        "error_uncertainty": math.hypot(float(r["stderr_m_s"]) / scale,
+                                                        ref["stderr_norm"]),
+                        "fill_spread": math.nan,
+                        "acceptable": abs(err) <= TOLERANCE * ref["velocity_norm"],
+                        "wall_time_s": wall, "speedup": math.nan, "particle_steps": math.nan,
+                        "spheres": math.nan, "grains": math.nan, "failed": ""})  # fmt: skip
+    return out
 
 
 def pointmass_rows(rows: dict) -> list[dict]:
@@ -82,9 +118,9 @@ def plot(rows: list[dict], path) -> None:
                         xytext=(4, 3), textcoords="offset points")  # fmt: skip
         ax.axhline(sel[0]["reference"], color=f"C{i}", ls=":", lw=1)
     ax.set_xscale("log")
-    ax.set_xlabel("wall time, s (DEM: 1 thread beside 1 busy process)")
+    ax.set_xlabel("wall time, s (DEM: one thread beside one busy process)")
     ax.set_ylabel("v / (A omega cos phi)")
-    ax.set_title("model ladder (dotted: the bed's converged reference)", fontsize=10)
+    ax.set_title("model ladder (dotted: the bed's rigid limit)", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -95,7 +131,9 @@ def main() -> int:
     import sys
 
     rows = cached() if "--figures" in sys.argv else ensure(support_points(CASES) + POINTS)
-    out = pointmass_rows(rows) + table(POINTS, rows)
+    bed = [r | {"label": "bed, shipped (2e9 Pa)"} if r["label"] == "base" else r
+           for r in table(POINTS, rows)]  # fmt: skip
+    out = pointmass_rows(rows) + bed + sweep_rows()
     out.sort(key=lambda r: (r["case"], r["wall_time_s"]))
     write_csv("ladder", out, __file__)
     plot(out, HERE / "ladder.png")
