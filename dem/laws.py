@@ -126,13 +126,23 @@ def _spring_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, floa
 
 
 def _liggghts_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
-    """Linear kappa k_n; Hertz Mindlin's S_t = 8 G* a; the normal damping rescaled to k_t."""
+    """Linear kappa k_n; Hertz Mindlin's S_t = 8 G* a; and the tangential damping ratio.
+
+    The tangential oscillator has stiffness k_t and mass m* / f (f: the rotation factor, 7/2
+    for a rolling sphere), so its damping ratio is gamma_t sqrt(f) / (2 sqrt(k_t m*)). Hertz:
+    gamma_t = -2 sqrt(5/6) beta sqrt(S_t m*), so zeta_t = zeta_n sqrt(f); linear:
+    gamma_t = gamma_n = 2 zeta_n sqrt(k_n m*), so zeta_t = zeta_n sqrt(f k_n / k_t). With
+    eps_n = 0 and rotation that is 3.5 zeta_n (linear, kappa = 2/7): an overdamped dashpot whose
+    explicit step is stable only below 0.28 / omega_t, where an undamped one allows 2 / omega_t.
+    """
     if model == "linear":
         kt = p[contacts.P_KT_RATIO] * s_n
     else:
         kt = 8.0 * p[contacts.P_GSTAR] * a
-    kt_eff = rotation_factor * kt
-    return kt_eff, (zeta_n * math.sqrt(kt / kt_eff) if kt > 0 else 0.0)
+    if kt <= 0:
+        return 0.0, 0.0
+    ratio = rotation_factor * (s_n / kt if model == "linear" else 1.0)
+    return rotation_factor * kt, zeta_n * math.sqrt(ratio)
 
 
 def _impact_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:

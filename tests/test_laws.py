@@ -57,7 +57,7 @@ def test_a_key_of_another_law_is_refused_at_load_and_its_own_accepted(model, tan
 def test_calibration_refusal_comes_from_the_row():
     from dem.calibrate import calibrate
 
-    case = load_case(SPHERE_BED, {"contact.tangential": "liggghts"})
+    case = load_case(SPHERE_BED, {"contact.tangential": "liggghts", "run.timestep": "auto"})
     assert laws.TANGENTIAL_LAWS["liggghts"].calibration_refused
     with pytest.raises(InputError, match="contact.tangential"):
         calibrate(case)
@@ -70,10 +70,46 @@ def test_the_time_step_resolves_the_row_spring():
 
     limits = {}
     for tangential in laws.TANGENTIAL_LAWS:
-        case = load_case(SPHERE_BED, {"contact.tangential": tangential})
+        case = load_case(SPHERE_BED, {"contact.tangential": tangential, "run.timestep": "auto"})
         limits[tangential] = timestep_for(case).limit
     assert limits["impact"] >= limits["coulomb"]
     assert limits["impact"] >= limits["liggghts"]
+
+
+@pytest.mark.parametrize("model", ["linear", "hertz_mindlin"])
+def test_the_liggghts_dashpot_damps_the_rolling_tangential_oscillator(model):
+    """The tangential oscillator of a rolling sphere has stiffness k_t and mass 2/7 m*; its
+    damping ratio is gamma_t / (2 sqrt(k_t 2/7 m*)), with gamma_t as the kernel applies it
+    (linear: gamma_n; Hertz: -2 sqrt(5/6) beta sqrt(S_t m*)). The step limit takes that ratio.
+    (It took zeta_n sqrt(2/7) before: 3.5 times too weak a dashpot for eps_n = 0, and a linear
+    bed at 0.82 of that limit blew up while settling.)"""
+    keys = {"contact.tangential": "liggghts", "run.timestep": "auto"}
+    if model == "linear":
+        keys |= {"contact.model": "linear", "contact.youngs_modulus": None,
+                 "contact.stiffness": 1.68e5}  # fmt: skip
+    case = load_case(SPHERE_BED, keys)
+    law = laws.ContactLaw.from_case(case)
+    p = law.wall_params  # sphere-wall: m* = m, R* = r
+    m = case.material.density * 4.0 / 3.0 * math.pi * case.particles.radius**3
+    beta = p[contacts.P_BETA]
+    if model == "linear":
+        k_n = p[contacts.P_KN]
+        k_t = p[contacts.P_KT_RATIO] * k_n
+        gamma_t = -2.0 * beta * math.sqrt(k_n * m)  # gamma_n
+        s_n, a, zeta_n = k_n, 1.0, -beta
+    else:
+        delta = 1e-6
+        a = math.sqrt(case.particles.radius * delta)
+        s_n = 2.0 * p[contacts.P_YSTAR] * a
+        k_t = 8.0 * p[contacts.P_GSTAR] * a
+        gamma_t = -2.0 * math.sqrt(5.0 / 6.0) * beta * math.sqrt(k_t * m)
+        zeta_n = -math.sqrt(5.0 / 6.0) * beta
+    m_t = 2.0 / 7.0 * m
+    want = gamma_t / (2.0 * math.sqrt(k_t * m_t))
+    kt_eff, zeta_t = law.row.step_spring(p, model, s_n, a, zeta_n, 3.5)
+    assert kt_eff == pytest.approx(3.5 * k_t, rel=1e-12)
+    assert zeta_t == pytest.approx(want, rel=1e-12)
+    assert zeta_t > 1.0  # eps_n = 0: overdamped, the limit well below 2 / omega_t
 
 
 def _random_contact(rng):
