@@ -17,6 +17,7 @@ from dem.runner import run_case
 from dem.timestep import timestep_for
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+PARITY = CASES_DIR.parent / "validation" / "liggghts-bulk" / "sphere-bed-5e7"  # 5e7 Pa
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
 TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output", "feeder")
 
@@ -182,11 +183,12 @@ def test_wall_time_adds_the_compile_only_where_the_cache_is_cold(tmp_path, monke
 
 
 def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
-    """The shipped 5e7 sphere bed: the stiffness rule asks for more; applied, it asks nothing."""
+    """The 5e7 LIGGGHTS-parity sphere bed: the stiffness rule asks for more; applied, it asks
+    nothing."""
     out = tmp_path / "suggested"
-    assert main(["plan", str(CASES_DIR / "sphere-bed"), "--suggest", str(out)]) == 0
+    assert main(["plan", str(PARITY), "--suggest", str(out)]) == 0
     printed = capsys.readouterr().out
-    before = plan.plan(load_case(CASES_DIR / "sphere-bed"))
+    before = plan.plan(load_case(PARITY))
     warned = [a for a in before.advice if a.key == "contact.youngs_modulus"]
     assert warned and warned[0].value is not None and "contact.youngs_modulus" in printed
     case = load_case(out)  # it loads
@@ -197,7 +199,7 @@ def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
     assert "was 50000000.0" in (out / "case.toml").read_text()
     assert not (out / "README.md").exists()  # it describes the case as it was
     # nothing is replaced: a second suggestion into the same folder is refused
-    assert main(["plan", str(CASES_DIR / "sphere-bed"), "--suggest", str(out)]) == 2
+    assert main(["plan", str(PARITY), "--suggest", str(out)]) == 2
     assert "--suggest" in capsys.readouterr().err
 
 

@@ -11,6 +11,8 @@ from dem.plan import plan
 from dem.scene import resolve
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
+#: The LIGGGHTS-parity sphere bed: cases/sphere-bed at 5e7 Pa, as shipped until 2026-11-26.
+PARITY = Path(__file__).resolve().parents[1] / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
 
 
 def test_one_grain_is_the_resting_contact_of_the_single_grain_study():
@@ -48,7 +50,7 @@ def test_compliance_falls_as_e_to_the_minus_two_thirds_and_inverts():
 def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_names():
     data = stiffness.study()
     assert data is not None, "dem/data/stiffness_convergence.json ships with dem"
-    soft = plan(load_case(CASES / "sphere-bed", {"contact.youngs_modulus": 5.0e7}))
+    soft = plan(load_case(PARITY))
     warned = [a for a in soft.warnings() if a.key == "contact.youngs_modulus"]
     assert warned and "validation/bulk-convergence" in warned[0].text
     value = float(warned[0].text.rsplit(">= ", 1)[1])
@@ -59,16 +61,16 @@ def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_na
 
 
 def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(capsys):
-    """summary.json's ``stiffness`` and the terminal's line: the shipped 5e7 Pa sphere bed is
-    too soft and names the value its warning names; at that value it is stiff enough."""
+    """summary.json's ``stiffness`` and the terminal's line: the 5e7 Pa LIGGGHTS-parity sphere
+    bed is too soft and names the value its warning names; at that value it is stiff enough."""
     from dem.cli import _print_summary
 
-    soft = resolve(load_case(CASES / "sphere-bed"))
+    soft = resolve(load_case(PARITY))
     found = stiffness.assessment(soft)
     warned = stiffness.advice(soft)
     assert found["converged"] is False and found["compliance"] > found["compliance_limit"]
     assert (found["key"], found["value"]) == (warned.key, warned.value)
-    stiff = resolve(load_case(CASES / "sphere-bed", {found["key"]: found["value"]}))
+    stiff = resolve(load_case(PARITY, {found["key"]: found["value"]}))
     assert stiffness.assessment(stiff)["converged"] is True
     assert stiffness.assessment(resolve(load_case(CASES / "single-sphere"))) is None
     summary = {
@@ -86,3 +88,13 @@ def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(cap
     assert "sphere-bed at E = 5e+07 Pa" in out
     _print_summary(summary | {"stiffness": stiffness.assessment(stiff)})
     assert "stiff enough" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name", ["sphere-bed", "screw-trough", "u-trough", "v-trough", "feeder"])
+def test_every_shipped_bulk_case_is_stiff_enough_for_the_rigid_answer(name):
+    """The shipped beds sit where validation/bulk-convergence measured them within 2 % of the
+    rigid limit: no stiffness warning before the run, "converged" in the summary."""
+    scene = resolve(load_case(CASES / name))
+    assert stiffness.advice(scene) is None
+    assert stiffness.assessment(scene)["converged"] is True
+    assert not [a for a in plan(scene.case).warnings() if a.key == "contact.youngs_modulus"]

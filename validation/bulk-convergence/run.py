@@ -35,6 +35,7 @@ import csv
 import json
 import math
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -53,7 +54,13 @@ REPLICAS = 3
 CYCLES = 20
 COVERAGE_RUNS = 60
 #: The small bed of the coverage check: cases/sphere-bed at a fifth of its length and count.
-COVERAGE_CASE = {"trough.length": 0.02, "particles.count": 300, "run.cycles": CYCLES}
+COVERAGE_CASE = {
+    "trough.length": 0.02,
+    "particles.count": 300,
+    "run.cycles": CYCLES,
+    "contact.youngs_modulus": 5.0e7,
+    "run.timestep": "auto",
+}  # as measured
 
 
 def _run(case, out: Path) -> dict:
@@ -314,6 +321,84 @@ def spectrum(bed: str, moduli: list[float]) -> None:
     _write_csv(HERE / f"spectrum_{bed}.csv", rows)
     _record(f"spectrum_{bed}", {"rows": len(rows), "samples_per_period": SPECTRUM_SAMPLES,
                                 "cycles": SPECTRUM_CYCLES})  # fmt: skip
+
+
+#: In-plane sampling: samples per drive period, periods sampled, driven periods before.
+INPLANE_SAMPLES, INPLANE_CYCLES, INPLANE_SETTLE = 16, 30, 10
+#: A screw touches the floor when its lowest member's gap is below this, m (Hertz overlaps are
+#: negative gaps; 10 um is under a thousandth of a screw's length).
+FLOOR_GAP = 1.0e-5
+
+
+def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
+    """The screws' in-plane state against E: what the band of soft contacts changes.
+
+    Per E and fill (dt as the stiffness sweep), settled, driven INPLANE_SETTLE periods, then
+    sampled INPLANE_SAMPLES times a period over INPLANE_CYCLES periods: the bed velocity v_x;
+    the alignment S = <cos 2 theta> of the screws' long axes (smallest principal moment)
+    projected on the floor, theta from the conveying direction x (S = 1: all along the flow,
+    -1: all across, 0: isotropic); the tilt <|a_z|> out of the floor plane; the fraction of
+    screws touching the floor; v_x of the lower and upper half of the bed (by height); and,
+    per period, the correlation of v_x with S. Only clump beds have axes.
+    """
+    from dem import setup
+    from dem.kernels.rigid import quat_to_matrix
+
+    rows = []
+    for youngs in moduli:
+        for seed in seeds:
+            case = _bed_case(bed, youngs)
+            case = load_case(case.source, {**_bed_keys(youngs, case), "run.seed": seed})
+            sim = setup.from_case(case)
+            sim.settle()
+            sim.start_drive()
+            b, sp = sim.bodies, sim.spheres
+            long_axis = np.argmin(b.moments[0])
+            period = sim.trough.period
+            sim.run(round(INPLANE_SETTLE * period / sim.dt))
+            every = max(1, round(period / sim.dt / INPLANE_SAMPLES))
+            per = INPLANE_SAMPLES
+            n = INPLANE_CYCLES * per
+            t0 = time.perf_counter()
+            rec = {k: np.empty(n) for k in ("v", "s", "tilt", "touch", "v_low", "v_high")}
+            for k in range(n):
+                sim.run(every)
+                axes = np.array([quat_to_matrix(q)[:, long_axis] for q in b.q])
+                flat = axes[:, 0] ** 2 + axes[:, 1] ** 2
+                cos2 = (axes[:, 0] ** 2 - axes[:, 1] ** 2) / np.maximum(flat, 1e-30)
+                gap = sp.x[:, 2] - sp.radius
+                lowest = np.full(len(b.mass), np.inf)
+                np.minimum.at(lowest, b.body_of, gap)
+                z = b.x[:, 2]
+                low = z <= np.median(z)
+                rec["v"][k] = b.v[:, 0].mean()
+                rec["s"][k] = cos2.mean()
+                rec["tilt"][k] = np.abs(axes[:, 2]).mean()
+                rec["touch"][k] = np.mean(lowest < FLOOR_GAP)
+                rec["v_low"][k] = b.v[low, 0].mean()
+                rec["v_high"][k] = b.v[~low, 0].mean()
+            cyc = {k: v.reshape(INPLANE_CYCLES, per).mean(axis=1) for k, v in rec.items()}
+            row = {"bed": bed, "youngs_modulus_pa": youngs, "seed": seed,
+                   "velocity_m_s": float(cyc["v"].mean()),
+                   "velocity_cycle_sd_m_s": float(cyc["v"].std(ddof=1)),
+                   "alignment_S": float(cyc["s"].mean()),
+                   "alignment_cycle_sd": float(cyc["s"].std(ddof=1)),
+                   "tilt_abs_az": float(cyc["tilt"].mean()),
+                   "floor_contact_fraction": float(cyc["touch"].mean()),
+                   "velocity_lower_half_m_s": float(cyc["v_low"].mean()),
+                   "velocity_upper_half_m_s": float(cyc["v_high"].mean()),
+                   "corr_v_S_per_cycle": float(np.corrcoef(cyc["v"], cyc["s"])[0, 1]),
+                   "cpu_s": time.perf_counter() - t0}  # fmt: skip
+            rows.append(row)
+            print(f"{bed} E = {youngs:.0e} seed {seed}: v {row['velocity_m_s']:.4f} m/s, "
+                  f"S {row['alignment_S']:+.3f}, tilt {row['tilt_abs_az']:.3f}, floor "
+                  f"{row['floor_contact_fraction']:.3f}, low/high "
+                  f"{row['velocity_lower_half_m_s']:.4f}/{row['velocity_upper_half_m_s']:.4f}, "
+                  f"corr(v, S) {row['corr_v_S_per_cycle']:+.2f}", flush=True)  # fmt: skip
+    _write_csv(HERE / f"inplane_{bed}.csv", rows)
+    _record(f"inplane_{bed}", {"rows": len(rows), "samples_per_period": INPLANE_SAMPLES,
+                               "cycles": INPLANE_CYCLES, "settle_cycles": INPLANE_SETTLE,
+                               "floor_gap_m": FLOOR_GAP})  # fmt: skip
 
 
 def _row(bed, youngs, fraction, case, s) -> dict:
@@ -599,6 +684,7 @@ def main() -> None:
         "stiffness",
         "timestep",
         "spectrum",
+        "inplane",
         "section",
         "fills",
         "fit",
@@ -633,6 +719,8 @@ def main() -> None:
         section(args.bed, args.moduli or [2e9], args.factors)
     elif args.what == "spectrum":
         spectrum(args.bed, args.moduli or MODULI[:5])
+    elif args.what == "inplane":
+        inplane(args.bed, args.moduli or [5e7, 2e8, 5e8, 2e9, 2e10], [1, 2])
     figures()
 
 

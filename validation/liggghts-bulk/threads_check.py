@@ -21,7 +21,7 @@ from dem.case import load_case
 ROOT = Path(__file__).resolve().parents[2]
 
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 1
-case = load_case(ROOT / "cases" / "sphere-bed")
+case = load_case(ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7")
 case = dataclasses.replace(case, run=dataclasses.replace(case.run, timestep=5e-6))
 sim = setup.from_case(case)
 numba.set_num_threads(n)

@@ -62,6 +62,9 @@ COMMON = {
     "contact.tangential_stiffness_ratio": None,  # Hertz under "liggghts" takes Mindlin's k_t
     "contact.tangential_damping_ratio": None,
     "material.restitution_normal": 0.06,  # LIGGGHTS refuses e <= 0.05
+    # cases/feeder as shipped when this was measured (2e9 Pa and 4e-6 s since 2026-11-26)
+    "contact.youngs_modulus": 5.0e8,
+    "run.timestep": 8.0e-6,
 }
 #: Balance lines per drive cycle in the LIGGGHTS run.
 SAMPLES_PER_CYCLE = 8

@@ -86,6 +86,7 @@ COMMON = {
     "contact.tangential_stiffness_ratio": None,  # Hertz under "liggghts" takes Mindlin's k_t
     "contact.tangential_damping_ratio": None,
     "material.restitution_normal": RESTITUTION,
+    "contact.youngs_modulus": 5.0e8,  # the screw cases as shipped when this was measured
 }
 
 

@@ -13,7 +13,7 @@ import re
 import time
 
 import numpy as np
-from study import CASE, DECKS, SCRATCH, fresh_copy, rel, write_results
+from study import AS_MEASURED, CASE, DECKS, SCRATCH, fresh_copy, rel, write_results
 
 from dem import drive, provenance
 from dem.case import load_case
@@ -37,7 +37,7 @@ RUN_RE = re.compile(r"^run (\d+)", re.MULTILINE)
 
 def bulk_cases() -> dict:
     """Seeds 1-3 with rotation and seed 1 with rotation locked, at each pinned time step."""
-    base = load_case(CASE)
+    base = load_case(CASE, AS_MEASURED)
     out = {}
     for k, per_period in enumerate(BULK_STEPS_PER_PERIOD):
         dt = 1.0 / (base.drive.frequency * per_period)

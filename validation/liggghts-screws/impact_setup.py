@@ -14,7 +14,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from study import CASE, fmt
+from study import AS_MEASURED, CASE, fmt
 
 from dem import __version__, shapes
 from dem.case import load_case
@@ -38,7 +38,7 @@ START_FILE, TRAJ_FILE, MEMBERS_FILE = "start.txt", "traj.txt", "members.txt"
 
 def impact_case():
     """The screw case with e = 0.5 on a 0.06 m x 0.06 m periodic section (drive never on)."""
-    base = load_case(CASE)
+    base = load_case(CASE, AS_MEASURED)
     return dataclasses.replace(
         base.with_tangential("liggghts"),
         material=dataclasses.replace(base.material, restitution_normal=IMPACT_RESTITUTION),

@@ -69,7 +69,13 @@ ROOT = HERE.parents[1]
 RESULTS = HERE / "results.json"
 DECKS = HERE / "decks"
 SCRATCH = HERE / "scratch"
-CASES = {"sphere": ROOT / "cases" / "sphere-bed", "screw": ROOT / "cases" / "screw-trough"}
+CASES = {
+    "sphere": ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7",
+    "screw": ROOT / "cases" / "screw-trough",
+}
+#: The settings the matrix was measured at: the shipped cases until 2026-11-26 (the sphere bed
+#: is the LIGGGHTS-parity case above; the screws were shipped at 5e8 Pa and 8e-6 s then).
+AS_MEASURED = {"sphere": {}, "screw": {"contact.youngs_modulus": 5.0e8, "run.timestep": 8.0e-6}}
 ANGLES = {"sphere": (15.0, 25.0, 35.0, 50.0), "screw": (15.0, 25.0, 35.0, 45.0)}
 GAMMAS = (1.8, 3.0)
 UPHILL = (25.0, 1.8, 3.0)  # phi, Gamma, alpha (deg)
@@ -107,7 +113,7 @@ def points() -> list[Point]:
 
 def cases_for(p: Point) -> tuple:
     """(dem default case, LIGGGHTS-equivalent case) of a point, with the same step and cycles."""
-    base = load_case(CASES[p.shape])
+    base = load_case(CASES[p.shape], AS_MEASURED[p.shape])
     base = dataclasses.replace(
         base,
         trough=dataclasses.replace(base.trough, inclination=p.alpha),

@@ -250,7 +250,9 @@ def ratios(runs: list[dict]) -> dict:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--case", default=str(ROOT / "cases" / "sphere-bed"))
+    parser.add_argument(
+        "--case", default=str(ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7")
+    )
     parser.add_argument("--timestep", type=float, default=5e-6, help="s, both codes")
     parser.add_argument("--settle-cycles", type=int, default=1, help="driven, not timed")
     parser.add_argument("--cycles", type=int, default=6, help="driven cycles timed")

@@ -110,7 +110,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--old", type=Path, required=True)
     parser.add_argument("--new", type=Path, default=Path("."))
-    parser.add_argument("--case", type=Path, default=Path("cases/sphere-bed"))
+    parser.add_argument(
+        "--case", type=Path, default=Path("validation/liggghts-bulk/sphere-bed-5e7")
+    )
     parser.add_argument("--steps", type=int, default=4000)
     parser.add_argument("--trials", type=int, default=5)
     parser.add_argument("--threads", type=int, default=2)

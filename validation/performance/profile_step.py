@@ -165,7 +165,9 @@ def table(rows: list[dict]) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--case", default=str(ROOT / "cases" / "sphere-bed"))
+    parser.add_argument(
+        "--case", default=str(ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7")
+    )
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--threads", default="1,2")

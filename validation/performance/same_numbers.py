@@ -22,22 +22,25 @@ import subprocess
 import sys
 from pathlib import Path
 
-#: (name, case folder, overrides); small counts so that the whole matrix runs in minutes.
+#: The screw cases as they were when the bits were recorded (shipped at 2e9 Pa, 4e-6 s since).
+SCREWS_THEN = {"contact.youngs_modulus": 5.0e8, "run.timestep": 8.0e-6}
+#: (name, case folder, overrides); small counts so that the whole matrix runs in minutes. The
+#: sphere beds are the LIGGGHTS-parity bed, cases/sphere-bed as it was shipped until 2026-11-26.
 CONFIGS = [
-    ("sphere-hertz-impact", "cases/sphere-bed", {"particles.count": 120}),
+    ("sphere-hertz-impact", "validation/liggghts-bulk/sphere-bed-5e7", {"particles.count": 120}),
     (
         "sphere-hertz-coulomb",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {"particles.count": 120, "contact.tangential": "coulomb"},
     ),
     (
         "sphere-hertz-liggghts",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {"particles.count": 120, "contact.tangential": "liggghts"},
     ),
     (
         "sphere-hertz-impact-roll-limit",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {
             "particles.count": 120,
             "material.rolling_friction": 0.05,
@@ -47,7 +50,7 @@ CONFIGS = [
     ),
     (
         "sphere-linear-impact",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {
             "particles.count": 120,
             "contact.model": "linear",
@@ -57,7 +60,7 @@ CONFIGS = [
     ),
     (
         "sphere-linear-coulomb",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {
             "particles.count": 120,
             "contact.model": "linear",
@@ -68,7 +71,7 @@ CONFIGS = [
     ),
     (
         "sphere-linear-liggghts",
-        "cases/sphere-bed",
+        "validation/liggghts-bulk/sphere-bed-5e7",
         {
             "particles.count": 120,
             "contact.model": "linear",
@@ -77,15 +80,15 @@ CONFIGS = [
             "contact.tangential": "liggghts",
         },
     ),
-    ("screw-impact", "cases/screw-trough", {"particles.count": 24}),
+    ("screw-impact", "cases/screw-trough", {**SCREWS_THEN, "particles.count": 24}),
     (
         "screw-coulomb",
         "cases/screw-trough",
-        {"particles.count": 24, "contact.tangential": "coulomb"},
+        {**SCREWS_THEN, "particles.count": 24, "contact.tangential": "coulomb"},
     ),
     ("single-sphere", "cases/single-sphere", {}),
-    ("u-trough", "cases/u-trough", {"particles.count": 40}),
-    ("feeder", "cases/feeder", {}),
+    ("u-trough", "cases/u-trough", {**SCREWS_THEN, "particles.count": 40}),
+    ("feeder", "cases/feeder", SCREWS_THEN),
 ]
 
 JOB = r"""

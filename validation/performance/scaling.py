@@ -62,7 +62,8 @@ print(json.dumps({"n": n, "steps": steps, "wall": wall, "build_s": build,
 
 def run(n: int, threads: int) -> dict:
     env = os.environ | {"NUMBA_NUM_THREADS": str(threads)}
-    out = subprocess.run([sys.executable, "-c", JOB, str(n), str(ROOT / "cases" / "sphere-bed")],
+    case = ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
+    out = subprocess.run([sys.executable, "-c", JOB, str(n), str(case)],
                          env=env, capture_output=True, text=True, check=True)  # fmt: skip
     row = json.loads(out.stdout.strip().splitlines()[-1])
     return {

@@ -86,7 +86,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--steps", type=int, default=4000)
-    parser.add_argument("--case", default=str(ROOT / "cases" / "sphere-bed"))
+    parser.add_argument(
+        "--case", default=str(ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7")
+    )
     args = parser.parse_args()
     state = HERE / "scratch" / "threads_shared_state.npz"
     state.parent.mkdir(exist_ok=True)

@@ -161,6 +161,8 @@ def plan_data(rows: dict) -> dict:
         ts = [r for r in table(timestep.POINTS, rows) if r["case"] == case]
         auto = float(np.mean([r["timestep"] / r["timestep_limit"] for r in ship]))
         d["timestep"], ok = _effects(ts, lambda r: r["x"], auto)
+        # the stiffness sweep ran at this step: plan adds the step's effect against it
+        d["stiffness_timestep_fraction"] = stiffness.SWEEP_TIMESTEP_FRACTION
         f_ok = _walk(ok, auto, upward=True)
 
         cm = [r for r in table(contact_model.POINTS, rows) if r["case"] == case]

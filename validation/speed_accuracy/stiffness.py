@@ -14,6 +14,8 @@ import math
 from study import CASES, HERE, ROOT, TOLERANCE, plot, print_table, rigid_limit, write_csv
 
 POINTS: list = []  # nothing to run
+#: dt over the stability limit of every point of the sweep (validation/bulk-convergence).
+SWEEP_TIMESTEP_FRACTION = 0.5
 
 
 def rows() -> list[dict]:

@@ -55,7 +55,7 @@ CONFIGS = ("spheres hertz coulomb", "spheres hertz liggghts", "spheres linear co
 def config_case(name: str):
     """The small bed of one configuration (drive and material as shipped)."""
     if name.startswith("spheres"):
-        case = load_case(ROOT / "cases" / "sphere-bed")
+        case = load_case(ROOT / "validation" / "liggghts-bulk" / "sphere-bed-5e7")
         trough = dataclasses.replace(case.trough, length=0.03, width=0.02)
         particles = dataclasses.replace(case.particles, count=60)
         case = dataclasses.replace(case, trough=trough, particles=particles)
@@ -67,7 +67,10 @@ def config_case(name: str):
             )
             case = dataclasses.replace(case, contact=contact)
     else:
-        case = load_case(ROOT / "cases" / "screw-trough")
+        case = load_case(
+            ROOT / "cases" / "screw-trough",  # as shipped when measured
+            {"contact.youngs_modulus": 5.0e8, "run.timestep": 8.0e-6},
+        )
         trough = dataclasses.replace(case.trough, length=0.06, width=0.04)
         particles = dataclasses.replace(case.particles, count=20, rotation="free" in name)
         case = dataclasses.replace(case, trough=trough, particles=particles)
