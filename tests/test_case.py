@@ -623,6 +623,8 @@ def test_the_liggghts_parity_bed_is_the_sphere_bed_at_5e7_pa():
         parity,
         contact=dataclasses.replace(parity.contact, youngs_modulus=shipped.contact.youngs_modulus),
         run=dataclasses.replace(parity.run, timestep=shipped.run.timestep),
-        name=shipped.name, source=shipped.source, directory=shipped.directory,
+        name=shipped.name,
+        source=shipped.source,
+        directory=shipped.directory,
     )
     assert same == shipped
