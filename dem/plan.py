@@ -560,8 +560,9 @@ def plan(
         )
         advice.append(Advice("note", "feeder", text))
     stiff = stiffness.advice(scene)  # the bed's lowest mode against the drive (bulk study)
-    if stiff is not None and not any(a.key == stiff.key and a.level == "warn" for a in advice):
-        advice.append(stiff)  # one warning per key: the speed-accuracy study's, if it has one
+    if stiff is not None:  # one warning per key: this one, which names this bed's own value
+        advice = [a for a in advice if not (a.key == stiff.key and a.level == "warn")]
+        advice.append(stiff)
     calibrated = calibration_advice(case)
     if calibrated is not None:
         advice.append(calibrated)
@@ -673,8 +674,9 @@ def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
                 f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps", _up(e_ok)))  # fmt: skip
         elif e_equiv < e_ok / FAR:
             advice.append(Advice("warn", "contact.youngs_modulus",
-                f"{e_equiv:.3g} Pa is softer than the study found accurate ({e_ok:.3g} Pa "
-                f"stayed within {TOLERANCE:.0%})", _up(e_ok)))  # fmt: skip
+                f"{e_equiv:.3g} Pa is softer than the stiffness sweep found accurate "
+                f"(validation/bulk-convergence: {e_ok:.3g} Pa stayed within {TOLERANCE:.0%})",
+                _up(e_ok)))  # fmt: skip
     f_ok = cheap["timestep_fraction"]
     if case.run.timestep is not None and fraction < f_ok / FAR:
         advice.append(Advice("warn", "run.timestep",
@@ -853,12 +855,14 @@ def suggest(
                 )  # fmt: skip
             seen.setdefault(key, []).append(value)
         stiffer = {"contact.youngs_modulus", "contact.stiffness"} & set(todo)
-        if stiffer and "run.timestep" not in todo and current_case.run.timestep is not None:
-            # a step set by hand keeps its fraction of the stability limit, which moves with
-            # the stiffness (the automatic step follows by itself)
+        if stiffer and ("run.timestep" in todo or current_case.run.timestep is not None):
+            # a step set by hand, or advised at the old stiffness, keeps its fraction of the
+            # stability limit, which moves with the stiffness (the automatic step follows by
+            # itself)
+            step = todo.get("run.timestep", current.timestep)
             automatic = load_case(source, changes | todo | {"run.timestep": None})
             limit = resolve(automatic).step.limit
-            todo["run.timestep"] = _down(current.timestep / current.timestep_limit * limit)
+            todo["run.timestep"] = _down(step / current.timestep_limit * limit)
         changes.update(todo)
         current_case = load_case(source, changes)
         current = plan(current_case, threads=threads, cycles=cycles)

@@ -144,7 +144,7 @@ def test_advice_names_what_a_case_overdoes_or_underdoes(tmp_path, study):
 def test_soft_contacts_outside_the_study_are_flagged(tmp_path, study):
     soft = plan.plan(small(tmp_path, {"contact.youngs_modulus": 1e5}))
     texts = " ".join(a.text for a in soft.warnings())
-    assert "softer than the study found accurate" in texts
+    assert "softer than the stiffness sweep found accurate" in texts
     assert "outside the studied range" in soft.error_source
     assert len([a for a in soft.warnings() if a.key == "contact.youngs_modulus"]) == 1
 
@@ -257,13 +257,14 @@ def test_plan_claims_only_what_was_measured(tmp_path):
     assert data is not None
     case = load_case(CASES_DIR / "screw-trough")
     assert case.contact.tangential == "impact"
-    p = plan.plan(case)
+    assert data["cases"]["screw-trough"]["conditions"]["tangential"] == "impact"
+    assert math.isfinite(plan.plan(case).expected_error)  # the study's own case
+    other_law = case.with_tangential("coulomb")
+    p = plan.plan(other_law)
     assert math.isnan(p.expected_error) and "not measured" in p.error_source
-    assert "contact.tangential = 'impact' (study: 'coulomb')" in p.error_source
+    assert "contact.tangential = 'coulomb' (study: 'impact')" in p.error_source
     assert "expected error    not estimated: not measured" in p.text()
-    studied = case.with_tangential("coulomb")
-    assert math.isfinite(plan.plan(studied).expected_error)
-    other_drive = studied.with_drive(throw_number=1.3)
+    other_drive = case.with_drive(throw_number=1.3)
     p = plan.plan(other_drive)
     assert math.isnan(p.expected_error) and "drive.throw_number = 1.3" in p.error_source
 
@@ -274,9 +275,13 @@ def test_plan_json_is_strict_json_with_null_for_what_was_not_measured(capsys):
     def refuse(name):
         raise ValueError(f"not JSON: {name}")
 
-    assert main(["plan", str(CASES_DIR / "screw-trough"), "--json"]) == 0
+    argv = ["plan", str(CASES_DIR / "screw-trough"), "--set", "drive.angle=40", "--json"]
+    assert main(argv) == 0
     out = json.loads(capsys.readouterr().out, parse_constant=refuse)
     assert out["expected_error"] is None and "not measured" in out["error_source"]
+    assert main(["plan", str(CASES_DIR / "screw-trough"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out, parse_constant=refuse)
+    assert 0.0 < out["expected_error"] < 0.05
 
 
 def test_plan_warns_when_calibrated_contact_values_belong_to_another_drive(tmp_path):

@@ -324,7 +324,7 @@ def write_csv(name: str, rows: list[dict], script: str) -> Path:
                  f"acceptable: |error| <= {TOLERANCE:.0%} of it and "
                  "<= 2 x its uncertainty (fill-to-fill spread / sqrt(fills) and the "
                  "reference's)\n")  # fmt: skip
-        fields = list(max(rows, key=len))
+        fields = list(dict.fromkeys(k for r in rows for k in r))
         writer = csv.DictWriter(fh, fieldnames=fields, restval="")
         writer.writeheader()
         writer.writerows(rows)
