@@ -124,6 +124,29 @@ def test_expected_error_is_the_base_error_at_shipped_settings(tmp_path, study):
     assert p.warnings() == []
 
 
+def test_the_step_counts_against_the_step_the_stiffness_was_measured_at(tmp_path, study):
+    """The stiffness series comes from a sweep at its own step (0.5 of the limit in the
+    shipped data): the step's part is its effect there minus its effect at the sweep's step,
+    so a case at the sweep's step gets the stiffness error alone."""
+    kind = study["cases"]["sphere-bed"]
+    kind["timestep"] = [[0.1, 0.0], [0.3046, 0.0], [0.5, 0.02], [1.0, 0.04]]
+    case = small(tmp_path, {"particles.count": 1500})
+    limit = plan.plan(case).timestep_limit
+    at = {}
+    for f in (0.5, 1.0):
+        c = load_case(case.directory, {"trough.length": 0.10, "trough.width": 0.04,
+                                       "particles.count": 1500,
+                                       "run.timestep": f * limit * (1 - 1e-9)})  # fmt: skip
+        at[f] = plan.plan(c).error_parts.get("time step", 0.0)
+    assert at[0.5] == pytest.approx(0.02, abs=1e-6) and at[1.0] == pytest.approx(0.04, abs=1e-6)
+    kind["stiffness_timestep_fraction"] = 0.5
+    for f, want in ((0.5, 0.0), (1.0, 0.02)):
+        c = load_case(case.directory, {"trough.length": 0.10, "trough.width": 0.04,
+                                       "particles.count": 1500,
+                                       "run.timestep": f * limit * (1 - 1e-9)})  # fmt: skip
+        assert plan.plan(c).error_parts.get("time step", 0.0) == pytest.approx(want, abs=1e-6)
+
+
 def test_advice_names_what_a_case_overdoes_or_underdoes(tmp_path, study):
     stiff = plan.plan(small(tmp_path / "a", {"contact.youngs_modulus": 1e9}))
     assert [a.key for a in stiff.warnings()] == ["contact.youngs_modulus"]
