@@ -529,3 +529,16 @@ def test_deck_notes_the_wall_lever_arm_only_where_it_differs_from_liggghts(tmp_p
     mid = load_case(CASES_DIR / "sphere-bed", overrides={"contact.wall_lever_arm": "midpoint"})
     deck = write_deck(mid, tmp_path / "b", timestep=5e-6, steps=10, settle_steps=0)
     assert note not in deck.read_text()
+
+
+def test_a_deck_of_grains_stiffer_than_1e9_pa_tells_liggghts_they_are_hard(tmp_path):
+    """LIGGGHTS 3.8 stops on youngsModulus > 1e9 in SI units unless ``hard_particles yes``
+    comes first; the shipped beds (2e9 Pa) need it, the 5e7 Pa LIGGGHTS-parity bed does not."""
+    stiff = write_deck(load_case(CASES_DIR / "sphere-bed"), tmp_path / "stiff", timestep=1e-6,
+                       steps=10, settle_steps=0)  # fmt: skip
+    text = stiff.read_text()
+    assert "hard_particles yes" in text
+    assert text.index("hard_particles yes") < text.index("youngsModulus")
+    parity = CASES_DIR.parent / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
+    soft = write_deck(load_case(parity), tmp_path / "soft", timestep=1e-6, steps=10, settle_steps=0)
+    assert "hard_particles" not in soft.read_text()

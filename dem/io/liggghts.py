@@ -722,6 +722,10 @@ def write_deck(
     g0 = math.hypot(gx0, gz0)
     drive_start = fill_steps
 
+    # LIGGGHTS refuses E > 1e9 Pa in SI units unless told the grains are hard on purpose
+    youngs = case.contact.youngs_modulus if case.contact.model == "hertz_mindlin" else None
+    hard = (["hard_particles yes  # E > 1e9 Pa: LIGGGHTS 3.8 refuses it in SI units otherwise"]
+            if youngs is not None and youngs > 1.0e9 else [])  # fmt: skip
     lines = [
         f"# LIGGGHTS deck exported by dem {__version__} (dem export liggghts)",
         f"# case {case.name}: {what}, {case.contact.model}, "
@@ -754,6 +758,7 @@ def write_deck(
         "communicate single vel yes",
         "processors * 1 1  # split x only: the bed is uniform across y and z",
         "units si",
+        *hard,
         "",
         f"region domain block {_fmt(box_x[0])} {_fmt(box_x[1])} {_fmt(box_y[0])} {_fmt(box_y[1])} "
         f"{_fmt(box_z0)} {_fmt(top)} units box",
@@ -966,7 +971,9 @@ def run_liggghts(
     work = Path(work_dir)
     command = [*prefix, exe, "-in", deck_name]
     t0 = time.perf_counter()
-    done = subprocess.run(command, cwd=work, capture_output=True, text=True)
+    # errors="replace": LIGGGHTS can print raw bytes (a clump template's name, a garbled error
+    # line) that are not UTF-8; its message must still reach the user
+    done = subprocess.run(command, cwd=work, capture_output=True, text=True, errors="replace")
     wall = time.perf_counter() - t0
     (work / log_name).write_text(done.stdout + done.stderr)
     loops = loop_times(done.stdout)
