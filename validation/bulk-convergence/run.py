@@ -324,7 +324,7 @@ def spectrum(bed: str, moduli: list[float]) -> None:
 
 
 #: In-plane sampling: samples per drive period, periods sampled, driven periods before.
-INPLANE_SAMPLES, INPLANE_CYCLES, INPLANE_SETTLE = 16, 30, 10
+INPLANE_SAMPLES, INPLANE_CYCLES, INPLANE_SETTLE = 32, 30, 10
 #: A screw touches the floor when its lowest member's gap is below this, m (Hertz overlaps are
 #: negative gaps; 10 um is under a thousandth of a screw's length).
 FLOOR_GAP = 1.0e-5
@@ -340,8 +340,9 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
     -1: all across, 0: isotropic); the tilt <|a_z|> out of the floor plane; the fraction of
     screws touching the floor; v_x of the lower and upper half of the bed (by height); and,
     per period, the correlation of v_x with S. Only clump beds have axes. ``inplane_phase_BED.csv``
-    holds the same quantities binned by the drive's phase (16 bins, from the drive time), the
-    mean over the period-cycles and fills of each E: where in the cycle a difference arises.
+    holds the same quantities binned by the drive's phase (32 bins, from the drive time), the
+    mean over the cycles and fills of each E, with the bed's mean x-acceleration from contacts
+    (the walls': grain-grain forces cancel): where in the cycle momentum is gained and lost.
     """
     from dem import setup
     from dem.kernels.rigid import quat_to_matrix
@@ -359,11 +360,16 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
             long_axis = np.argmin(b.moments[0])
             period = sim.trough.period
             sim.run(round(INPLANE_SETTLE * period / sim.dt))
-            every = max(1, round(period / sim.dt / INPLANE_SAMPLES))
+            # two steps short of a bin: the samples' phase drifts by 2 x samples steps a period,
+            # so each bin is sampled across its width, not at one sub-phase (which made the
+            # beds' profiles look shifted against each other by up to a bin)
+            every = max(1, int(period / sim.dt / INPLANE_SAMPLES) - 2)
             per = INPLANE_SAMPLES
             n = INPLANE_CYCLES * per
             t0 = time.perf_counter()
-            rec = {k: np.empty(n) for k in ("v", "s", "tilt", "touch", "v_low", "v_high", "z")}
+            keys = ("v", "s", "tilt", "touch", "v_low", "v_high", "z", "a")
+            rec = {k: np.empty(n) for k in keys}
+            total = float(b.mass.sum())
             phase = np.empty(n, dtype=np.int64)
             for k in range(n):
                 sim.run(every)
@@ -383,6 +389,8 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
                 rec["v_low"][k] = b.v[low, 0].mean()
                 rec["v_high"][k] = b.v[~low, 0].mean()
                 rec["z"][k] = z.mean()
+                body = sim.gravity[0] + sim.trough.frame_acceleration(sim.drive_time)[0]
+                rec["a"][k] = float(np.sum(b.force[:, 0] - b.mass * body)) / total
             by_phase.append({k: np.bincount(phase, v, per) / np.maximum(np.bincount(phase, None,
                              per), 1) for k, v in rec.items()})  # fmt: skip
             cyc = {k: v.reshape(INPLANE_CYCLES, per).mean(axis=1) for k, v in rec.items()}
@@ -409,7 +417,8 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
                                "phase_deg": 360.0 * (j + 0.5) / INPLANE_SAMPLES,
                                "velocity_m_s": mean["v"], "floor_contact_fraction": mean["touch"],
                                "height_m": mean["z"], "alignment_S": mean["s"],
-                               "velocity_lower_half_m_s": mean["v_low"]})  # fmt: skip
+                               "velocity_lower_half_m_s": mean["v_low"],
+                               "contact_accel_x_m_s2": mean["a"]})  # fmt: skip
     _write_csv(HERE / f"inplane_{bed}.csv", rows)
     _write_csv(HERE / f"inplane_phase_{bed}.csv", phase_rows)
     _record(f"inplane_{bed}", {"rows": len(rows), "samples_per_period": INPLANE_SAMPLES,
