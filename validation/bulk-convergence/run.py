@@ -674,6 +674,28 @@ def figures() -> None:
             ax.set_ylabel("runs" if kind == "one run" else "triples")
             ax.set_title(f"{kind}: 95 % interval covers in {100 * share:.0f} % of {len(sel)}")
         fig.savefig(HERE / "coverage.png", dpi=120)
+    phase = HERE / "inplane_phase_screw-trough.csv"
+    if phase.is_file():
+        rows = _read_csv(phase)
+        fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.0), sharex=True, constrained_layout=True)
+        moduli = sorted({float(r["youngs_modulus_pa"]) for r in rows})
+        for i, e in enumerate(moduli):
+            sel = [r for r in rows if float(r["youngs_modulus_pa"]) == e]
+            x = [float(r["phase_deg"]) for r in sel]
+            mean = np.mean([float(r["velocity_m_s"]) for r in sel])
+            label = f"E = {e:.0e} Pa (v = {mean:.4f} m/s)"
+            for ax, key in zip(axes, ("velocity_m_s", "contact_accel_x_m_s2",
+                                      "floor_contact_fraction"), strict=True):  # fmt: skip
+                ax.plot(x, [float(r[key]) for r in sel], "o-", ms=2.5, color=f"C{i}",
+                        label=label)  # fmt: skip
+        axes[0].set_ylabel("bed v_x relative to\nthe trough (m/s)")
+        axes[1].set_ylabel("bed x-acceleration\nfrom the walls (m/s^2)")
+        axes[2].set_ylabel("fraction of screws\ntouching the floor")
+        axes[2].set_xlabel("drive phase (deg; trough acceleration A w^2 sin(phase))")
+        axes[0].legend(fontsize=7)
+        axes[0].set_title("screw-trough: the cycle against stiffness (2 fills x 30 cycles each)",
+                          fontsize=10)  # fmt: skip
+        fig.savefig(HERE / "inplane_phase.png", dpi=120)
 
 
 def _write_csv(path: Path, rows: list[dict]) -> None:
