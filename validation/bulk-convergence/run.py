@@ -426,6 +426,51 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
                                "floor_gap_m": FLOOR_GAP})  # fmt: skip
 
 
+#: The mesh pans as shipped, and 10x stiffer at the same fraction of the stability limit.
+PAN_STIFF = 2.0e10
+
+
+def pans() -> None:
+    """cases/u-trough and cases/v-trough as shipped (2e9 Pa, dt 4e-6 s) against the same pan at
+    2e10 Pa, 3 fills each: are the pans, which the sweep did not cover, converged where the
+    flat screw bed is? The stiff runs take dt at the shipped step's fraction of their limit."""
+    rows = []
+    for name in ("u-trough", "v-trough"):
+        shipped = load_case(ROOT / "cases" / name)
+        fraction = shipped.run.timestep / timestep_for(shipped).limit
+        probe = load_case(ROOT / "cases" / name, {"contact.youngs_modulus": PAN_STIFF,
+                                                  "run.timestep": "auto"})  # fmt: skip
+        dt = float(f"{fraction * timestep_for(probe).limit:.3g}")
+        found = {}
+        for youngs, keys in ((shipped.contact.youngs_modulus, {}),
+                             (PAN_STIFF, {"contact.youngs_modulus": PAN_STIFF,
+                                          "run.timestep": dt})):  # fmt: skip
+            case = load_case(ROOT / "cases" / name, {**keys, "run.replicas": REPLICAS})
+            s = _run(case, SCRATCH / f"pan_{name}_E{youngs:.0e}")
+            found[youngs] = s
+            rows.append({"case": name, "youngs_modulus_pa": youngs,
+                         "timestep_s": case.run.timestep, "replicas": s["replicas"],
+                         "mean_velocity_m_s": s["mean_velocity"],
+                         "stderr_m_s": s["mean_velocity_stderr"],
+                         "mean_velocity_norm": s["mean_velocity_norm"],
+                         "per_replica_m_s": " ".join(f"{r['mean_velocity']:.6g}"
+                                                     for r in s["per_replica"]),
+                         "cpu_s": s["wall_time_s"]})  # fmt: skip
+        a, b = found[shipped.contact.youngs_modulus], found[PAN_STIFF]
+        diff = a["mean_velocity"] / b["mean_velocity"] - 1.0
+        err = math.hypot(
+            a["mean_velocity_stderr"] / b["mean_velocity"],
+            b["mean_velocity_stderr"] * a["mean_velocity"] / b["mean_velocity"] ** 2,
+        )
+        rows[-1]["shipped_vs_stiff"] = diff
+        rows[-1]["shipped_vs_stiff_stderr"] = err
+        print(f"{name}: shipped {a['mean_velocity']:.5f} +- {a['mean_velocity_stderr']:.5f}, "
+              f"2e10 Pa {b['mean_velocity']:.5f} +- {b['mean_velocity_stderr']:.5f} m/s: "
+              f"{100 * diff:+.1f} +- {100 * err:.1f} %", flush=True)  # fmt: skip
+    _write_csv(HERE / "pans.csv", rows)
+    _record("pans", {"rows": rows, "stiff_youngs_pa": PAN_STIFF})
+
+
 def _row(bed, youngs, fraction, case, s) -> dict:
     return {
         "bed": bed, "youngs_modulus_pa": youngs, "dt_fraction_of_limit": fraction,
@@ -732,6 +777,7 @@ def main() -> None:
         "timestep",
         "spectrum",
         "inplane",
+        "pans",
         "section",
         "fills",
         "fit",
@@ -766,6 +812,8 @@ def main() -> None:
         section(args.bed, args.moduli or [2e9], args.factors)
     elif args.what == "spectrum":
         spectrum(args.bed, args.moduli or MODULI[:5])
+    elif args.what == "pans":
+        pans()
     elif args.what == "inplane":
         inplane(args.bed, args.moduli or [5e7, 2e8, 5e8, 2e9, 2e10], [1, 2])
     figures()
