@@ -572,6 +572,7 @@ def stiffness_rows(bed: str) -> list[dict]:
     path = HERE / f"fills_{bed}.csv"
     more = {float(r["youngs_modulus_pa"]): r for r in _read_csv(path)} if path.is_file() else {}
     for r in rows:
+        r["cpu_s_per_fill"] = float(r["cpu_s"]) / int(r["replicas"])  # the sweep's own fills
         f = more.get(float(r["youngs_modulus_pa"]))
         if f is not None:
             r.update({"mean_velocity_m_s": f["mean_velocity_m_s"], "stderr_m_s": f["stderr_m_s"],
@@ -626,6 +627,7 @@ def rule() -> None:
                 "bed": bed, "youngs_modulus_pa": youngs, "compliance": mode.compliance,
                 "bed_mode_hz": mode.omega_bed / (2 * math.pi), "error_vs_rigid": error,
                 "error_stderr": float(r["stderr_m_s"]) / fit["v_inf_m_s"],
+                "fills": int(r["replicas"]), "cpu_s_per_fill": r["cpu_s_per_fill"],
             })  # fmt: skip
     if not rows:
         return

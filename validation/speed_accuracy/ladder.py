@@ -49,26 +49,15 @@ SWEEP_RUNGS = ((5e7, "bed, 5e7 Pa (soft)"), (5e10, "bed, 5e10 Pa (stiffest)"))
 def sweep_rows() -> list[dict]:
     """The soft and the stiff bed from validation/bulk-convergence, as ladder rows (each E's
     fills pooled with its extra fills, as the rigid-limit fit takes them)."""
-    import csv
-
     import stiffness
 
     out = []
     for name in CASES:
         ref = rigid_limit(name)
         swept = {r["x"]: r for r in stiffness.rows() if r["case"] == name}
-        path = ROOT / "validation" / "bulk-convergence" / f"stiffness_{name}.csv"
-        with open(path) as fh:
-            fills = {float(r["youngs_modulus_pa"]): int(r["replicas"]) for r in csv.DictReader(fh)}
-        more = ROOT / "validation" / "bulk-convergence" / f"fills_{name}.csv"
-        if more.is_file():
-            with open(more) as fh:
-                fills |= {float(r["youngs_modulus_pa"]): int(r["fills"])
-                          for r in csv.DictReader(line for line in fh
-                                                  if not line.startswith("#"))}  # fmt: skip
         for e, label in SWEEP_RUNGS:
             r = swept[e]
-            out.append(r | {"study": "ladder", "label": label, "x": label, "fills": fills[e],
+            out.append(r | {"study": "ladder", "label": label, "x": label,
                             "speedup": math.nan, "particle_steps": math.nan,
                             "spheres": math.nan, "grains": math.nan})  # fmt: skip
             assert r["reference"] == ref["velocity_norm"]

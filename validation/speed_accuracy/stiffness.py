@@ -20,17 +20,15 @@ SWEEP_TIMESTEP_FRACTION = 0.5
 
 def rows() -> list[dict]:
     """One row per bed and modulus, in the study's table form."""
-    import csv
     import json
 
     data = json.loads((ROOT / "dem" / "data" / "stiffness_convergence.json").read_text())
     out = []
     for case in CASES:
         ref = rigid_limit(case)
-        with open(ROOT / "validation" / "bulk-convergence" / f"stiffness_{case}.csv") as fh:
-            cost = {float(r["youngs_modulus_pa"]): float(r["cpu_s"]) / int(r["replicas"])
-                    for r in csv.DictReader(fh)}  # fmt: skip
-        for r in (r for r in data["rows"] if r["bed"] == case):
+        rows = [r for r in data["rows"] if r["bed"] == case]
+        cost = {r["youngs_modulus_pa"]: r["cpu_s_per_fill"] for r in rows}
+        for r in rows:
             e = r["youngs_modulus_pa"]
             err, unc = (
                 r["error_vs_rigid"],
@@ -39,7 +37,7 @@ def rows() -> list[dict]:
             v_ref = ref["velocity_norm"]
             out.append({
                 "case": case, "study": "stiffness", "label": f"E = {e:.0e}", "x": e,
-                "fills": "", "seed": "", "reference": v_ref, "fill_spread": math.nan,
+                "fills": r["fills"], "seed": "", "reference": v_ref, "fill_spread": math.nan,
                 "velocity_norm": v_ref * (1.0 + err), "stderr": r["error_stderr"] * v_ref,
                 "error": err * v_ref, "relative_error": err, "error_uncertainty": unc * v_ref,
                 "acceptable": abs(err) <= TOLERANCE and abs(err) <= 2.0 * unc,
