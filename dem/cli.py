@@ -305,7 +305,7 @@ def _cmd_optimum(args) -> int:
         impact=args.impact,
     )
     if plot is not None:
-        from dem.plots import optimum_figure
+        from dem.studies.plots import optimum_figure
 
         optimum_figure(o, plot)
         print(f"wrote {plot}", file=sys.stderr)
@@ -395,9 +395,9 @@ def _pointmass_parser(sub) -> None:
 
 
 def _cmd_run(args) -> int:
-    from dem.case import load_case
-    from dem.replicas import run_replicas
-    from dem.runner import RunInterrupted
+    from dem.run.replicas import run_replicas
+    from dem.run.runner import RunInterrupted
+    from dem.scene.case import load_case
 
     overrides = _set_overrides(args.set)
     if args.replicas is not None:
@@ -422,8 +422,8 @@ def _cmd_run(args) -> int:
 
 def _print_summary(s: dict) -> None:
     """The answer of a run, each value with its unit and the digits its error allows."""
-    from dem.measure import with_error
-    from dem.report import feeder_lines
+    from dem.physics.measure import with_error
+    from dem.studies.report import feeder_lines
 
     def line(label: str, text: str) -> None:
         print(f"{label:<18s} {text}")
@@ -504,7 +504,7 @@ def _set_overrides(texts: list[str] | None) -> dict:
 
     One value per key: several values are a sweep (``dem sweep``).
     """
-    from dem.sweep import parse_set
+    from dem.studies.sweep import parse_set
 
     overrides: dict = {}
     for text in texts or ():
@@ -519,12 +519,12 @@ def _set_overrides(texts: list[str] | None) -> dict:
 
 
 def _cmd_plan(args) -> int:
-    from dem.case import load_case
-    from dem.plan import plan
+    from dem.run.plan import plan
+    from dem.scene.case import load_case
 
     overrides = _set_overrides(args.set)
     if args.suggest:
-        from dem.plan import suggest
+        from dem.run.plan import suggest
 
         done = suggest(args.case_dir, args.suggest, overrides, threads=args.threads,
                        cycles=args.cycles)  # fmt: skip
@@ -545,7 +545,7 @@ def _cmd_plan(args) -> int:
 
 
 def _cmd_dem_sweep(args) -> int:
-    from dem.sweep import parse_set, run_sweep
+    from dem.studies.sweep import parse_set, run_sweep
 
     _check_numbers(args)
     sets = [parse_set(text) for text in args.set]
@@ -567,7 +567,7 @@ def _cmd_dem_sweep(args) -> int:
 
 
 def _cmd_dem_optimum(args) -> int:
-    from dem.optimum import bulk_optimum
+    from dem.studies.optimum import bulk_optimum
 
     _check_numbers(args)
     bounds = None
@@ -597,7 +597,7 @@ def _cmd_dem_optimum(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from dem.report import make_report
+    from dem.studies.report import make_report
 
     for out in args.out_dirs:
         if not (Path(out) / "summary.json").is_file():
@@ -610,9 +610,9 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_export_liggghts(args) -> int:
-    from dem.case import load_case
     from dem.io.liggghts import CLUMP_FILE, DECK_NAME, MESH_FILE, write_deck
-    from dem.scene import resolve
+    from dem.scene.case import load_case
+    from dem.scene.resolved import resolve
 
     case = load_case(args.case_dir)
     # dem's own time step (explicit or automatic, checked against the stability limit), so
@@ -684,10 +684,10 @@ def _export_settle_cycles(args, case) -> tuple[int, str | None]:
 def _cmd_calibrate(args) -> int:
     import datetime
 
-    from dem.calibrate import calibrate
-    from dem.case import CASE_FILE, load_case, set_contact_keys
-    from dem.laws import TANGENTIAL_LAWS
-    from dem.plots import calibration_figure
+    from dem.physics.laws import TANGENTIAL_LAWS
+    from dem.scene.case import CASE_FILE, load_case, set_contact_keys
+    from dem.studies.calibrate import calibrate
+    from dem.studies.plots import calibration_figure
 
     case = load_case(args.case_dir)
     plot = _plot_path(args.plot, "calibration.png") if args.plot else None

@@ -55,14 +55,15 @@ DEM_DT_HERTZ_FRACTION = 1.0 / 50.0
 #: stiffest single contact (omega_0 = sqrt(k / m*)); the margin covers grains with several
 #: contacts (the stiffness seen by one grain adds up) and the damping.
 DEM_DT_STABILITY_FRACTION = 0.3
-#: Safety margin on a clump's sampled smallest contact mass (dem.shapes.Template.contact_mass):
+#: Safety margin on a clump's sampled smallest contact mass
+# (dem.scene.shapes.Template.contact_mass):
 #: the time step is set as if the mass were this fraction smaller.
 DEM_CONTACT_MASS_MARGIN = 0.05
 #: Verlet skin as a fraction of the largest sphere radius; the list is rebuilt when a sphere has
 #: moved more than half the skin since the last build.
 DEM_SKIN_FRACTION = 0.25
 #: Default tangential damping ratio zeta_t of ``[contact] tangential = "coulomb"``
-#: (dem.tangential): damps the ringing of a resting contact within a few periods.
+#: (dem.physics.tangential): damps the ringing of a resting contact within a few periods.
 DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 #: ``[contact] tangential = "impact"``: the enduring contact's stick is a spring-dashpot sized by
 #: the time step, not by the material: angular frequency DEM_STICK_RATE / dt on the contact's
@@ -88,7 +89,8 @@ DEM_CHECK_INTERVAL = 500
 #: A run that can be stopped (SIGINT/SIGTERM) checks at least this often, s: chunks shorten
 #: when 500 steps take longer (large scenes).
 DEM_STOP_LATENCY_S = 0.5
-#: Overlap guard (dem.simulation.Simulation.check), as fractions of the smaller radius, sampled
+#: Overlap guard (dem.engine.simulation.Simulation.check), as fractions of the smaller radius,
+# sampled
 #: at every check (every DEM_CHECK_INTERVAL steps). Accuracy bound: a run whose largest overlap
 #: exceeds it finishes, with a warning and the record (max_overlap_fraction: where, when, the
 #: stiffness that would bring it under) in summary.json. An overlap is set by the stiffness
@@ -146,7 +148,8 @@ DEM_AUTO_SETTLE_TOLERANCE = 1e-4
 #: (and ACTIVE) fell to 0.08-0.27e7 while PASSIVE kept 0.7-0.9e7. The thread guard below now
 #: handles a shared machine (validation/performance/threads_shared.py).
 DEM_OMP_WAIT_POLICY: str | None = None
-#: Thread guard (dem.threads): with more than one thread, try the other choice (one thread, or
+#: Thread guard (dem.engine.threads): with more than one thread, try the other choice (one thread,
+# or
 #: back to N) after this many chunks of DEM_CHECK_INTERVAL steps, the wait doubling (up to 8x)
 #: while the choice holds, and keep the faster; False leaves the thread count alone.
 DEM_THREAD_GUARD = True

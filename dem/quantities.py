@@ -1,7 +1,7 @@
 """The one table of input quantities: name, unit, allowed range and its text.
 
 Every place that accepts a physical number checks it against this table: the case reader
-(:mod:`dem.case`, keys such as ``drive.angle``), the point-mass functions
+(:mod:`dem.scene.case`, keys such as ``drive.angle``), the point-mass functions
 (:mod:`dem.pointmass.validate`) and the command line (its help and its errors, :mod:`dem.cli`).
 A range is stated once, so a value refused in a case file is refused with the same words on the
 command line and in the library.

@@ -6,9 +6,9 @@ The oracle of tests/test_fill.py: the grid fill must place the same grains, bit 
 import numpy as np
 
 from dem.config import DEM_FILL_TRIES
-from dem.fill import clump_box_height, random_orientations, sphere_box_height
 from dem.kernels.rigid import quat_to_matrix
-from dem.trough import Trough
+from dem.scene.fill import clump_box_height, random_orientations, sphere_box_height
+from dem.scene.trough import Trough
 
 
 def naive_fill(
@@ -83,7 +83,7 @@ def naive_fill_clumps(
 
     Args:
         n: Number of clumps.
-        template: A :class:`dem.shapes.Template`.
+        template: A :class:`dem.scene.shapes.Template`.
         length, width: Trough section, m.
         rng: Random generator (seeded by the caller).
         height: Initial box height, m; default ``DEM_FILL_HEIGHT_FACTOR`` times the height of a

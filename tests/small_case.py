@@ -51,7 +51,7 @@ def sigterm_at_check(monkeypatch, n: int) -> None:
     import os
     import signal
 
-    from dem.simulation import Simulation
+    from dem.engine.simulation import Simulation
 
     original, calls = Simulation.check, {"n": 0}
 
@@ -71,7 +71,7 @@ def stop_mid_frame(case, out: Path, monkeypatch, check: int, timestep: float) ->
     import numpy as np
     import pytest
 
-    from dem.runner import RunInterrupted, run_case
+    from dem.run.runner import RunInterrupted, run_case
 
     sigterm_at_check(monkeypatch, check)
     with pytest.raises(RunInterrupted) as info:

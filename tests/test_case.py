@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-import dem.case
-from dem.case import Case, load_case
+import dem.scene.case
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.scene.case import Case, load_case
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
@@ -195,7 +195,7 @@ def test_tangential_keys(tmp_path):
 
 def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_path):
     from dem.kernels.contacts import P_WALL_ARM
-    from dem.timestep import ContactLaw
+    from dem.scene.timestep import ContactLaw
 
     case = load_case(write_case(tmp_path, with_changes({})))
     assert case.contact.wall_lever_arm == "surface"
@@ -212,7 +212,7 @@ def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_
 def test_explicit_timestep_and_mesh(tmp_path):
     import meshio
 
-    from dem.mesh import extrude
+    from dem.scene.mesh import extrude
 
     (tmp_path / "geometry").mkdir()
     box = [[-0.02, 0.02], [-0.02, 0.0], [0.02, 0.0], [0.02, 0.02]]  # floor, walls: 0.04 wide
@@ -257,10 +257,10 @@ def test_unsupported_shape_is_easy_to_lift(tmp_path, monkeypatch):
         }
     )
     path = write_case(tmp_path, tables)
-    monkeypatch.setattr(dem.case, "SUPPORTED_SHAPES", ("sphere",))
+    monkeypatch.setattr(dem.scene.case, "SUPPORTED_SHAPES", ("sphere",))
     with pytest.raises(InputError, match="not supported yet"):
         load_case(path)
-    monkeypatch.setattr(dem.case, "SUPPORTED_SHAPES", ("sphere", "screw"))
+    monkeypatch.setattr(dem.scene.case, "SUPPORTED_SHAPES", ("sphere", "screw"))
     assert load_case(path).particles.head_radius == 0.003
 
 

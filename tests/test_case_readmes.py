@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from dem.case import load_case
+from dem.scene.case import load_case
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 READMES = sorted(p for p in CASES.glob("*/README.md") if (p.parent / "case.toml").is_file())

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, sigterm_at_check, write_case
 
-from dem.case import load_case
 from dem.cli import main
 from dem.io import checkpoint
+from dem.scene.case import load_case
 
 TEXT = SMALL_CASE.replace("cycles = 6", "cycles = 2").replace("settle_cycles = 2",
                                                               "settle_cycles = 1")  # fmt: skip
@@ -28,7 +28,7 @@ TEXT = SMALL_CASE.replace("cycles = 6", "cycles = 2").replace("settle_cycles = 2
 @pytest.fixture(scope="module")
 def interrupted(tmp_path_factory):
     """An interrupted run of a small case with its checkpoint (cycle 2 of 3, mid-run)."""
-    from dem.runner import RunInterrupted, run_case
+    from dem.run.runner import RunInterrupted, run_case
 
     root = tmp_path_factory.mktemp("interrupted")
     case_dir = write_case(root / "case", TEXT)
@@ -72,7 +72,7 @@ def _resume(case_dir, out, capsys) -> tuple[int, str]:
 
 def _lines(err: str) -> list[str]:
     """stderr less the runner's progress line: it fills the trough before it reads the
-    checkpoint (dem/runner.py; its owner is asked to read and compare it before the fill)."""
+    checkpoint (dem/run/runner.py; its owner is asked to read and compare it before the fill)."""
     return [line for line in err.splitlines() if not line.startswith("dem: filling")]
 
 

@@ -198,8 +198,8 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
     (case_dir / "case.toml").write_text(SMALL_CASE)
     code, out, err = run(capsys, "export", "liggghts", str(case_dir), str(tmp_path / "deck"))
     assert code == 0, err
-    from dem import setup
-    from dem.case import load_case
+    from dem.engine import setup
+    from dem.scene.case import load_case
 
     deck = (tmp_path / "deck" / "in.dem").read_text().splitlines()
     (line,) = [x for x in deck if x.startswith("timestep ")]
@@ -253,7 +253,7 @@ def _single_sphere_copy(tmp_path, throw_number=None, tangential=None):
 
 
 def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
-    from dem.case import load_case
+    from dem.scene.case import load_case
 
     case_dir, toml = _single_sphere_copy(tmp_path, 1.8, "coulomb")
     before = toml.read_text()
@@ -271,7 +271,7 @@ def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
     trail = (case_dir / "output" / "calibration_evaluations.csv").read_text().splitlines()
     assert trail[0].startswith("evaluation,tangential_stiffness_ratio") and len(trail) > 17
     assert "at Gamma 1.8, phi 25 deg, mu 0.35, alpha 0 deg" in toml.read_text()
-    from dem.plan import plan
+    from dem.run.plan import plan
 
     key = "contact.tangential_stiffness_ratio"
     assert not [a for a in plan(load_case(case_dir)).advice if a.key == key]
@@ -280,11 +280,11 @@ def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
 
 
 def test_calibrate_counts_its_evaluations_and_a_stop_keeps_them(tmp_path, capsys, monkeypatch):
-    import dem.calibrate
+    import dem.studies.calibrate
 
     case_dir, toml = _single_sphere_copy(tmp_path, 1.8, "coulomb")
     before = toml.read_text()
-    measure, calls = dem.calibrate._measure, {"n": 0}
+    measure, calls = dem.studies.calibrate._measure, {"n": 0}
 
     def stopped_at_the_fifth(*args, **kwargs):
         calls["n"] += 1
@@ -292,7 +292,7 @@ def test_calibrate_counts_its_evaluations_and_a_stop_keeps_them(tmp_path, capsys
             raise KeyboardInterrupt
         return measure(*args, **kwargs)
 
-    monkeypatch.setattr(dem.calibrate, "_measure", stopped_at_the_fifth)
+    monkeypatch.setattr(dem.studies.calibrate, "_measure", stopped_at_the_fifth)
     code, _, err = run(capsys, "calibrate", str(case_dir), "--plot", str(tmp_path / "c.png"))
     assert code == 130 and toml.read_text() == before
     assert "[ 1/" in err and "to go" in err and "stopped after 3 evaluations" in err

@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 from small_case import write_case
 
-from dem import setup, shapes
-from dem.case import load_case
+from dem.engine import setup
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import Bodies, Spheres
 from dem.io import checkpoint
 from dem.kernels import contacts
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
-from dem.runner import run_case
-from dem.simulation import ContactLaw, Simulation
-from dem.state import Bodies, Spheres
-from dem.trough import Trough
+from dem.run.runner import run_case
+from dem.scene import shapes
+from dem.scene.case import load_case
+from dem.scene.trough import Trough
 
 RADIUS, DENSITY = 2.0e-3, 7800.0
 SCREW = dict(length=0.016, shank_radius=0.0014, head_radius=0.0028)

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from naive_dem import all_forces
 
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import Spheres
 from dem.kernels import contacts
-from dem.simulation import ContactLaw, Simulation
-from dem.state import Spheres
-from dem.trough import Trough
+from dem.scene.trough import Trough
 
 LENGTH, WIDTH = 0.012, 0.010
 

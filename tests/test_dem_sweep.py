@@ -10,8 +10,8 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.runner import SUMMARY
-from dem.sweep import folder_name, grid, parse_set, run_sweep
+from dem.run.runner import SUMMARY
+from dem.studies.sweep import folder_name, grid, parse_set, run_sweep
 
 pytest.importorskip("distributed")
 

@@ -1,14 +1,15 @@
-"""dem.drive against independent forms of Eq. 3, and the sites that call it."""
+"""dem.physics.drive against independent forms of Eq. 3, and the sites that call it."""
 
 import math
 
 import numpy as np
 import pytest
 
-from dem import drive, measure, pointmass
-from dem.case import resolve_drive
+from dem import pointmass
 from dem.config import GRAVITY
-from dem.trough import Trough
+from dem.physics import drive, measure
+from dem.scene.case import resolve_drive
+from dem.scene.trough import Trough
 
 
 def test_throw_number_is_eq3_and_amplitude_inverts_it():
@@ -27,7 +28,7 @@ def test_resolve_drive_is_dem_drive_bit_for_bit():
         by_amp = resolve_drive(f, phi, alpha, amplitude=value * 1e-3)
         assert by_amp.throw_number == drive.throw_number(value * 1e-3, f, phi, alpha)
         assert by_amp.omega == drive.omega(f)
-        # the DEM's velocity scale is dem.drive's
+        # the DEM's velocity scale is dem.physics.drive's
         scale = measure.drive_velocity_scale(by_amp.amplitude, by_amp.omega, phi)
         assert scale == drive.drive_velocity(by_amp.amplitude, f, phi)
 
@@ -73,7 +74,7 @@ def test_trough_throw_number_is_the_case_value():
 
 
 def _motion(second=None, ramp_time=0.0, amplitude=0.3e-3, angle=25.0, f=60.0):
-    from dem.drive import Component, Motion
+    from dem.physics.drive import Component, Motion
 
     comps = [Component(amplitude, math.radians(angle))]
     if second is not None:
@@ -100,7 +101,7 @@ def test_motion_velocity_and_frame_acceleration_are_derivatives_of_the_displacem
 
 
 def test_ramp_rises_smoothly_from_rest_to_full_amplitude():
-    from dem.drive import ramp
+    from dem.physics.drive import ramp
 
     T = 0.1
     assert ramp(0.0, T) == (0.0, 0.0, 0.0)

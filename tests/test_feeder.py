@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from small_case import stop_mid_frame, write_case
 
-from dem import setup
-from dem.case import load_case
+from dem.engine import setup
 from dem.errors import InputError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.hdf5 import read_results
-from dem.runner import run_case
+from dem.run.runner import run_case
+from dem.scene.case import load_case
 
 FEEDER = """
 [trough]
@@ -245,8 +245,8 @@ def test_a_feeder_in_a_u_pan_keeps_every_grain_inside_the_mesh(tmp_path):
     side of the U mesh, clear of it, in front of the back wall, and the balance holds."""
     from pathlib import Path
 
-    from dem.fill import inside_mesh
-    from dem.mesh import load_mesh
+    from dem.scene.fill import inside_mesh
+    from dem.scene.mesh import load_mesh
 
     stl = Path(__file__).resolve().parents[1] / "cases" / "geometry" / "u_trough.stl"
     text = FEEDER.replace(

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from naive_fill import naive_fill, naive_fill_clumps
 
-from dem import fill, shapes
-from dem.trough import Trough
+from dem.scene import fill, shapes
+from dem.scene.trough import Trough
 
 
 def overlaps(pos: np.ndarray, radius: np.ndarray, length: float) -> int:

@@ -81,7 +81,7 @@ def _set(text: str, key: str, value: str) -> str:
 
 def test_the_screw_case_of_the_table_is_valid_and_set_replaces_keys(tmp_path, capsys):
     """The table's base cases load, and _set writes the hostile value where the key lives."""
-    from dem.case import load_case
+    from dem.scene.case import load_case
 
     assert load_case(write_case(tmp_path / "s", SCREW_CASE)).particles.shape == "screw"
     text = _set(SMALL_CASE, "material.friction", "nan")

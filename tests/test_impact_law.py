@@ -11,14 +11,16 @@ import math
 import numpy as np
 import pytest
 
-from dem import calibrate, pointmass, setup
-from dem.case import load_case
+from dem import pointmass
+from dem.engine import setup
+from dem.engine.simulation import ContactLaw, Simulation, measure_cycles
+from dem.engine.state import Spheres
 from dem.kernels import contacts
-from dem.measure import conveying_velocity
+from dem.physics.measure import conveying_velocity
 from dem.pointmass.bounded import coulomb_bounded_velocity
-from dem.simulation import ContactLaw, Simulation, measure_cycles
-from dem.state import Spheres
-from dem.trough import Trough
+from dem.scene.case import load_case
+from dem.scene.trough import Trough
+from dem.studies import calibrate
 
 RADIUS, DENSITY = 0.002, 7800.0
 MASS = DENSITY * 4.0 / 3.0 * math.pi * RADIUS**3

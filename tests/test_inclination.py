@@ -11,9 +11,9 @@ import math
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem.case import load_case
 from dem.cli import main
 from dem.errors import InputError
+from dem.scene.case import load_case
 
 FRICTION_ANGLE = math.degrees(math.atan(0.35))  # SMALL_CASE's material.friction
 

@@ -7,15 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from dem import setup
-from dem.case import load_case
 from dem.config import GRAVITY
+from dem.engine import setup
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import Spheres
 from dem.errors import InputError, SimulationError
 from dem.kernels import contacts
-from dem.runner import run_case
-from dem.simulation import ContactLaw, Simulation
-from dem.state import Spheres
-from dem.trough import Trough
+from dem.run.runner import run_case
+from dem.scene.case import load_case
+from dem.scene.trough import Trough
 
 RADIUS, DENSITY = 2.0e-3, 7800.0
 MASS = DENSITY * 4 / 3 * math.pi * RADIUS**3
@@ -262,7 +262,7 @@ def test_run_case_writes_summary(tmp_path):
 
 def test_from_grains_and_measure_cycles_give_what_run_case_gives(tmp_path):
     """The public path (place a grain, measure whole cycles) and dem run agree on one block."""
-    from dem.simulation import measure_cycles
+    from dem.engine.simulation import measure_cycles
 
     case = _single_sphere(0.9)
     summary = run_case(case, tmp_path, progress=False, frames=False)

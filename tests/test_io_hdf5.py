@@ -176,7 +176,7 @@ def test_viewer_holding_the_file_does_not_stop_appends(tmp_path):
 def test_resolved_case_from_case_file(tmp_path):
     from pathlib import Path
 
-    from dem.case import load_case
+    from dem.scene.case import load_case
 
     case = load_case(Path(__file__).parents[1] / "cases" / "sphere-bed").as_dict()
     path = tmp_path / "results.h5"

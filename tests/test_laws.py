@@ -1,4 +1,4 @@
-"""The contact-law registry (dem.laws) and the scalar sub-models of dem.kernels.contacts."""
+"""The contact-law registry (dem.physics.laws) and the scalar sub-models of dem.kernels.contacts."""
 
 import math
 from pathlib import Path
@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dem import laws
-from dem.case import load_case
 from dem.errors import InputError
 from dem.kernels import contacts
+from dem.physics import laws
+from dem.scene.case import load_case
 
 SPHERE_BED = Path(__file__).resolve().parents[1] / "cases" / "sphere-bed"
 
@@ -55,7 +55,7 @@ def test_a_key_of_another_law_is_refused_at_load_and_its_own_accepted(model, tan
 
 
 def test_calibration_refusal_comes_from_the_row():
-    from dem.calibrate import calibrate
+    from dem.studies.calibrate import calibrate
 
     case = load_case(SPHERE_BED, {"contact.tangential": "liggghts", "run.timestep": "auto"})
     assert laws.TANGENTIAL_LAWS["liggghts"].calibration_refused
@@ -66,7 +66,7 @@ def test_calibration_refusal_comes_from_the_row():
 def test_the_time_step_resolves_the_row_spring():
     """A law with a material tangential spring has a limit set by it; "impact" sizes its stick
     by the step itself, so its limit is the normal one."""
-    from dem.timestep import timestep_for
+    from dem.scene.timestep import timestep_for
 
     limits = {}
     for tangential in laws.TANGENTIAL_LAWS:

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from dem.case import load_case
-from dem.feeder import grain_mass
+from dem.engine.feeder import grain_mass
 from dem.io.liggghts import LIGGGHTS_INSTALL, find_liggghts, run_liggghts, write_deck
-from dem.timestep import timestep_for
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
 SHIPPED = sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))

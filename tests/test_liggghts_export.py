@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import dem
-from dem import shapes
-from dem.case import load_case
 from dem.config import GRAVITY
+from dem.engine.simulation import ContactLaw
 from dem.errors import InputError
 from dem.io.liggghts import (
     LIGGGHTS_INSTALL,
@@ -23,8 +22,9 @@ from dem.io.liggghts import (
     write_deck,
 )
 from dem.kernels import contacts
-from dem.mesh import extrude, load_mesh
-from dem.simulation import ContactLaw
+from dem.scene import shapes
+from dem.scene.case import load_case
+from dem.scene.mesh import extrude, load_mesh
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
 
@@ -223,7 +223,7 @@ def test_screw_deck_is_a_multisphere_deck(screw_deck):
     assert template[template.index("spheres") + 1 : template.index("spheres") + 5] == [
         "file", "grain.multisphere", "scale", "1.0",
     ]  # fmt: skip
-    # the exact mass and principal inertia of dem.shapes, not LIGGGHTS's Monte Carlo estimate
+    # the exact mass and principal inertia of dem.scene.shapes, not LIGGGHTS's Monte Carlo estimate
     assert float(template[template.index("mass") + 1]) == grain.mass == 0.0025
     i = template.index("inertia_tensor")
     tensor = [float(v) for v in template[i + 1 : i + 7]]
@@ -349,7 +349,7 @@ def test_mesh_box_holds_the_mesh_and_the_fill_region_lies_inside_the_pan(mesh_de
     y0, y1, z0 = y0 - reach, y1 + reach, z0 - reach
     assert "all_in no orientation random" in " ".join(fix(c, "ins"))
     # every point of the block's surface lies on the grains' side of the mesh, clear of it
-    # (an independent check: dem.mesh's closest-point kernels, not strip_top)
+    # (an independent check: dem.scene.mesh's closest-point kernels, not strip_top)
     mesh.index(float(np.max(hi - lo)))
     u = np.linspace(0.0, 1.0, 41)
     xs = np.linspace(x0, x1, 7)
@@ -411,7 +411,7 @@ def test_feeder_deck_has_the_back_wall_open_edge_and_one_grain_per_feed(tmp_path
     """cases/feeder: x is open at the discharge edge L (lost spheres deleted and ignored), the
     back wall is the plane x = 0, the fill stands clear of both, and the feed inserts one grain
     every m / feed_rate into the zone at the back (LIGGGHTS rounds fractions of a grain down)."""
-    from dem.feeder import grain_mass
+    from dem.engine.feeder import grain_mass
 
     case = load_case(CASES_DIR / "feeder")
     dt = case.run.timestep
@@ -437,7 +437,8 @@ def test_feeder_deck_has_the_back_wall_open_edge_and_one_grain_per_feed(tmp_path
     assert rate == case.feeder.feed_rate
     assert rate * every * dt == pytest.approx(grain_mass(case), rel=1e-3)
     [zone] = [a for a in c["region"] if a[0] == "feedzone"]
-    # the zone holds centres of mass, a reach clear of the back wall, as dem.feeder places them
+    # the zone holds centres of mass, a reach clear of the back wall, as dem.engine.feeder places
+    # them
     assert float(zone[2]) == pytest.approx(reach)
     assert float(zone[3]) == pytest.approx(case.feeder.feed_length - reach)
     assert "all_in no orientation random" in " ".join(feed)
@@ -478,13 +479,13 @@ def test_liggghts_runs_a_feeder_deck_and_its_balance_closes(tmp_path):
 
 def test_elliptical_drive_and_ramp_variables_are_the_kernels_acceleration(tmp_path):
     """The deck's gx, gz, evaluated as LIGGGHTS would (the equal-style expressions in Python),
-    equal gravity minus s''(tau) of dem.drive.Motion within and after the ramp."""
+    equal gravity minus s''(tau) of dem.physics.drive.Motion within and after the ramp."""
     import math
     import re
 
-    from dem.case import load_case
     from dem.io.liggghts import write_deck
-    from dem.trough import Trough
+    from dem.scene.case import load_case
+    from dem.scene.trough import Trough
 
     ov = {"drive.second_amplitude": 2e-4, "drive.second_angle": 90.0,
           "drive.second_phase": 90.0, "drive.ramp_cycles": 3.0, "run.settle_cycles": 5}  # fmt: skip
@@ -504,8 +505,8 @@ def test_elliptical_drive_and_ramp_variables_are_the_kernels_acceleration(tmp_pa
 @pytest.mark.integration
 @pytest.mark.skipif(find_liggghts() is None, reason="liggghts not on PATH")
 def test_an_elliptical_ramped_deck_runs_in_liggghts(tmp_path):
-    from dem.case import load_case
     from dem.io.liggghts import run_liggghts, write_deck
+    from dem.scene.case import load_case
 
     ov = {"drive.second_amplitude": 2e-4, "drive.second_angle": 90.0,
           "drive.second_phase": 90.0, "drive.ramp_cycles": 3.0, "run.settle_cycles": 5,

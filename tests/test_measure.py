@@ -1,13 +1,14 @@
-"""Per-cycle statistics (dem.measure) and the damping relation shared with the LIGGGHTS export."""
+"""Per-cycle statistics (dem.physics.measure) and the damping relation shared with the LIGGGHTS
+export."""
 
 import math
 
 import numpy as np
 import pytest
 
-from dem import measure
 from dem.io.liggghts import damping_ratio
 from dem.kernels.contacts import damping_beta
+from dem.physics import measure
 
 
 def test_mean_and_stderr_is_std_ddof1_over_sqrt_n():

@@ -7,11 +7,11 @@ import numba
 import numpy as np
 import pytest
 
-from dem import setup
-from dem.case import load_case
+from dem.engine import setup
 from dem.errors import InputError
 from dem.kernels.mesh import EDGE, FACE, VERTEX, closest_point
-from dem.mesh import extrude, load_mesh
+from dem.scene.case import load_case
+from dem.scene.mesh import extrude, load_mesh
 
 LENGTH, WIDTH, WALL = 0.03, 0.02, 0.012
 
@@ -165,7 +165,7 @@ def test_sliding_down_a_tilted_mesh_follows_coulomb(tmp_path):
 
 
 def test_a_grain_rests_in_the_u_trough(tmp_path):
-    from dem.mesh import extrude as ext
+    from dem.scene.mesh import extrude as ext
 
     theta = np.linspace(np.pi, 2 * np.pi, 49)
     R = 0.5 * WIDTH
@@ -203,7 +203,7 @@ def test_a_bed_in_the_u_trough_stays_above_the_mesh_in_every_frame(tmp_path):
     """dem run on a U-trough mesh: every sphere of every frame lies inside the pan, clear of it."""
     import h5py
 
-    from dem.runner import run_case
+    from dem.run.runner import run_case
 
     theta = np.linspace(np.pi, 2 * np.pi, 33)
     R = 0.5 * WIDTH

@@ -68,8 +68,8 @@ def test_the_smallest_bumpiness_named_is_accepted(tmp_path, capsys):
     """The bound in the message is rounded up: the value it names loads (at most 1000 spheres)."""
     import re
 
-    from dem.case import load_case
     from dem.quantities import MAX_GRAIN_SPHERES
+    from dem.scene.case import load_case
 
     case_dir = write_case(tmp_path / "case", SCREW_CASE.format(b="1e-9"))
     code, err = _dem(["plan", str(case_dir)], capsys)
@@ -109,7 +109,7 @@ def _box(path, binary: bool) -> bytes:
     """Floor and side walls of SMALL_CASE's trough as 6 triangles; returns the file's bytes."""
     import meshio
 
-    from dem.mesh import extrude
+    from dem.scene.mesh import extrude
 
     h = 0.5 * WIDTH
     mesh = extrude([[-h, WALL], [-h, 0.0], [h, 0.0], [h, WALL]], LENGTH)
@@ -198,7 +198,7 @@ def test_any_file_meshio_cannot_use_is_one_line_naming_the_key(tmp_path, capsys,
 def _binary(triangles) -> bytes:
     import numpy as np
 
-    from dem.mesh import _STL_DTYPE
+    from dem.scene.mesh import _STL_DTYPE
 
     records = np.zeros(len(triangles), dtype=_STL_DTYPE)
     records["facet"] = triangles
@@ -211,7 +211,7 @@ def _binary(triangles) -> bytes:
 def test_other_corrupt_binary_stls_are_refused(tmp_path, capsys, variant):
     import numpy as np
 
-    from dem.mesh import read_stl
+    from dem.scene.mesh import read_stl
 
     good = _box(tmp_path / "b.stl", binary=True)
     tri = read_stl(tmp_path / "b.stl")

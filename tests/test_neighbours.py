@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import PairList, Spheres
 from dem.kernels import contacts
-from dem.simulation import ContactLaw, Simulation
-from dem.state import PairList, Spheres
-from dem.trough import Trough
+from dem.scene.trough import Trough
 
 
 def _sim(n, length, width, seed, capacity=None):

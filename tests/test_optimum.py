@@ -9,7 +9,7 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.optimum import maximize_noisy, replot
+from dem.studies.optimum import maximize_noisy, replot
 
 
 def noisy(peak: float, width: float, noise: float, seed: int):

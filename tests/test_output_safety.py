@@ -19,10 +19,10 @@ from pathlib import Path
 import pytest
 from small_case import SMALL_CASE, sigterm_at_check, write_case
 
-from dem.case import load_case
 from dem.cli import main
 from dem.io.hdf5 import read_results
-from dem.runner import LOCK_FILE, run_case
+from dem.run.runner import LOCK_FILE, run_case
+from dem.scene.case import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -104,7 +104,7 @@ def test_the_room_check_names_a_file_size_limit(tmp_path, monkeypatch):
 #: The point-mass model of the summary compiles for seconds on a fresh machine: the signal then.
 SIGNAL_IN_SUMMARY = """
 import os, signal
-import dem.runner as runner
+import dem.run.runner as runner
 _pointmass = runner._pointmass
 def late(case):
     os.kill(os.getpid(), signal.{sig})

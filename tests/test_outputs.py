@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import measure
-from dem.case import load_case
-from dem.runner import run_case
+from dem.physics import measure
+from dem.run.runner import run_case
+from dem.scene.case import load_case
 
 
 @pytest.fixture(scope="module")

@@ -10,11 +10,12 @@ from pathlib import Path
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import plan, setup, stiffness
-from dem.case import load_case
 from dem.cli import main
-from dem.runner import run_case
-from dem.timestep import timestep_for
+from dem.engine import setup
+from dem.run import plan, stiffness
+from dem.run.runner import run_case
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
 PARITY = CASES_DIR.parent / "validation" / "liggghts-bulk" / "sphere-bed-5e7"  # 5e7 Pa
@@ -48,7 +49,7 @@ def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
 
 @pytest.fixture
 def study(monkeypatch):
-    """The synthetic speed-accuracy study alone (the bed-compliance rule of dem.stiffness has
+    """The synthetic speed-accuracy study alone (the bed-compliance rule of dem.run.stiffness has
     its own data and tests/test_stiffness.py)."""
     data = synthetic_study()
     monkeypatch.setattr(plan, "study_data", lambda: data)
@@ -312,8 +313,8 @@ def test_plan_warns_when_calibrated_contact_values_belong_to_another_drive(tmp_p
     an override, as dem run --set makes) gets a warning naming both."""
     from small_case import SMALL_CASE, write_case
 
-    from dem.case import load_case
-    from dem.plan import plan
+    from dem.run.plan import plan
+    from dem.scene.case import load_case
 
     text = SMALL_CASE.replace(
         "youngs_modulus = 5.0e7",

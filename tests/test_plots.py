@@ -5,14 +5,14 @@ import re
 import numpy as np
 import pytest
 
-from dem import plots
+from dem.studies import plots
 
 UNIT = re.compile(r"\([^()]+\)$")  # "... (deg)", "... (m/s)", "(-)" for a dimensionless number
 
 
 @pytest.fixture
 def figures(monkeypatch):
-    """Every figure dem.plots.save writes, kept open for inspection after it was written."""
+    """Every figure dem.studies.plots.save writes, kept open for inspection after it was written."""
     kept = []
     real = plots.save
 
@@ -120,7 +120,7 @@ def _rows():
 
 
 def test_sweep_figure_shows_m_s_and_v_norm(tmp_path, figures):
-    from dem.sweep import plot
+    from dem.studies.sweep import plot
 
     plot(_rows(), tmp_path / "s.png", ["drive.angle", "material.friction"],
          held={"drive.amplitude": 5e-4, "drive.frequency": 60.0})  # fmt: skip
@@ -142,7 +142,7 @@ def test_sweep_figure_shows_m_s_and_v_norm(tmp_path, figures):
 
 
 def _search(peak: bool):
-    from dem.optimum import maximize_noisy
+    from dem.studies.optimum import maximize_noisy
 
     rng = np.random.default_rng(3)
 
@@ -156,8 +156,8 @@ def _search(peak: bool):
 
 
 def test_bulk_optimum_figure_has_a_plateau_band_and_no_stop_reason(tmp_path, figures):
-    from dem.optimum import _plot, plateau
     from dem.pointmass.sweep import optimum
+    from dem.studies.optimum import _plot, plateau
 
     pm = optimum("angle", "throw_number", friction=0.35, throw_number=1.8, frequency=60.0,
                  bounds=(10.0, 60.0), points=41)  # fmt: skip

@@ -1,9 +1,9 @@
-"""dem.progress.Status: a live line on a terminal, two lines in a log."""
+"""dem.run.progress.Status: a live line on a terminal, two lines in a log."""
 
 import io
 import time
 
-from dem.progress import Status
+from dem.run.progress import Status
 
 
 class _Tty(io.StringIO):

@@ -1,4 +1,4 @@
-"""Replicas (dem.replicas): N fills of one case, pooled; reproducible, refusing, resumable."""
+"""Replicas (dem.run.replicas): N fills of one case, pooled; reproducible, refusing, resumable."""
 
 import json
 import math
@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, run_cli, write_case
 
-from dem import measure, replicas
-from dem.case import load_case
 from dem.errors import InputError
-from dem.runner import run_case
+from dem.physics import measure
+from dem.run import replicas
+from dem.run.runner import run_case
+from dem.scene.case import load_case
 
 TINY = SMALL_CASE.replace("count = 120", "count = 40").replace("cycles = 6", "cycles = 3")
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from dem.io.hdf5 import ResultsWriter
-from dem.report import make_report, running_statistics
+from dem.studies.report import make_report, running_statistics
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, stop_mid_frame, write_case
 
-from dem.case import load_case
 from dem.errors import InputError
 from dem.io.hdf5 import read_results
-from dem.runner import run_case
+from dem.run.runner import run_case
+from dem.scene.case import load_case
 
 
 def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:
@@ -131,7 +131,7 @@ def test_results_of_a_killed_run_are_readable(tmp_path):
     assert np.all(np.isfinite(last["positions"])) and last["positions"].shape == (120, 3)
     assert json.loads(json.dumps(r["case"]))["particles"]["count"] == 120
     # a killed run leaves no stale lock (the kernel drops it with the process)
-    from dem.runner import _lock_output
+    from dem.run.runner import _lock_output
 
     _lock_output(out).close()
 
@@ -216,7 +216,7 @@ def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_pa
     # up within a few hundred steps; the load check is widened so that the run starts at all
     from dem import config
     from dem.errors import SimulationError
-    from dem.timestep import timestep_for
+    from dem.scene.timestep import timestep_for
 
     case = load_case(_case_dir(tmp_path, cycles=4))
     limit = timestep_for(case).limit
@@ -406,8 +406,9 @@ def test_a_slow_scene_asks_for_a_stop_every_stop_latency_not_500_steps(tmp_path,
     """When 500 steps take long (a million spheres take about a minute), ``run`` shortens its
     chunks to DEM_STOP_LATENCY_S of wall time from the last chunk's speed, so a signal is still
     honoured within about that (issue 15: "within about a second in every phase")."""
-    from dem import config, setup
-    from dem.simulation import Simulation
+    from dem import config
+    from dem.engine import setup
+    from dem.engine.simulation import Simulation
 
     case = load_case(write_case(tmp_path / "case", SMALL_CASE))
     sim = setup.from_case(case)

@@ -1,4 +1,5 @@
-"""dem.scene: a case resolved once (grain, law, step, trough), the same numbers as the case."""
+"""dem.scene.resolved: a case resolved once (grain, law, step, trough), the same numbers as the
+case."""
 
 import dataclasses
 import math
@@ -8,11 +9,12 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import plan, setup
-from dem.case import load_case
-from dem.scene import Scene, resolve
-from dem.timestep import ContactLaw, timestep_for
-from dem.trough import Trough
+from dem.engine import setup
+from dem.run import plan
+from dem.scene.case import load_case
+from dem.scene.resolved import Scene, resolve
+from dem.scene.timestep import ContactLaw, timestep_for
+from dem.scene.trough import Trough
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 

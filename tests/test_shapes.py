@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from dem import config, shapes
+from dem import config
 from dem.errors import InputError
+from dem.scene import shapes
 
 RHO = 7800.0
 FAST = 1e-3  # grid tolerance in these tests (the default is tighter and slower)

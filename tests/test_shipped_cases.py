@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dem.case import load_case
 from dem.io.files import json_text
 from dem.io.hdf5 import read_results
-from dem.runner import run_case
+from dem.run.runner import run_case
+from dem.scene.case import load_case
 
 pytestmark = pytest.mark.integration
 

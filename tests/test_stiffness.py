@@ -1,14 +1,15 @@
-"""The bed-compliance rule (dem.stiffness): the estimate, its inverse and the warning it gives."""
+"""The bed-compliance rule (dem.run.stiffness): the estimate, its inverse and the warning it
+gives."""
 
 import math
 from pathlib import Path
 
 import pytest
 
-from dem import stiffness
-from dem.case import load_case
-from dem.plan import plan
-from dem.scene import resolve
+from dem.run import stiffness
+from dem.run.plan import plan
+from dem.scene.case import load_case
+from dem.scene.resolved import resolve
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 #: The LIGGGHTS-parity sphere bed: cases/sphere-bed at 5e7 Pa, as shipped until 2026-11-26.

@@ -16,15 +16,15 @@ import numpy as np
 import pytest
 
 from dem import config
-from dem.case import load_case
 from dem.config import GRAVITY
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import Spheres
 from dem.errors import SimulationError
 from dem.kernels import contacts
-from dem.mesh import extrude, load_mesh
-from dem.runner import run_case
-from dem.simulation import ContactLaw, Simulation
-from dem.state import Spheres
-from dem.trough import Trough
+from dem.run.runner import run_case
+from dem.scene.case import load_case
+from dem.scene.mesh import extrude, load_mesh
+from dem.scene.trough import Trough
 
 RADIUS, DENSITY = 2.0e-3, 7800.0
 MASS = DENSITY * 4 / 3 * math.pi * RADIUS**3

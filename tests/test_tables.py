@@ -88,7 +88,7 @@ def test_pointmass_sweep_csv_reads_with_numpy(tmp_path, capsys):
 
 
 def test_optimum_csv_has_units_in_its_header(tmp_path):
-    from dem.optimum import _write_csv
+    from dem.studies.optimum import _write_csv
 
     samples = [(10.0, 0, 0.71732348874, 0.0043689807), (22.5, 1, 0.8 + 1e-17, 0.004)]
     _write_csv(tmp_path / "optimum.csv", samples, "drive.angle", "velocity_norm")

@@ -1,4 +1,5 @@
-"""Tangential restitution of the ``"coulomb"`` spring law: the mapping of dem.tangential, virtual
+"""Tangential restitution of the ``"coulomb"`` spring law: the mapping of dem.physics.tangential,
+virtual
 impacts, calibration. The impact-aware default law is tested in test_impact_law.py."""
 
 import dataclasses
@@ -7,12 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from dem import calibrate, tangential
-from dem.case import load_case
+from dem.engine.simulation import ContactLaw, Simulation
+from dem.engine.state import Spheres
 from dem.kernels import contacts
-from dem.simulation import ContactLaw, Simulation
-from dem.state import Spheres
-from dem.trough import Trough
+from dem.physics import tangential
+from dem.scene.case import load_case
+from dem.scene.trough import Trough
+from dem.studies import calibrate
 
 
 def _sphere_case(
@@ -70,7 +72,8 @@ def test_no_rebound_at_and_beyond_critical_damping(beta):
 )
 @pytest.mark.parametrize("incidence", [10.0, 30.0])
 def test_sticking_impact_gives_the_eps_t_of_the_formula(rotation, e_t, incidence):
-    """With limit_force the grain leaves at the zero of the normal force, where dem.tangential
+    """With limit_force the grain leaves at the zero of the normal force, where
+    dem.physics.tangential
     defines the end of the impact: an impact that sticks throughout (mu = 1e4; with a finite mu
     the shrinking normal force lets it slip at the very end) has the centre-of-mass eps_t of the
     mapping, for a block (f_t = 1) and a rolling sphere (f_t = 2/7)."""

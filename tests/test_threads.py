@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import config, setup
-from dem.case import load_case
+from dem import config
+from dem.engine import setup
+from dem.scene.case import load_case
 
 pytestmark = pytest.mark.skipif(
     numba.config.NUMBA_NUM_THREADS < 2,
@@ -102,7 +103,7 @@ def test_one_and_two_threads_give_identical_trajectories(tmp_path, monkeypatch, 
 
 
 def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
-    from dem import threads
+    from dem.engine import threads
 
     chosen = []
     monkeypatch.setattr(threads.numba, "set_num_threads", chosen.append)
@@ -147,7 +148,7 @@ def test_thread_guard_probes_one_thread_and_keeps_the_faster(monkeypatch):
 
 
 def test_the_guard_starts_on_one_thread_where_the_load_leaves_no_core_free(monkeypatch):
-    from dem import threads
+    from dem.engine import threads
 
     assert threads.starting_threads(2, cores=2, busy=0.3) == 2
     assert threads.starting_threads(2, cores=2, busy=0.6) == 1  # a core half busy is not free
@@ -166,7 +167,7 @@ def test_the_guard_starts_on_one_thread_where_the_load_leaves_no_core_free(monke
 
 
 def test_the_guard_notes_the_move_to_one_thread_once(monkeypatch):
-    from dem import threads
+    from dem.engine import threads
 
     notes = []
     monkeypatch.setattr(threads.numba, "set_num_threads", lambda k: None)
@@ -179,7 +180,7 @@ def test_the_guard_notes_the_move_to_one_thread_once(monkeypatch):
 
 def test_a_try_of_the_other_thread_count_runs_a_short_chunk(tmp_path, monkeypatch):
     """The guard's try may be the slow choice: Simulation.run gives it a short chunk."""
-    from dem import threads
+    from dem.engine import threads
 
     monkeypatch.setattr(threads.numba, "set_num_threads", lambda k: None)
     sim = setup.from_case(load_case(write_case(tmp_path / "case")))
@@ -202,8 +203,8 @@ def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
         pytest.skip("needs two numba threads")
 
     from dem import config
-    from dem.case import load_case
-    from dem.runner import run_case
+    from dem.run.runner import run_case
+    from dem.scene.case import load_case
 
     case = load_case(write_case(tmp_path / "case"))
     guarded = run_case(case, tmp_path / "a", threads=2, progress=False, frames=False)

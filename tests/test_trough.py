@@ -1,8 +1,8 @@
-"""The Python description of the kernel's walls and of the periodic section (dem.trough)."""
+"""The Python description of the kernel's walls and of the periodic section (dem.scene.trough)."""
 
 import numpy as np
 
-from dem.trough import WALLS, Trough
+from dem.scene.trough import WALLS, Trough
 
 L, W = 0.1, 0.04
 

@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from small_case import SMALL_CASE, write_case
 
-from dem import setup
-from dem.case import load_case
 from dem.config import GRAVITY
+from dem.engine import setup
 from dem.errors import InputError
 from dem.kernels import contacts
-from dem.laws import ContactLaw
+from dem.physics.laws import ContactLaw
+from dem.scene.case import load_case
 
 
 def _case(tmp_path, wall: str = "", **overrides):
@@ -84,7 +84,7 @@ def test_an_incline_steeper_than_the_walls_friction_angle_is_refused_by_that_key
 
 def test_the_point_mass_and_the_deck_see_the_walls_values(tmp_path):
     from dem.io.liggghts import write_deck
-    from dem.runner import _pointmass_bounded
+    from dem.run.runner import _pointmass_bounded
 
     case = _case(tmp_path, "friction = 0.6\n")
     plain = _case(tmp_path / "p")

@@ -12,7 +12,8 @@ to the grains' side, as dem's fill expects:
 - ``v_trough.stl``: two flanks at 45 degrees meeting at the bottom (60 mm wide, 30 mm deep),
   with straight side walls 20 mm tall above the rim.
 
-Each profile segment is one rectangle along x, split into two triangles (``dem.mesh.extrude``; a
+Each profile segment is one rectangle along x, split into two triangles
+(``dem.scene.mesh.extrude``; a
 long triangle is fine: the contact index bins triangles by their bounding boxes). Only numpy,
 meshio and that function are used.
 """
@@ -25,7 +26,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from dem.mesh import extrude
+from dem.scene.mesh import extrude
 
 RADIUS = 0.030
 DEPTH = 0.030

@@ -1,4 +1,4 @@
-"""Checkpoints: the whole state of a :class:`dem.simulation.Simulation` in one ``.npz`` file.
+"""Checkpoints: the whole state of a :class:`dem.engine.simulation.Simulation` in one ``.npz`` file.
 
 A checkpoint holds everything the step loop reads, so that a run restored from it continues bit
 for bit: sphere arrays (``sph.*``), rigid bodies (``body.*``), the pair list with its contact
@@ -30,12 +30,12 @@ from pathlib import Path
 import numpy as np
 
 from dem import config
+from dem.engine.state import PairList
 from dem.errors import SimulationError
 from dem.io.files import replace_file
 from dem.kernels.contacts import HISTORY_WIDTH
 from dem.kernels.forces import N_WALLS
 from dem.kernels.mesh import MESH_SLOTS
-from dem.state import PairList
 
 LOOP_KEY = "loop.json"
 #: Pair-list arrays each step writes before reading them: not saved.

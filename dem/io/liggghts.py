@@ -11,7 +11,8 @@ the case's triangle mesh, below) and every grain feels the effective gravity
 in m/s^2, with tau the time since the drive started. ``fix gravity`` takes a magnitude and a
 direction; both are equal-style variables, |g(t)| and (g_x, 0, g_z).
 
-Mesh troughs (``[trough] mesh``): the triangles the case reads (:func:`dem.mesh.load_mesh`) are
+Mesh troughs (``[trough] mesh``): the triangles the case reads (:func:`dem.scene.mesh.load_mesh`)
+are
 written next to the deck as the ASCII STL ``trough.stl`` (exact coordinates, m, trough frame)
 and become one granular wall, ``fix trough all mesh/surface file trough.stl type 2`` and
 ``fix walls all wall/gran MODEL mesh n_meshes 1 meshes trough SETTINGS``, in place of the three
@@ -32,7 +33,7 @@ the pan with the largest cross-section below the mesh's top whose sides and floo
 neighbour skin away from every triangle, and the column above it is as tall as the grains need
 at the loose fill fraction.
 
-Finite feeders (``[feeder]``, :mod:`dem.feeder`): the box is closed across y and z and open
+Finite feeders (``[feeder]``, :mod:`dem.engine.feeder`): the box is closed across y and z and open
 along x (``boundary f f f``) from a margin behind the back wall to the discharge edge x = L; a
 sphere whose centre passes L leaves the box and LIGGGHTS deletes it (``thermo_modify lost
 ignore``), as dem removes a grain whose centre of mass passes L. A clump goes as a whole in
@@ -74,7 +75,7 @@ comparison.
 Grains: spheres are ``fix particletemplate/sphere`` integrated by ``fix nve/sphere`` (``nve``
 with rotation locked). Screws and clumps are ``fix particletemplate/multisphere`` reading the
 members from ``grain.multisphere`` (``x y z r`` in m, body frame: centre of mass at the origin,
-principal axes, written by :func:`dem.shapes.write_clump`), with the template's exact ``mass``
+principal axes, written by :func:`dem.scene.shapes.write_clump`), with the template's exact ``mass``
 and diagonal ``inertia_tensor`` given (``use_volume``), so LIGGGHTS's Monte Carlo estimate only
 sets its volume; ``fix multisphere`` integrates the rigid bodies (``tflag off off off`` locks
 rotation) and needs ``atom_modify map array sort 0 0``. LIGGGHTS, like dem, takes the clump's
@@ -104,15 +105,15 @@ from typing import NamedTuple
 import numpy as np
 
 from dem import __version__
-from dem.case import Case
 from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
-from dem.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
-from dem.mesh import load_mesh
-from dem.scene import Scene, resolve
-from dem.shapes import write_clump
-from dem.timestep import ContactLaw
+from dem.physics.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
+from dem.scene.case import Case
+from dem.scene.mesh import load_mesh
+from dem.scene.resolved import Scene, resolve
+from dem.scene.shapes import write_clump
+from dem.scene.timestep import ContactLaw
 
 #: LIGGGHTS version the decks are written for.
 LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"
@@ -380,7 +381,8 @@ def _drive_variables(d, gx0: float, gz0: float) -> list[str]:
     """Equal-style variables gx, gz: gravity minus the trough's acceleration s''(tau).
 
     The paper's drive: drive = A w^2 sin(w tau), gx = gx0 + drive cos(phi), gz likewise (as
-    before). A second component and a start-up ramp follow :class:`dem.drive.Motion` term for
+    before). A second component and a start-up ramp follow :class:`dem.physics.drive.Motion` term
+    for
     term: each component k adds A_k w^2 [c_s sin(w tau + psi_k) + c_c cos(w tau + psi_k)] e_k
     with c_s = r - r''/w^2, c_c = -2 r'/w of the smootherstep r(u), u = min(tau / T, 1)
     (written with comparisons: LIGGGHTS's min() is a special function of computes)
@@ -464,14 +466,14 @@ def _feeder_lines(
     The feed is ``insert/rate/region`` of ``feed_rate`` kg/s into the zone 0 < x <
     ``feed_length`` over the fill block's y range, from the fill block's bottom up as high as
     the loose fill column, one grain every m / feed_rate (at least every
-    :data:`dem.feeder.EXCHANGE_FRACTION` of a drive period, as dem exchanges), the first one
+    :data:`dem.engine.feeder.EXCHANGE_FRACTION` of a drive period, as dem exchanges), the first one
     m / feed_rate after the drive starts (as dem, which feeds a grain once a whole one is owed;
     LIGGGHTS would insert one at once), at rest in the trough's frame. :data:`BALANCE_FILE`
     gets, every ``sample_steps``, the drive time tau (s), the spheres in the box (a grain of k
     members counts k), the grains fed so far and the initial charge in spheres: grains
     discharged = charge + fed - in the box, per :func:`read_balance`.
     """
-    from dem.feeder import EXCHANGE_FRACTION
+    from dem.engine.feeder import EXCHANGE_FRACTION
 
     case = scene.case
     f, d = case.feeder, case.drive
@@ -535,7 +537,8 @@ def write_deck(
     """Write ``out_dir/in.dem``, a LIGGGHTS deck equivalent to a case.
 
     Args:
-        case: A validated case (spheres, screws or clumps), or its :class:`dem.scene.Scene`.
+        case: A validated case (spheres, screws or clumps), or its
+        :class:`dem.scene.resolved.Scene`.
         out_dir: Directory for the deck (created; a clump case also gets ``grain.multisphere``,
             a mesh case ``trough.stl``); LIGGGHTS is run inside it.
         timestep: dt, s.
@@ -565,7 +568,9 @@ def write_deck(
     source = str(case.source)
     p, t, d = case.particles, case.trough, case.drive
     if p.shape != "sphere" and p.grain is None:
-        raise InputError("particles.shape", p.shape, "a case read by dem.case.load_case", source)
+        raise InputError(
+            "particles.shape", p.shape, "a case read by dem.scene.case.load_case", source
+        )
     if not timestep > 0.0:
         raise InputError("timestep", timestep, "> 0 (s)")
     if steps < 1:
@@ -601,7 +606,8 @@ def write_deck(
         i1, i2, i3 = (_fmt(m) for m in g.moments)
         grain_lines = [
             f"# {CLUMP_FILE}: members x y z r (m) in the body frame (centre of mass at the origin,",
-            "# principal axes); mass and inertia tensor exact from dem.shapes, Monte Carlo volume",
+            "# principal axes); mass and inertia tensor exact from dem.scene.shapes,"
+            " Monte Carlo volume",
             f"fix pts all particletemplate/multisphere {s_template} atom_type 1 "
             f"density constant {_fmt(g.density)} nspheres {members} ntry {MULTISPHERE_NTRY} "
             f"spheres file {CLUMP_FILE} scale 1.0 type 1 mass {_fmt(g.mass)} "
@@ -667,7 +673,8 @@ def write_deck(
     reach = p.radius if p.shape == "sphere" else p.grain.bounding_radius
     if p.shape != "sphere":  # the region holds centres of mass (_placement)
         fill_y, fill_z0 = (fill_y[0] + reach, fill_y[1] - reach), fill_z0 + reach
-    # a feeder fills [reach, L - reach] as dem does (dem.setup), clear of the back wall and edge
+    # a feeder fills [reach, L - reach] as dem does (dem.engine.setup), clear of the back wall and
+    # edge
     fill_x = (0.0, t.length) if feeder is None else (reach, t.length - reach)
     fill_width = fill_y[1] - fill_y[0]
     if fill_width <= 0.0:

@@ -12,8 +12,9 @@ Every frame is one ``<DataSet timestep="t" part="0" name="spheres" .../>``, one 
 ``part="1" name="trough"`` and, for clumps, one with ``part="2" name="grains"`` in the
 collection, t in seconds of simulated time; ParaView shows the three as named blocks
 (``/Root/spheres``, ``/Root/trough``, ``/Root/grains``: Extract Block selects them by name).
-The trough's geometry is that of :class:`dem.trough.Trough`
-(:meth:`~dem.trough.Trough.wall_corners`, the kernel's walls), or the triangles of a mesh trough
+The trough's geometry is that of :class:`dem.scene.trough.Trough`
+(:meth:`~dem.scene.trough.Trough.wall_corners`, the kernel's walls), or the triangles of a mesh
+trough
 (``trough.mesh``), built once per writer: in the trough frame it is written once and every
 frame refers to it, in the lab frame each frame writes a shifted copy. The collection is
 rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
@@ -34,7 +35,7 @@ Frames (coordinates in m):
 
 Velocities: the trough frame moves with the drive without turning, so a grain's velocity in the
 lab is its velocity relative to the trough plus the trough's velocity s'(t) at that time,
-v_lab = v_trough + s'(t) (:meth:`dem.trough.Trough.velocity`). Relative to the trough a
+v_lab = v_trough + s'(t) (:meth:`dem.scene.trough.Trough.velocity`). Relative to the trough a
 conveyed bed moves forward on average but backward for part of every cycle; in the lab it
 moves with the trough.
 
@@ -77,7 +78,7 @@ import numpy as np
 import pyvista as pv
 
 from dem.io.files import replace_file, replace_text
-from dem.trough import Trough
+from dem.scene.trough import Trough
 
 PVD_NAME = "particles.pvd"
 #: The collection is rewritten after a frame when this many seconds have passed since the last
@@ -111,7 +112,7 @@ def trough_polydata(
 ) -> pv.PolyData:
     """Floor and side walls of the trough section as three quads, coordinates in m.
 
-    The kernel's walls as :meth:`dem.trough.Trough.wall_corners` gives them. Floor: z = 0,
+    The kernel's walls as :meth:`dem.scene.trough.Trough.wall_corners` gives them. Floor: z = 0,
     0 <= x <= length, |y| <= width/2; side walls: y = +-width/2, 0 <= z <= wall_height; with
     ``back_wall`` a finite feeder's back wall x = 0 as a fourth quad. Cell data ``part``: the
     kernel's wall index, 0 floor, 1 wall y = -width/2, 2 wall y = +width/2, 3 the back wall.
@@ -162,7 +163,7 @@ class VTKSeriesWriter:
         lab_frame: False (default): trough frame, trough fixed. True: spheres and trough shifted
             by the drive displacement given to :meth:`write_frame`.
         wall_height: Height of the drawn side walls, m (default: half the width).
-        mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`): drawn instead of the flat walls.
+        mesh: A trough mesh (:class:`dem.scene.mesh.TriangleMesh`): drawn instead of the flat walls.
         period: Period along x that positions are wrapped into, m (default ``trough_length``;
             a finite feeder's domain is longer than its trough).
         back_wall: Draw a finite feeder's back wall x = 0 (cell ``part`` 3).
@@ -269,7 +270,8 @@ class VTKSeriesWriter:
             drive_velocity: Trough velocity s'(t), (3,), m/s. When given, ``velocity_lab`` =
                 ``velocity`` + s'(t) and ``speed_lab`` are written, and in the lab frame
                 ``velocity`` is that lab velocity too.
-            bodies: The clumps (:class:`dem.state.Bodies`, or any object with its ``x``, ``v``,
+            bodies: The clumps (:class:`dem.engine.state.Bodies`, or any object with its ``x``,
+            ``v``,
                 ``q``, ``omega``, ``mass``, ``moments``, ``offsets`` and ``body_of``), indexed by
                 ``clump_id``: a grains dataset (``grains_NNNNNN.vtp``) is written beside the
                 spheres. None for spheres.

@@ -4,7 +4,7 @@ Each sub-model is a small ``@njit`` function of scalars that returns scalars (th
 history goes in and comes out as numbers), so the same functions can run inside GPU kernels;
 :func:`contact_force` is the thin wrapper that reads the parameter array and the history row.
 What the rest of dem asks of a law (case keys, time step, export, calibration) is its row in
-:mod:`dem.laws`.
+:mod:`dem.physics.laws`.
 
 A contact between sphere i and sphere j (or a wall, j = wall) is described by
 
@@ -73,7 +73,8 @@ w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w
 tau_j += the same.
 
 Laws (kernel ids :data:`MODELS` and :data:`TANGENTIAL`; a new tangential law is a new function
-here and one row in :data:`dem.laws.TANGENTIAL_LAWS`). The normal part is that of LIGGGHTS; the
+here and one row in :data:`dem.physics.laws.TANGENTIAL_LAWS`). The normal part is that of LIGGGHTS;
+the
 tangential part depends on the convention:
 
 - linear spring-dashpot (LIGGGHTS ``hooke/stiffness`` with a restitution-derived damping):
@@ -90,7 +91,7 @@ tangential part depends on the convention:
 Here beta = ln(e) / sqrt(ln(e)^2 + pi^2) for 0 < e <= 1 and beta = -1 for e = 0 (critical damping
 of the linear law; ln 0 is never evaluated), see :func:`damping_beta`. For equal materials
 Y* = Y / (2 (1 - nu^2)) and G* = Y / (4 (2 - nu)(1 + nu)). How kappa and zeta_t follow from the
-tangential restitution eps_t is in :mod:`dem.tangential`.
+tangential restitution eps_t is in :mod:`dem.physics.tangential`.
 
 Parameters reach the kernels as one float64 array ``params`` indexed by the ``P_*`` constants.
 """
@@ -160,7 +161,8 @@ def damping_beta(restitution: float) -> float:
 
     beta = -1 is critical damping of the linear spring-dashpot (the limit e -> 0 of the formula);
     the logarithm of 0 is never evaluated. -beta is the damping ratio zeta of the linear
-    spring-dashpot, e = exp(-zeta pi / sqrt(1 - zeta^2)); :mod:`dem.tangential` and the LIGGGHTS
+    spring-dashpot, e = exp(-zeta pi / sqrt(1 - zeta^2)); :mod:`dem.physics.tangential` and the
+    LIGGGHTS
     export (:func:`dem.io.liggghts.damping_ratio`) take it from here.
     """
     if not 0.0 <= restitution <= 1.0:
@@ -598,7 +600,7 @@ def contact_force(
 def wall_row(p):
     """The grain-wall law's parameters: the second row of ``p``, or ``p`` if it holds one law.
 
-    :class:`dem.laws.ContactLaw` packs the grain-grain row, then the grain-wall row.
+    :class:`dem.physics.laws.ContactLaw` packs the grain-grain row, then the grain-wall row.
     """
     if p.shape[0] >= 2 * N_PARAMS:
         return p[N_PARAMS : 2 * N_PARAMS]

@@ -16,7 +16,7 @@ One step n -> n + 1 (t_n = n dt), as in LAMMPS ``fix nve/sphere``:
 
 Arrays travel as named layouts (:mod:`dem.kernels.layout`): ``sph`` (SphereArrays), ``nb``
 (PairArrays), ``bod`` (BodyArrays) and ``geom`` (Geometry: length, width, skin, dt); fields are
-read by name, shapes in :mod:`dem.state`.
+read by name, shapes in :mod:`dem.engine.state`.
 """
 
 import math
@@ -133,11 +133,11 @@ def _ordered_sum(values):
 
 @numba.njit(**NUMBA_OPTIONS)
 def body_acceleration(t, gravity, drive):
-    """a_body = g - s''(t), the trough's motion s(t) of :class:`dem.drive.Motion`.
+    """a_body = g - s''(t), the trough's motion s(t) of :class:`dem.physics.drive.Motion`.
 
     drive = (omega, T_ramp, A_1 omega^2, psi_1, e_1 (3), A_2 omega^2, psi_2, e_2 (3)), all zeros
     with the drive off. Past the ramp (or without one) -s'' = sum_k A_k omega^2 sin(omega t +
-    psi_k) e_k; within it the smootherstep r(t) of :func:`dem.drive.ramp` scales it and adds
+    psi_k) e_k; within it the smootherstep r(t) of :func:`dem.physics.drive.ramp` scales it and adds
     its derivatives: sum_k A_k omega^2 e_k [(r - r''/omega^2) sin - (2 r'/omega) cos].
     """
     w = drive[0]
@@ -243,7 +243,7 @@ def advance(
         counters: int64 (2,): number of pairs, number of builds; updated.
         geom: Geometry (length, width, skin, dt).
         gravity: float64 (3,), m/s^2, trough frame.
-        drive: float64 (12,): :meth:`dem.drive.Motion.kernel_array` (zeros: drive off).
+        drive: float64 (12,): :meth:`dem.physics.drive.Motion.kernel_array` (zeros: drive off).
         out_stats: float64 (2,): += sum over steps of sum_i m_i v_x,i; += number of steps.
         serial: True on one thread: pair forces added to the spheres directly (same bits).
         mesh: The trough mesh (:class:`dem.kernels.layout.MeshArrays`), or None: flat walls.
@@ -277,7 +277,8 @@ def advance(
 
 # --- rigid clumps ---------------------------------------------------------------------------------
 # Bodies travel as ``bod = (X, V, q, L, inv_mass, mass, moments, force, torque, omega, start,
-# members, offsets, body_of)`` (shapes in :class:`dem.state.Bodies`). Member spheres carry the
+# members, offsets, body_of)`` (shapes in :class:`dem.engine.state.Bodies`). Member spheres carry
+# the
 # clump mass M in ``sph.mass`` (the contact law's effective mass, as LIGGGHTS multisphere); their
 # own kick and drift is replaced by the rigid-body update of :mod:`dem.kernels.rigid`.
 

@@ -1,7 +1,8 @@
 """Named array layouts the kernels take: no index number carries physics.
 
 Each layout is a :class:`typing.NamedTuple`, which numba compiles as a tuple whose fields are read
-by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.state` builds them from its dataclasses
+by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.engine.state` builds them from its
+dataclasses
 (``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap`` pair
 capacity.
 """
@@ -13,7 +14,7 @@ import numpy as np
 
 
 class SphereArrays(NamedTuple):
-    """Per-sphere state (:class:`dem.state.Spheres`)."""
+    """Per-sphere state (:class:`dem.engine.state.Spheres`)."""
 
     x: np.ndarray  # (n, 3) positions, m
     v: np.ndarray  # (n, 3) velocities, m/s
@@ -28,7 +29,7 @@ class SphereArrays(NamedTuple):
 
 
 class BodyArrays(NamedTuple):
-    """Rigid clumps and their members (:class:`dem.state.Bodies`)."""
+    """Rigid clumps and their members (:class:`dem.engine.state.Bodies`)."""
 
     x: np.ndarray  # (B, 3) centres of mass, m
     v: np.ndarray  # (B, 3) centre-of-mass velocities, m/s
@@ -66,7 +67,7 @@ class PairArrays(NamedTuple):
 
 
 class MeshArrays(NamedTuple):
-    """A trough mesh and its contact slots (:class:`dem.mesh.TriangleMesh`); None: flat walls."""
+    """A trough mesh and its contact slots (:class:`~dem.scene.mesh.TriangleMesh`); None: flat."""
 
     tri: np.ndarray  # (T, 3, 3) triangle corners, m
     grid: np.ndarray  # (5,) index origin (3), cell edge, period along x (0: none), m
@@ -78,7 +79,7 @@ class MeshArrays(NamedTuple):
 
 
 class Geometry(NamedTuple):
-    """The periodic section and the step (:class:`dem.simulation.Simulation`)."""
+    """The periodic section and the step (:class:`dem.engine.simulation.Simulation`)."""
 
     length: float  # period along x, m
     width: float  # distance between the side walls, m

@@ -148,7 +148,8 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
 
     ``mesh`` is a :class:`dem.kernels.layout.MeshArrays`; its slot rows ``MESH_SLOTS i + s``
     are sphere i's (module docstring), updated. The centre is taken in the section [0, length)
-    along x (``mesh.grid[4]``; the mesh is periodic there, :mod:`dem.mesh`). A sphere whose cell
+    along x (``mesh.grid[4]``; the mesh is periodic there, :mod:`dem.scene.mesh`). A sphere whose
+    cell
     lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
     not inlined: inlined into every step kernel it took two minutes to compile).
     """

@@ -2,7 +2,7 @@
 
 The paper's model (:mod:`dem.pointmass.model`) has the trough move along one line, so the
 accelerations along and normal to the floor are both a + b sin(omega t) and every phase change is
-a root of a closed form. With two components out of phase (:class:`dem.drive.Motion`) the
+a root of a closed form. With two components out of phase (:class:`dem.physics.drive.Motion`) the
 trough's motion along x and along z are sinusoids of different phase,
 
     s_x = |X| sin(omega t + arg X),   s_z = |Z| sin(omega t + arg Z),
@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from dem.config import GRAVITY
-from dem.drive import Motion
+from dem.physics.drive import Motion
 from dem.pointmass.stepped import step_motion
 from dem.pointmass.validate import check_friction, check_inclination, check_restitution
 

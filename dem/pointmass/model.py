@@ -14,7 +14,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from dem import config, drive
+from dem import config
+from dem.physics import drive
 from dem.pointmass import _kernel
 from dem.pointmass.validate import (
     check_angle,
@@ -89,25 +90,25 @@ class VelocityResult:
 
 
 # The drive relations in the point-mass argument order (Gamma or A, phi, alpha, f); the
-# physics is dem.drive's.
+# physics is dem.physics.drive's.
 
 
 def amplitude_from_throw_number(
     throw_number: float, angle: float, inclination: float, frequency: float
 ) -> float:
-    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m (:func:`dem.drive.amplitude`)."""
+    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m (:func:`dem.physics.drive.amplitude`)."""
     return drive.amplitude(throw_number, frequency, angle, inclination)
 
 
 def throw_number_from_amplitude(
     amplitude: float, angle: float, inclination: float, frequency: float
 ) -> float:
-    """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (Eq. 3; :func:`dem.drive.throw_number`)."""
+    """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (Eq. 3; ``drive.throw_number``)."""
     return drive.throw_number(amplitude, frequency, angle, inclination)
 
 
 def drive_velocity(throw_number, angle, inclination, frequency):
-    """A omega cos(phi), m/s, of a drive given by Gamma (:mod:`dem.drive`; arrays broadcast)."""
+    """A omega cos(phi), m/s, of a drive given by Gamma (:mod:`~dem.physics.drive`; broadcasts)."""
     return drive.drive_velocity_from_throw_number(throw_number, frequency, angle, inclination)
 
 

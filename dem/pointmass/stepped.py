@@ -2,7 +2,7 @@
 
 :mod:`dem.pointmass.model` integrates the paper's model event by event. Three questions need the
 motion step by step instead: the landings it makes (their incidence and speed, which
-:mod:`dem.calibrate` throws a DEM grain at), the variant whose landings never take more than
+:mod:`dem.studies.calibrate` throws a DEM grain at), the variant whose landings never take more than
 Coulomb allows (:mod:`dem.pointmass.bounded`) and a trough moving on an ellipse, whose along-
 and normal accelerations are out of phase (:mod:`dem.pointmass.elliptic`). All are one kernel,
 :func:`step_motion`.

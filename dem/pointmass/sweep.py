@@ -30,8 +30,9 @@ from typing import IO
 
 import numpy as np
 
-from dem import config, drive
+from dem import config
 from dem.errors import InputError
+from dem.physics import drive
 from dem.pointmass.model import REGIMES, velocities
 from dem.pointmass.validate import check_angle, check_positive, check_throw_number
 
@@ -191,7 +192,7 @@ class Optimum:
 
 
 def _drive(over, hold, x, fixed):
-    """Throw number, angle, amplitude and frequency along the scanned variable x (dem.drive)."""
+    """Throw number, angle, amplitude and frequency along the scanned variable x (physics.drive)."""
     alpha = fixed["inclination"]
     if over == "angle":
         phi = x

@@ -12,8 +12,8 @@ Runs go to scratch/ (ignored by git); a rerun reuses finished replicas (``--resu
     .venv/bin/python validation/bulk-convergence/run.py fills screw-trough       # 5 more fills
     .venv/bin/python validation/bulk-convergence/run.py figures
 
-Everything goes through the public API a user has: ``dem.case.load_case`` with overrides, and
-``dem.replicas.run_replicas`` (``dem run --replicas N``), whose pooled summaries are read back.
+Everything goes through the public API a user has: ``dem.scene.case.load_case`` with overrides, and
+``dem.run.replicas.run_replicas`` (``dem run --replicas N``), whose pooled summaries are read back.
 
 - coverage: a small sphere bed (cases/sphere-bed cut to 300 spheres in a 20 mm section, the
   same depth) run from 60 fills. Each run's own 95 % interval (1.96 times its autocorrelated
@@ -40,10 +40,11 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import measure, provenance
-from dem.case import load_case
-from dem.replicas import run_replicas
-from dem.timestep import timestep_for
+from dem import provenance
+from dem.physics import measure
+from dem.run.replicas import run_replicas
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -281,11 +282,12 @@ def spectrum(bed: str, moduli: list[float]) -> None:
     One fill per E (seed 1, dt as the stiffness sweep), settled, driven SPECTRUM_SETTLE cycles,
     then sampled SPECTRUM_SAMPLES times a period over SPECTRUM_CYCLES periods; the Fourier
     amplitude of z_com at harmonics 1-12 of the drive, beside the bed's lowest vertical mode
-    (:func:`dem.stiffness.bed_mode`) in drive harmonics. A bed mode near harmonic k amplifies
+    (:func:`dem.run.stiffness.bed_mode`) in drive harmonics. A bed mode near harmonic k amplifies
     harmonic k: where the velocity's band over E lines up with that, the band is the resonance.
     """
-    from dem import setup, stiffness
-    from dem.scene import resolve
+    from dem.engine import setup
+    from dem.run import stiffness
+    from dem.scene.resolved import resolve
 
     rows = []
     for youngs in moduli:
@@ -344,7 +346,7 @@ def inplane(bed: str, moduli: list[float], seeds: list[int]) -> None:
     mean over the cycles and fills of each E, with the bed's mean x-acceleration from contacts
     (the walls': grain-grain forces cancel): where in the cycle momentum is gained and lost.
     """
-    from dem import setup
+    from dem.engine import setup
     from dem.kernels.rigid import quat_to_matrix
 
     rows, phase_rows = [], []
@@ -490,7 +492,7 @@ MEAN_COMPLIANCE = 0.01
 #: A held-out point further than this many of its standard errors from the fit rejects the fit.
 HELD_OUT_Z = 3.0
 #: Points of the rigid-limit fit: where the bed's compliance (omega / omega_bed)^2 is below this
-#: (:func:`dem.stiffness.bed_mode`), the response is linear in it.
+#: (:func:`dem.run.stiffness.bed_mode`), the response is linear in it.
 FIT_COMPLIANCE = 0.025
 
 
@@ -498,12 +500,12 @@ def rigid_limit(rows: list[dict], bed: str) -> dict:
     """v(E) = v_inf + b E^(-2/3) by weighted least squares on the stiff points; held-out check.
 
     The exponent is the compliance's: (omega / omega_bed)^2 ~ 1 / S ~ E^(-2/3) (Hertz at a fixed
-    load, :mod:`dem.stiffness`), fitted where c < FIT_COMPLIANCE. Checked on a held-out point:
+    load, :mod:`dem.run.stiffness`), fitted where c < FIT_COMPLIANCE. Checked on a held-out point:
     fitted without the stiffest point, which it must predict. v_inf's error combines the fit's
     statistical error with half the spread of v_inf over the exponents 1/3 and 1 (the form).
     """
-    from dem import stiffness
-    from dem.scene import resolve
+    from dem.run import stiffness
+    from dem.scene.resolved import resolve
 
     e = np.array([float(r["youngs_modulus_pa"]) for r in rows])
     v = np.array([float(r["mean_velocity_m_s"]) for r in rows])
@@ -595,13 +597,13 @@ def refit() -> None:
 def rule() -> None:
     """The stiffness rule dem warns by: compliance (omega / omega_bed)^2 against the error.
 
-    Per bed and E: c from :func:`dem.stiffness.bed_mode`, the error v / v_inf - 1 against the
+    Per bed and E: c from :func:`dem.run.stiffness.bed_mode`, the error v / v_inf - 1 against the
     fitted rigid limit. The limit is the largest c below which no measured point of either bed
     misses its rigid limit by more than 2 % beyond two of its standard errors (a 3-fill point
     of the screws scatters by 1-2 %); written to dem/data/stiffness_convergence.json.
     """
-    from dem import stiffness
-    from dem.scene import resolve
+    from dem.run import stiffness
+    from dem.scene.resolved import resolve
 
     record = _read_record()
     rows, limits = [], {}

@@ -13,8 +13,8 @@ Regenerates the CSV files, provenance.json and figures of this folder (README.md
 Every run uses the library's defaults for the law (``[contact] tangential = "impact"``, no
 calibration, no per-drive setting): the grains are cases/single-sphere (r = 2 mm steel, rotation
 locked unless stated) and the screw of cases/screw-trough (2.5 g, 8 spheres, laid along the
-trough on head and tip, rotation locked), placed by dem.setup.from_grains and measured by
-dem.simulation.measure_cycles. The reference is the Coulomb-bounded point mass
+trough on head and tip, rotation locked), placed by dem.engine.setup.from_grains and measured by
+dem.engine.simulation.measure_cycles. The reference is the Coulomb-bounded point mass
 (``dem.pointmass.velocity(..., impact="coulomb")``), which equals the paper's model except at
 landings where Eq. 12 asks for more tangential impulse than friction gives.
 """
@@ -32,12 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import calibrate, pointmass, provenance, setup
-from dem.case import load_case
+from dem import pointmass, provenance
 from dem.config import GRAVITY
-from dem.fill import random_orientations
-from dem.measure import conveying_velocity
-from dem.simulation import measure_cycles
+from dem.engine import setup
+from dem.engine.simulation import measure_cycles
+from dem.physics.measure import conveying_velocity
+from dem.scene.case import load_case
+from dem.scene.fill import random_orientations
+from dem.studies import calibrate
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -317,7 +319,7 @@ def stick_bed_row(job):
     instability guard that stopped it; its velocity and the settled bed's jitter."""
     import tempfile
 
-    from dem.runner import run_case
+    from dem.run.runner import run_case
 
     name, rate, zeta = job
     _set_stick(rate, zeta)

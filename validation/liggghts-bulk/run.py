@@ -19,7 +19,8 @@ codes (LIGGGHTS refuses e <= 0.05; DESIGN.md section 8), the same explicit time 
 same number of settle and measured drive cycles. The vibration angle phi is swept at fixed
 amplitude, so Gamma = A omega^2 sin(phi) / g changes with phi.
 
-dem: dem.runner.run_case (no frames), per-cycle mass-weighted mean x-velocities from its summary.
+dem: dem.run.runner.run_case (no frames), per-cycle mass-weighted mean x-velocities from its
+summary.
 LIGGGHTS: the deck of dem.io.liggghts.write_deck with ``sample_steps = 1``, so vx_mean.txt holds
 the mean x-velocity of every step and is binned here into exactly the drive cycles dem uses
 (cycle c = driven steps round(c P / dt) + 1 ... round((c + 1) P / dt)). Equal sphere masses, so
@@ -45,7 +46,6 @@ from pathlib import Path
 import numpy as np
 
 from dem import __version__, pointmass, provenance
-from dem.case import load_case
 from dem.io.liggghts import (
     DECK_NAME,
     LIGGGHTS_INSTALL,
@@ -55,7 +55,8 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
-from dem.measure import conveying_velocity
+from dem.physics.measure import conveying_velocity
+from dem.scene.case import load_case
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -82,7 +83,7 @@ def make_case(base, angle: float, args):
 
 
 def cycle_edges(case, n_cycles: int) -> list[int]:
-    """Driven-step index ending each cycle, as dem.runner counts them: round(c P / dt)."""
+    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
     period = 1.0 / case.drive.frequency
     return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
 
@@ -179,9 +180,9 @@ def liggghts_point(case, args) -> dict:
 # --------------------------------------------------------------------------- dem
 def run_dem(case, args) -> dict:
     try:
-        from dem.runner import run_case
+        from dem.run.runner import run_case
     except ImportError as exc:
-        msg = f"dem.runner is not available ({exc}): dem half skipped"
+        msg = f"dem.run.runner is not available ({exc}): dem half skipped"
         print(msg)
         return {"skipped": msg}
     out = Path(args.scratch) / "dem" / tag(case.drive.angle)
@@ -197,7 +198,7 @@ def run_dem(case, args) -> dict:
     )
     return {
         "command": (
-            f"dem.runner.run_case(case, out, cycles={case.run.cycles}, threads={args.threads}, "
+            f"dem.run.runner.run_case(case, out, cycles={case.run.cycles}, threads={args.threads}, "
             "progress=False, overwrite=True, frames=False)"
         ),
         "mean_velocity": summary["mean_velocity"],

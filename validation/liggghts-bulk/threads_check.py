@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numba
 
-from dem import setup
-from dem.case import load_case
+from dem.engine import setup
+from dem.scene.case import load_case
 
 ROOT = Path(__file__).resolve().parents[2]
 

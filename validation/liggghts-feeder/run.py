@@ -6,7 +6,7 @@ Regenerates results.json, discharge.png and decks/<run>/ here (the runs of the R
     nice -n 10 .venv/bin/python validation/liggghts-feeder/run.py --seed 2
     .venv/bin/python validation/liggghts-feeder/run.py --report-only       # pooled + figure
 
-Cases (``--cases``), each ``dem.case.load_case(case, overrides=...)``:
+Cases (``--cases``), each ``dem.scene.case.load_case(case, overrides=...)``:
 
 - ``flat``: cases/feeder (a 0.15 m flat feeder, 2.5 g screws fed at 0.05 kg/s, 50 screws to
   start, Gamma 1.8, 150 start-up + 180 measured cycles);
@@ -16,10 +16,10 @@ Both codes use LIGGGHTS's conventions (``contact.tangential = "liggghts"``, Mind
 ``restitution_normal = 0.06``), the case's time step 8e-6 s and seed. LIGGGHTS runs the deck of
 ``dem.io.liggghts.write_deck`` unchanged (one rank); its ``balance.txt`` gives the grains in the
 box, fed and discharged (``read_balance``), binned into dem's drive cycles
-(``discharge_per_cycle``). dem runs ``dem.runner.run_case`` (one thread) and reports the same
+(``discharge_per_cycle``). dem runs ``dem.run.runner.run_case`` (one thread) and reports the same
 per-cycle discharge and end-of-cycle hold-up (results.h5 /cycles). Per code: the steady
 discharge rate and the hold-up (mean over the measured cycles, correlated standard errors of
-``dem.measure.correlated_stderr``), the grains fed, and the measured wall time.
+``dem.physics.measure.correlated_stderr``), the grains fed, and the measured wall time.
 
 What is compared: in the steady state both codes discharge what they are fed, so the discharge
 rate checks the bookkeeping; the hold-up (kg in the trough at a given feed) is set by the
@@ -38,9 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import __version__, measure, provenance
-from dem.case import load_case
-from dem.feeder import grain_mass
+from dem import __version__, provenance
+from dem.engine.feeder import grain_mass
 from dem.io.liggghts import (
     BALANCE_FILE,
     DECK_NAME,
@@ -53,6 +52,8 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
+from dem.physics import measure
+from dem.scene.case import load_case
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -168,7 +169,7 @@ def liggghts_velocity(work: Path, case) -> tuple[float, float]:
 
 def run_dem(name: str, case, args) -> dict:
     from dem.io.hdf5 import read_results
-    from dem.runner import run_case
+    from dem.run.runner import run_case
 
     out = Path(args.scratch) / "dem" / name
     t0 = time.perf_counter()
@@ -188,7 +189,7 @@ def run_dem(name: str, case, args) -> dict:
     )
     return {
         "command": (
-            f"dem.runner.run_case(case, {out.relative_to(ROOT)}, cycles={c}, threads=1, "
+            f"dem.run.runner.run_case(case, {out.relative_to(ROOT)}, cycles={c}, threads=1, "
             "progress=False, overwrite=True, frames=False)"
         ),
         "discharge_rate": rate,
@@ -311,16 +312,16 @@ def main(argv=None) -> int:
         "--feed-at-trough-rest",
         action="store_true",
         help="dem feeds grains at rest in the trough's frame, as the LIGGGHTS deck does "
-        "(dem.feeder.FEED_AT_LAB_REST = False); stored as <case>-trough-rest, dem only",
+        "(dem.engine.feeder.FEED_AT_LAB_REST = False); stored as <case>-trough-rest, dem only",
     )
     args = ap.parse_args(argv)
     path = HERE / "results.json"
     results = json.loads(path.read_text()) if path.exists() else {"cases": {}}
     if not args.report_only:
         if args.feed_at_trough_rest:
-            import dem.feeder
+            import dem.engine.feeder
 
-            dem.feeder.FEED_AT_LAB_REST = False
+            dem.engine.feeder.FEED_AT_LAB_REST = False
             args.skip_liggghts = True
         for kind in args.cases:
             name = kind if args.seed == 1 else f"{kind}-seed{args.seed}"

@@ -9,7 +9,7 @@ runs of the README: see its Provenance):
         --mesh-curvature 5 --skip-dem     # LIGGGHTS with 'curvature 5 curvature_tolerant yes'
     .venv/bin/python validation/liggghts-mesh/run.py --report-only   # pooled seeds + figure
 
-Cases (``--cases``), each built by ``dem.case.load_case(case, overrides=...)``:
+Cases (``--cases``), each built by ``dem.scene.case.load_case(case, overrides=...)``:
 
 - ``spheres``: the U pan of cases/u-trough (a half cylinder of radius 30 mm with 20 mm walls,
   100 triangles) with 2400 spheres of r = 2 mm instead of the screws: the mesh contact alone;
@@ -28,10 +28,10 @@ The method is that of validation/liggghts-bulk/run.py:
 - LIGGGHTS: ``dem.io.liggghts.write_deck(case, decks/<case>, timestep=dt, steps=..,
   settle_steps=.., sample_steps=1)``, run on one rank in a copy under scratch/ with one line
   added, ``write_dump all custom final.atoms id type x y z radius``, so that the final member
-  spheres can be checked against the mesh (dem.mesh's closest-point kernels): all inside the
+  spheres can be checked against the mesh (dem.scene.mesh's closest-point kernels): all inside the
   pan and not through it. vx_mean.txt (the mean x-velocity of every step: of the spheres, or of
   the screws' centres of mass) is binned into exactly the drive cycles dem uses.
-- dem: ``dem.runner.run_case(case, scratch/dem/<case>, cycles=20, threads=1, progress=False,
+- dem: ``dem.run.runner.run_case(case, scratch/dem/<case>, cycles=20, threads=1, progress=False,
   overwrite=True, frames=False)``; per-cycle mass-weighted mean x-velocities from its summary.
 - both: v = mean of the per-cycle means, se = std(ddof=1) / sqrt(cycles); dem - LIGGGHTS in %
   of LIGGGHTS and in combined standard errors sqrt(se_dem^2 + se_L^2).
@@ -53,7 +53,6 @@ from pathlib import Path
 import numpy as np
 
 from dem import __version__, provenance
-from dem.case import load_case
 from dem.io.liggghts import (
     DECK_NAME,
     LIGGGHTS_INSTALL,
@@ -64,7 +63,8 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
-from dem.mesh import extrude, load_mesh
+from dem.scene.case import load_case
+from dem.scene.mesh import extrude, load_mesh
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -138,7 +138,7 @@ def make_case(name: str, args):
 
 
 def cycle_edges(case, n_cycles: int) -> list[int]:
-    """Driven-step index ending each cycle, as dem.runner counts them: round(c P / dt)."""
+    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
     period = 1.0 / case.drive.frequency
     return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
 
@@ -253,7 +253,7 @@ def run_liggghts_case(name: str, case, args) -> dict:
 
 # --------------------------------------------------------------------------- dem
 def run_dem(name: str, case, args) -> dict:
-    from dem.runner import run_case
+    from dem.run.runner import run_case
 
     out = Path(args.scratch) / "dem" / name
     t0 = time.perf_counter()
@@ -267,7 +267,7 @@ def run_dem(name: str, case, args) -> dict:
     )
     return {
         "command": (
-            f"dem.runner.run_case(case, {out.relative_to(ROOT)}, cycles={case.run.cycles}, "
+            f"dem.run.runner.run_case(case, {out.relative_to(ROOT)}, cycles={case.run.cycles}, "
             "threads=1, progress=False, overwrite=True, frames=False)"
         ),
         "mean_velocity": summary["mean_velocity"],

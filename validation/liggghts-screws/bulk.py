@@ -15,12 +15,13 @@ import time
 import numpy as np
 from study import AS_MEASURED, CASE, DECKS, SCRATCH, fresh_copy, rel, write_results
 
-from dem import drive, provenance
-from dem.case import load_case
+from dem import provenance
 from dem.io.liggghts import DECK_NAME, VX_FILE, run_liggghts, write_deck
-from dem.measure import conveying_velocity
-from dem.runner import run_case
-from dem.timestep import timestep_for
+from dem.physics import drive
+from dem.physics.measure import conveying_velocity
+from dem.run.runner import run_case
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 BULK_RESTITUTION = 0.06  # both codes; LIGGGHTS refuses e <= 0.05
 BULK_SETTLE_CYCLES = 5

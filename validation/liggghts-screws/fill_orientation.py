@@ -39,9 +39,10 @@ from bulk import bulk_cases, bulk_liggghts
 from lever_arm import deck_youngs_modulus
 from study import HERE, RESULTS, SCRATCH, rel, write_results
 
-from dem import provenance, setup
+from dem import provenance
+from dem.engine import setup
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
-from dem.measure import correlated_stderr
+from dem.physics.measure import correlated_stderr
 
 TAG = "seed1_dt2x"
 MEASURED = 60  # cycles after part A's 5 settle cycles

@@ -34,7 +34,8 @@ from impact_setup import (
 from replica import replica_sphere
 from study import CASE, DECKS, SCRATCH, fresh_copy, rel, write_results
 
-from dem import provenance, setup
+from dem import provenance
+from dem.engine import setup
 from dem.io.liggghts import DECK_NAME, run_liggghts
 from dem.kernels.rigid import quat_to_matrix
 
@@ -82,7 +83,8 @@ def impact_dem(
     sphere. ``shift`` (body frame, m) moves every member of the template by the same vector,
     leaving mass and moments as they are: LIGGGHTS's body, whose members sit off the centre of
     mass by the error of its Monte Carlo centre of mass. The body is placed by
-    ``dem.setup.from_grains`` at LIGGGHTS's position, orientation and velocity; its spin is set
+    ``dem.engine.setup.from_grains`` at LIGGGHTS's position, orientation and velocity; its spin is
+    set
     after (a clump's through its angular momentum L = R diag(I) R^T omega).
     """
     t0, x, v, w, q = start[0], start[1:4], start[4:7], start[7:10], start[10:14]

@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 from study import AS_MEASURED, CASE, fmt
 
-from dem import __version__, shapes
-from dem.case import load_case
+from dem import __version__
 from dem.io.liggghts import DECK_NAME
+from dem.scene import shapes
+from dem.scene.case import load_case
 
 IMPACT_RESTITUTION = 0.5
 IMPACT_SECTION = 0.06  # m, length (periodic) and width of the section
@@ -107,7 +108,7 @@ def impact_deck(body: str, case, dt: float, deck_dir: Path) -> Path:
         i1, i2, i3 = (fmt(v) for v in grain.moments)
         grain_lines = [
             "# grain.multisphere: members x y z r (m), body frame (centre of mass at the origin,",
-            "# principal axes); mass and principal moments exact from dem.shapes",
+            "# principal axes); mass and principal moments exact from dem.scene.shapes",
             f"fix pts all particletemplate/multisphere 15485863 atom_type 1 density constant "
             f"{fmt(grain.density)} nspheres {grain.count} ntry 1000000 spheres file "
             f"grain.multisphere scale 1.0 type 1 mass {fmt(grain.mass)} inertia_tensor {i1} 0.0 "

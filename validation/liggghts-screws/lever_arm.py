@@ -28,7 +28,7 @@ from bulk import bulk_cases
 from study import DECKS, RESULTS, SCRATCH, rel, write_results
 
 from dem import provenance
-from dem.runner import run_case
+from dem.run.runner import run_case
 
 ARMS = ("surface", "midpoint")
 TAGS = ("seed1_dt2x", "seed2_dt2x", "seed3_dt2x")

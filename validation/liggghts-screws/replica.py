@@ -10,7 +10,7 @@ import numpy as np
 from impact_setup import SPHERE_MASS, SPHERE_RADIUS
 
 from dem.kernels import contacts
-from dem.timestep import ContactLaw
+from dem.scene.timestep import ContactLaw
 
 
 def replica_sphere(start: np.ndarray, times: np.ndarray, case, dt: float, lever: str):

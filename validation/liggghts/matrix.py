@@ -13,7 +13,7 @@ Each point runs, one simulation at a time (dem on one numba thread, LIGGGHTS on 
 1. **LIGGGHTS**: the deck ``dem.io.liggghts.write_deck`` exports for the point with
    LIGGGHTS's conventions (``with_tangential("liggghts")``, eps_n = 0.06 since LIGGGHTS refuses
    e <= 0.05), the mean x-velocity of every step binned into dem's drive cycles;
-2. **dem, LIGGGHTS's conventions**: the same case through ``dem.runner.run_case``;
+2. **dem, LIGGGHTS's conventions**: the same case through ``dem.run.runner.run_case``;
 3. **dem, defaults**: the shipped case's own conventions (eps_n = 0, the calibrated tangential
    law for eps_t = 0.8), at the same drive, step and cycles;
 4. **dem, LIGGGHTS's tangential law with eps_n = 0** (deep fills only): splits the difference
@@ -23,7 +23,7 @@ Each point runs, one simulation at a time (dem on one numba thread, LIGGGHTS on 
 Both codes use the same time step: the case's step (screws: run.timestep = 8e-6 s; spheres: the
 automatic step), but never above half of dem's stability limit for the point. Both run
 SETTLE_CYCLES driven cycles unmeasured and CYCLES measured. The error of a mean velocity is
-``dem.measure.correlated_stderr`` of the per-cycle means (Sokal's integrated autocorrelation
+``dem.physics.measure.correlated_stderr`` of the per-cycle means (Sokal's integrated autocorrelation
 time), since a screw bed's per-cycle means are correlated over tens of cycles
 (validation/liggghts-screws, part D).
 
@@ -51,7 +51,6 @@ from pathlib import Path
 import numpy as np
 
 from dem import pointmass, provenance
-from dem.case import load_case
 from dem.io.liggghts import (
     DECK_NAME,
     LIGGGHTS_INSTALL,
@@ -60,9 +59,10 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
-from dem.measure import correlated_stderr, drive_velocity_scale
-from dem.runner import run_case
-from dem.timestep import timestep_for
+from dem.physics.measure import correlated_stderr, drive_velocity_scale
+from dem.run.runner import run_case
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -174,7 +174,7 @@ def statistics(per_cycle) -> dict:
 
 
 def cycle_edges(case) -> list[int]:
-    """Driven-step index ending each cycle, as dem.runner counts them: round(c P / dt)."""
+    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
     period, dt = 1.0 / case.drive.frequency, case.run.timestep
     return [int(round(c * period / dt)) for c in range(SETTLE_CYCLES + CYCLES + 1)]
 

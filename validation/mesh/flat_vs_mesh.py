@@ -4,9 +4,10 @@
 
 cases/screw-trough (200 screws, Gamma 1.8, phi 25 deg) runs as shipped (the kernel's flat floor
 and side walls) and with ``trough.mesh`` a box of the same floor and walls (60 mm tall) cut into
-triangles (``dem.mesh.extrude``, 8 segments along x, so grains cross triangle edges and vertices
-all the time), one run per seed on one thread, twice: filled by the mesh fill
-(``dem.fill.fill_mesh``, what a mesh case gets) and from the very fill the flat case gets (same
+triangles (``dem.scene.mesh.extrude``, 8 segments along x, so grains cross triangle edges and
+vertices all the time), one run per seed on one thread, twice: filled by the mesh fill
+(``dem.scene.fill.fill_mesh``, what a mesh case gets) and from the very fill the flat case gets
+(same
 seed, same grains: only the walls differ). The means over the seeds are compared with their
 combined standard error (fill-to-fill scatter included). The shipped U and V troughs
 (cases/u-trough, cases/v-trough, 150 screws) run once each beside them for the record.
@@ -31,10 +32,11 @@ from dataclasses import replace  # noqa: E402
 import meshio  # noqa: E402
 import numpy as np  # noqa: E402
 
-from dem import fill, provenance  # noqa: E402
-from dem.case import load_case  # noqa: E402
-from dem.mesh import extrude  # noqa: E402
-from dem.runner import run_case  # noqa: E402
+from dem import provenance  # noqa: E402
+from dem.run.runner import run_case  # noqa: E402
+from dem.scene import fill  # noqa: E402
+from dem.scene.case import load_case  # noqa: E402
+from dem.scene.mesh import extrude  # noqa: E402
 
 
 def box_mesh(path: Path, length: float, width: float, wall: float) -> Path:

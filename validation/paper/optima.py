@@ -3,15 +3,15 @@
 What is held fixed while the angle changes decides where the optimum lies (DESIGN.md section 4):
 the throw number Gamma, the amplitude A, or the peak trough acceleration A omega^2 = K g; a
 fourth reading holds Gamma and measures v / (A omega) = v_norm cos(phi). The drive at the
-paper's 60 Hz comes from :mod:`dem.drive`.
+paper's 60 Hz comes from :mod:`dem.physics.drive`.
 """
 
 import math
 
 import numpy as np
 
-from dem import drive
 from dem.config import GRAVITY
+from dem.physics import drive
 from dem.pointmass import REGIMES, velocities
 from dem.pointmass.sweep import optimum
 

@@ -1,6 +1,6 @@
 """A small real DEM run written as a ParaView time series, for render.py to draw.
 
-Runs the engine (dem.simulation.Simulation) on cases/sphere-bed with fewer spheres: fill,
+Runs the engine (dem.engine.simulation.Simulation) on cases/sphere-bed with fewer spheres: fill,
 settle with the drive off, then a few driven cycles; frames are written with
 dem.io.vtk.VTKSeriesWriter (trough frame): the settled bed as frame 0, then
 ``--frames-per-cycle`` frames per drive cycle.
@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import setup
-from dem.case import load_case
+from dem.engine import setup
+from dem.engine.simulation import Simulation
 from dem.io.vtk import VTKSeriesWriter
-from dem.simulation import Simulation
+from dem.scene.case import load_case
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

@@ -9,7 +9,7 @@ the rate comes from LIGGGHTS's own "Loop time of T on P procs for S steps with N
 last run, so neither start-up nor the fill is timed. Skipped with a message if ``liggghts`` is not
 on PATH.
 
-dem half: ``dem.runner.run_case`` on the same case with the same time step, 1 and 2 threads,
+dem half: ``dem.run.runner.run_case`` on the same case with the same time step, 1 and 2 threads,
 each in its own process (numba's thread count is fixed per process); the rate is the
 ``particle_steps_per_s`` of its summary.json. Skipped with a message if the engine is missing.
 
@@ -38,7 +38,6 @@ import time
 from pathlib import Path
 
 from dem import __version__, provenance
-from dem.case import load_case
 from dem.io.liggghts import (
     DECK_NAME,
     LIGGGHTS_INSTALL,
@@ -47,6 +46,7 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
+from dem.scene.case import load_case
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -145,8 +145,8 @@ def liggghts_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict | 
 
 DEM_CHILD = """
 import dataclasses
-from dem.case import load_case
-from dem.runner import run_case
+from dem.scene.case import load_case
+from dem.run.runner import run_case
 case = load_case({case!r}).with_tangential("liggghts")
 run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r})
 case = dataclasses.replace(case, run=run)
@@ -156,7 +156,8 @@ run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
 
 
 def dem_once(args, threads: int) -> dict:
-    """One dem.runner.run_case in its own process (numba's thread count is fixed per process)."""
+    """One dem.run.runner.run_case in its own process (numba's thread count is fixed per
+    process)."""
     out = HERE / "scratch" / "dem" / f"threads{threads}"
     code = DEM_CHILD.format(
         case=str(Path(args.case).resolve()),

@@ -1,7 +1,8 @@
 """Speed and compile time of two checkouts of dem, interleaved: did a change cost anything?
 
 Each trial runs one small job in a fresh process for each checkout, alternating which goes
-first: the job builds a case (``dem.setup.from_case`` or, for old checkouts, the classmethod),
+first: the job builds a case (``dem.engine.setup.from_case`` or, for old checkouts, the
+classmethod),
 settles it for a few hundred steps, switches the drive on and times ``--steps`` steps after a
 warm-up. Per process it reports
 
@@ -38,14 +39,14 @@ from dem import provenance
 JOB = r"""
 import json, os, sys, time
 import numba
-from dem.case import load_case
+from dem.scene.case import load_case
 case = load_case(sys.argv[1])
 steps = int(sys.argv[2])
 import dem
 if os.path.exists(os.path.join(dem.__path__[0], "setup.py")):
-    from dem.setup import from_case
-else:  # before dem.setup (an editable install would supply the new module to an old tree)
-    from dem.simulation import Simulation
+    from dem.engine.setup import from_case
+else:  # before dem.engine.setup (an editable install would supply the new module to an old tree)
+    from dem.engine.simulation import Simulation
     from_case = Simulation.from_case
 print("dem from", dem.__path__[0], file=sys.stderr)
 sim = from_case(case)

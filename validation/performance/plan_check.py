@@ -32,8 +32,8 @@ DEM = str(Path(sys.executable).with_name("dem"))
 
 WARM = """
 import sys
-from dem.case import load_case
-from dem.runner import _compile_first
+from dem.scene.case import load_case
+from dem.run.runner import _compile_first
 _compile_first(load_case(sys.argv[1]), progress=False)
 """
 

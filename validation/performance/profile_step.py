@@ -36,7 +36,7 @@ import json, sys, time
 import numba
 import numpy as np
 from pathlib import Path
-from dem.case import load_case
+from dem.scene.case import load_case
 from dem import setup
 from dem.io import checkpoint
 from dem.kernels import integrate as I

@@ -95,7 +95,7 @@ JOB = r"""
 import hashlib, json, sys
 import numba
 import numpy as np
-from dem.case import load_case
+from dem.scene.case import load_case
 from dem import setup
 numba.set_num_threads(1)
 name, folder, overrides, steps = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), int(sys.argv[4])

@@ -29,7 +29,7 @@ THREADS = (1, 2)
 JOB = r"""
 import json, resource, sys, time
 import numpy as np
-from dem.case import load_case
+from dem.scene.case import load_case
 from dem import setup
 n = int(sys.argv[1])
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -13,7 +13,7 @@ timed steps. Configurations:
   runner's thread guard does when two threads fall behind;
 - ``2 threads, PASSIVE``: OMP_WAIT_POLICY=PASSIVE (waiting threads sleep at once);
 - ``2 threads, SPINCOUNT 1e4``: GOMP_SPINCOUNT=10000 (spin briefly, then sleep);
-- ``2 threads + guard``: what ``dem run`` does, :class:`dem.threads.ThreadGuard`.
+- ``2 threads + guard``: what ``dem run`` does, :class:`dem.engine.threads.ThreadGuard`.
 
 Each is measured with the machine otherwise idle and beside one busy process (a Python loop),
 the configurations interleaved and repeated; the 1-minute load average is recorded beside each.
@@ -43,10 +43,10 @@ CONFIGS = {
 WORKER = """
 import sys, time, numba
 from pathlib import Path
-from dem.case import load_case
+from dem.scene.case import load_case
 from dem import setup
 from dem.io import checkpoint
-from dem.threads import ThreadGuard
+from dem.engine.threads import ThreadGuard
 threads, steps = sys.argv[1], int(sys.argv[2])
 sim = setup.from_case(load_case(sys.argv[3]))
 checkpoint.load_state(sim, checkpoint.read(Path(sys.argv[4]))[0])
@@ -63,9 +63,9 @@ print(sim.spheres.n * steps / (time.perf_counter() - t0))
 
 def prepare(case: str, path: Path) -> None:
     """A settled bed driven for two cycles, written as a checkpoint."""
-    from dem import setup
-    from dem.case import load_case
+    from dem.engine import setup
     from dem.io import checkpoint
+    from dem.scene.case import load_case
 
     sim = setup.from_case(load_case(case))
     sim.settle()

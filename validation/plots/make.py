@@ -8,7 +8,8 @@
   normalised, the point mass dashed.
 - ``comparison.png``: ``dem report`` of three of its points (mu = 0.3).
 - ``velocity_per_cycle.png``: ``dem report`` of one point (phi = 25 deg, mu = 0.3).
-- ``optimum_screw_trough.png``: ``dem optimum``'s figure redrawn (:func:`dem.optimum.replot`)
+- ``optimum_screw_trough.png``: ``dem optimum``'s figure redrawn
+(:func:`dem.studies.optimum.replot`)
   from the recorded search of validation/optimum/screw-trough/optimum.json: the plateau band,
   the runs, the point mass of the same drive.
 
@@ -18,9 +19,9 @@ Scratch output goes to validation/plots/scratch (git-ignored).
 import shutil
 from pathlib import Path
 
-from dem.optimum import replot
-from dem.report import make_report
-from dem.sweep import run_sweep
+from dem.studies.optimum import replot
+from dem.studies.report import make_report
+from dem.studies.sweep import run_sweep
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

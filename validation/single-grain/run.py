@@ -10,7 +10,8 @@ Regenerates the CSV files and figures of this folder (README.md says what each s
 
 Base case: cases/single-sphere as shipped (r = 2 mm, rho = 7800, linear k_n = 4e6 N/m,
 eps_n = 0, eps_t = 0.8, tangential = "coulomb" with k_t / k_n from eps_t, rotation locked).
-The block is placed at rest on the floor (dem.setup.from_grains) and measured over whole drive
+The block is placed at rest on the floor (dem.engine.setup.from_grains) and measured over whole
+drive
 cycles (measure_cycles): the public library, no private copy of the run loop.
 """
 
@@ -24,12 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import calibrate, pointmass, provenance, setup
-from dem.case import load_case
+from dem import pointmass, provenance
 from dem.config import GRAVITY
-from dem.measure import conveying_velocity
+from dem.engine import setup
+from dem.engine.simulation import measure_cycles
+from dem.physics.measure import conveying_velocity
 from dem.pointmass.bounded import coulomb_bounded_velocity
-from dem.simulation import measure_cycles
+from dem.scene.case import load_case
+from dem.studies import calibrate
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

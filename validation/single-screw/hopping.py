@@ -8,7 +8,7 @@ Regenerates hopping_fig6.csv, hopping_fig7.csv and hopping.png in this folder:
 
 One screw of cases/screw-trough (2.5 g, 8 spheres) lies along +x on head and tip
 (run.lying_pose), linear contact k_n = 4e7 N/m per member, eps_n = 0, eps_t = 0.8, Coulomb-exact
-tangential law. At every point k_t / k_n is fitted by dem.calibrate.calibrate to the point
+tangential law. At every point k_t / k_n is fitted by dem.studies.calibrate.calibrate to the point
 mass's landings at that drive, thrown in the lying pose (both contacts land together, as they
 do in the run). Then
 
@@ -17,7 +17,8 @@ do in the run). Then
   tip first (information: how far a real screw departs from the point mass).
 
 Each run: settle with the drive off, switch the drive on at phase 0, discard 40 cycles, measure
-20 (dem.simulation.measure_cycles; mean and standard error by dem.measure.conveying_velocity).
+20 (dem.engine.simulation.measure_cycles; mean and standard error by
+dem.physics.measure.conveying_velocity).
 The dotted curve is the point mass whose landings never take more than Coulomb allows
 (dem.pointmass.bounded).
 """
@@ -34,11 +35,13 @@ from pathlib import Path
 import numpy as np
 import run as screw  # this folder's sliding study: the case, the pose, the time step
 
-from dem import calibrate, measure, pointmass, provenance
-from dem.case import load_case
+from dem import pointmass, provenance
+from dem.engine.simulation import measure_cycles
 from dem.kernels.rigid import quat_to_matrix
+from dem.physics import measure
 from dem.pointmass.bounded import coulomb_bounded_velocity
-from dem.simulation import measure_cycles
+from dem.scene.case import load_case
+from dem.studies import calibrate
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

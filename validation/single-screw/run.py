@@ -13,20 +13,22 @@ and eps_t do not enter it; a locked block that slides on both contacts feels
 sum_i mu N_i = mu N, so its centre of mass must follow the point mass. Swept over phi in
 {15, 25, 45} deg, mu in {0.25, 0.35, 0.6} and Gamma in [0.2, 0.95], flat trough, 60 Hz, linear
 contact k_n = 4e7 N/m per member. ``--tangential``: "coulomb" (default; eps_n = 0 as the paper,
-k_t / k_n derived from eps_t = 0.8, dem.tangential) or "liggghts" (k_t = 2/7 k_n, eps_n = 0.5:
+k_t / k_n derived from eps_t = 0.8, dem.physics.tangential) or "liggghts" (k_t = 2/7 k_n, eps_n =
+0.5:
 the law and contact the recorded results.csv were made with; README.md says why).
 
 Each point is run again with rotation free from the same lying start (column
 dem_velocity_norm_free_rotation; not part of the criterion, which is the locked block's).
 
-Time step: the engine's own rule (dem.timestep.timestep_limits: 1/50 of the linear collision
+Time step: the engine's own rule (dem.scene.timestep.timestep_limits: 1/50 of the linear collision
 time, within the stability limit) applied to the effective mass a floor contact of the lying
 screw actually has: M with rotation locked, 1 / max_n (1/M + (p x n) . I^-1 (p x n)) with it free.
-dem.setup.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
-locked, dem.shapes.Template.contact_mass (0.37 g) free (README.md: the bound of the recording).
+dem.engine.setup.from_grains' automatic step (``--timestep auto``) bounds that mass for any pose: M
+locked, dem.scene.shapes.Template.contact_mass (0.37 g) free (README.md: the bound of the
+recording).
 
-The screw is placed by dem.setup.from_grains and measured cycle by cycle by
-dem.simulation.measure_cycles. Settling: after ``--min-settle-cycles`` driven cycles the run
+The screw is placed by dem.engine.setup.from_grains and measured cycle by cycle by
+dem.engine.simulation.measure_cycles. Settling: after ``--min-settle-cycles`` driven cycles the run
 measures as soon as one cycle's mean velocity differs from the previous one by less than
 ``--periodic-tol`` (normalised), at most after ``--max-settle-cycles``; then ``--cycles`` cycles.
 """
@@ -41,12 +43,14 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import measure, pointmass, setup
-from dem.case import load_case
+from dem import pointmass
+from dem.engine import setup
+from dem.engine.simulation import measure_cycles
 from dem.kernels.rigid import quat_to_matrix
-from dem.simulation import measure_cycles
-from dem.timestep import ContactLaw, timestep_limits
-from dem.trough import Trough
+from dem.physics import measure
+from dem.scene.case import load_case
+from dem.scene.timestep import ContactLaw, timestep_limits
+from dem.scene.trough import Trough
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -129,7 +133,7 @@ def floor_contact_mass(template, q, rotation):
 
 
 def lying_simulation(case, timestep="contact"):
-    """One screw laid by lying_pose at mid length, y = 0, at rest (dem.setup.from_grains).
+    """One screw laid by lying_pose at mid length, y = 0, at rest (dem.engine.setup.from_grains).
 
     ``"auto"``: from_grains' automatic step. ``"contact"``: the same rule (timestep_limits) at
     the floor contact's actual effective mass (floor_contact_mass), shortened to a whole number
@@ -155,11 +159,11 @@ def lying_simulation(case, timestep="contact"):
 def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
     """Settle with the drive off, switch it on at phase 0, wait for periodicity, measure.
 
-    Each cycle is one call of dem.simulation.measure_cycles (whole drive cycles from phase 0,
+    Each cycle is one call of dem.engine.simulation.measure_cycles (whole drive cycles from phase 0,
     as ``dem run`` measures; the first call switches the drive on). Driven cycles are discarded
     until at least ``min_settle`` have run and the last one changed by less than ``tol``
     A omega cos phi (or ``max_settle`` have run); the next ``cycles`` are measured
-    (dem.measure.conveying_velocity: mean and standard error of the per-cycle means).
+    (dem.physics.measure.conveying_velocity: mean and standard error of the per-cycle means).
 
     Returns:
         (VelocityStatistics, settling cycles, largest tilt of the screw axis from its start

@@ -14,7 +14,7 @@ k_t / k_n = 2/7. The LIGGGHTS law with Hertz takes Mindlin's k_t, as a LIGGGHTS 
 
 from study import BASE_TIMESTEP_FRACTION, CASES, FILL_SEEDS, Point, default_points, load, main
 
-from dem import plan
+from dem.run import plan
 
 
 def linear_stiffness(case_name: str) -> float:

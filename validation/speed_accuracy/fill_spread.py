@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 from study import HERE, Point, load
 
-from dem import measure, provenance
+from dem import provenance
+from dem.physics import measure
 
 SEEDS = (1, 2, 3, 4)
 CYCLES = 200
@@ -30,7 +31,7 @@ BLOCK = 20
 
 
 def run(seed: int) -> list[float]:
-    from dem import runner
+    from dem.run import runner
 
     point = Point("fill_spread", "screw-trough", "long", "long", timestep_fraction=1.0, seed=seed)
     case = load(point)

@@ -34,7 +34,7 @@ from study import (
 )
 
 from dem import pointmass
-from dem.case import load_case
+from dem.scene.case import load_case
 
 POINTS = [
     p

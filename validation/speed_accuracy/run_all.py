@@ -38,7 +38,8 @@ from study import (
     reference as reference_of,
 )
 
-from dem import plan, provenance
+from dem import provenance
+from dem.run import plan
 
 STUDIES = (reference, timestep, contact_model, skin, section, resolution)
 

@@ -1,8 +1,9 @@
 """What every speed-accuracy study shares: a run point, a cache of finished runs, the reference.
 
 A point is one ``dem run`` of a shipped case (``cases/sphere-bed`` or ``cases/screw-trough``)
-with some keys overridden (:func:`dem.case.load_case` ``overrides``), through the same runner a
-user calls (:func:`dem.runner.run_case`: fill, settle, "auto" settle cycles, 20 measured
+with some keys overridden (:func:`dem.scene.case.load_case` ``overrides``), through the same runner
+a
+user calls (:func:`dem.run.runner.run_case`: fill, settle, "auto" settle cycles, 20 measured
 cycles), without frames, on one thread. Two points run at a time (one per core), so every wall
 time is a one-thread time beside one other busy process, the same for every point.
 
@@ -74,7 +75,7 @@ class Point:
         case: Shipped case name.
         label: Short text for plots and tables.
         x: The value the study varies (for its chart).
-        overrides: ``{"table.key": value}`` for :func:`dem.case.load_case`.
+        overrides: ``{"table.key": value}`` for :func:`dem.scene.case.load_case`.
         timestep_fraction: dt as a fraction of the case's stability limit (None: the case's).
         skin_fraction: Neighbour skin over the largest radius (None: ``DEM_SKIN_FRACTION``).
         seed: ``run.seed``.
@@ -117,8 +118,8 @@ def rigid_limit(case: str) -> dict:
 
 def load(point: Point):
     """The case of a point (its overrides and time step applied, checked as a file would be)."""
-    from dem.case import load_case
-    from dem.timestep import timestep_for
+    from dem.scene.case import load_case
+    from dem.scene.timestep import timestep_for
 
     overrides = BASE | point.overrides
     overrides["run.seed"] = point.seed
@@ -134,8 +135,9 @@ def load(point: Point):
 
 def run_point(point: Point) -> dict:
     """Run one point on one thread and return its row (also the cache record)."""
-    from dem import config, runner
+    from dem import config
     from dem.errors import SimulationError
+    from dem.run import runner
 
     default_skin = config.DEM_SKIN_FRACTION
     if point.skin_fraction is not None:

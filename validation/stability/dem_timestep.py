@@ -7,13 +7,13 @@ Regenerates dem_timestep.csv and dem_timestep.png in this folder:
 
 Small beds of the shipped grains (60 spheres of cases/sphere-bed in a 30 x 20 mm section; 20
 screws of cases/screw-trough in 60 x 40 mm), each run with dt = f x the stability limit that
-``run.timestep`` is checked against (dem.timestep.timestep_for: 0.3 of the critical step
+``run.timestep`` is checked against (dem.scene.timestep.timestep_for: 0.3 of the critical step
 2 / omega_0 of the stiffest single contact), f from 0.1 to 10, built with
 ``check_limit=False`` so that steps beyond the limit run at all. Configurations: spheres under
 Hertz-Mindlin with the Coulomb and the LIGGGHTS tangential law, spheres under the linear law
 (k_n = 2e4 N/m, about the Hertz tangent stiffness of these impacts), screws with rotation free
 and locked. Each run fills, settles with the drive off, drives 4 cycles unmeasured and measures
-16 (dem.simulation.measure_cycles). Outcome:
+16 (dem.engine.simulation.measure_cycles). Outcome:
 
 - unstable: the engine's guard stopped the run (dem.errors.SimulationError; its message is kept);
 - inaccurate: it ran, but v / (A omega cos phi) differs from the f = 0.1 run by more than 0.02
@@ -38,11 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import measure, provenance, setup
-from dem.case import load_case
+from dem import provenance
+from dem.engine import setup
+from dem.engine.simulation import measure_cycles
 from dem.errors import SimulationError
-from dem.simulation import measure_cycles
-from dem.timestep import timestep_for
+from dem.physics import measure
+from dem.scene.case import load_case
+from dem.scene.timestep import timestep_for
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

@@ -54,7 +54,7 @@ class BedMode:
 
 
 def bed_mode(scene, youngs_modulus: float | None = None, stiffness: float | None = None) -> BedMode:
-    """The :class:`BedMode` of a :class:`dem.scene.Scene` (another E or k_n if given)."""
+    """The :class:`BedMode` of a :class:`dem.scene.resolved.Scene` (another E or k_n if given)."""
     case = scene.case
     c, pt = case.contact, case.particles
     mass, radius = scene.grain_mass, scene.max_radius
@@ -98,11 +98,11 @@ def stiffness_for(scene, compliance: float) -> tuple[str, float]:
 
 
 def advice(scene):
-    """A "warn" :class:`dem.plan.Advice` where the bed is too compliant by the study, or None.
+    """A "warn" :class:`dem.run.plan.Advice` where the bed is too compliant by the study, or None.
 
     One grain (no bed) gets none: validation/impact-law covers it.
     """
-    from dem.plan import Advice, _up
+    from dem.run.plan import Advice, _up
 
     data = study()
     if data is None or scene.case.particles.count < 2:
@@ -133,7 +133,7 @@ def assessment(scene) -> dict | None:
     data = study()
     if data is None or scene.case.particles.count < 2:
         return None
-    from dem.plan import _up
+    from dem.run.plan import _up
 
     limit = data["compliance_limit"]
     mode = bed_mode(scene)

@@ -41,8 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from dem import config, stiffness
-from dem.scene import resolve
+from dem import config
+from dem.run import stiffness
+from dem.scene.resolved import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
 TOLERANCE = 0.02
@@ -286,8 +287,9 @@ MEMORY_SAMPLE_GRAINS = 2000
 def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
     """Bytes of the state a run allocates: spheres, clumps and the pair list (at its start).
 
-    ``case``: a :class:`dem.scene.Scene`, or a case resolved here. Several threads add the
-    parallel pair loop's inbox (:meth:`dem.state.PairList.ensure_inbox`). Measured by allocating
+    ``case``: a :class:`dem.scene.resolved.Scene`, or a case resolved here. Several threads add the
+    parallel pair loop's inbox (:meth:`dem.engine.state.PairList.ensure_inbox`). Measured by
+    allocating
     the arrays (zeros: no page is touched) up to 2 :data:`MEMORY_SAMPLE_GRAINS` grains, and
     extrapolated linearly beyond.
     """
@@ -303,7 +305,7 @@ def memory_bytes(case, spheres: int, grains: int, threads: int = 1) -> int:
 
 def _allocated_bytes(scene, spheres: int, grains: int, threads: int) -> int:
     """The bytes of the state's arrays, allocated for ``grains`` grains of ``spheres``."""
-    from dem.state import Bodies, PairList, Spheres
+    from dem.engine.state import Bodies, PairList, Spheres
 
     case = scene.case
     width = scene.law.history_width
@@ -334,7 +336,7 @@ def _allocated_bytes(scene, spheres: int, grains: int, threads: int) -> int:
 
 def settle_steps(case, dt: float) -> int:
     """Steps of the drive-off settle: twice the fall time from the top of the fill box."""
-    from dem import fill
+    from dem.scene import fill
 
     fall = math.sqrt(2.0 * fill.box_height(case) / config.GRAVITY)
     return int(min(2.0 * fall, config.DEM_SETTLE_MAX_TIME) / dt)
@@ -369,7 +371,7 @@ def _scale(rate_used: float, used: int, threads: int) -> float:
 def grain_mass_radius(case) -> tuple[float, float]:
     """A grain's mass, kg, and its largest sphere radius, m (the grain-floor impact's).
 
-    ``case``: a :class:`dem.scene.Scene`, or a case resolved here.
+    ``case``: a :class:`dem.scene.resolved.Scene`, or a case resolved here.
     """
     scene = resolve(case)
     return scene.grain_mass, scene.max_radius
@@ -379,7 +381,7 @@ def linear_equivalent_stiffness(case) -> float:
     """The linear k_n, N/m, whose contact lasts as long as the case's Hertz impact.
 
     The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2. ``case``: a
-    :class:`dem.scene.Scene`, or a case resolved here.
+    :class:`dem.scene.resolved.Scene`, or a case resolved here.
     """
     from dem.kernels import contacts
 
@@ -397,7 +399,7 @@ def equivalent_youngs_modulus(case) -> float:
     """The study's stiffness axis: the case's Young's modulus, Pa.
 
     For the linear law: the modulus whose Hertz grain-floor impact at A omega lasts as long as
-    the linear contact, pi sqrt(m / k_n). ``case``: a :class:`dem.scene.Scene`, or a case
+    the linear contact, pi sqrt(m / k_n). ``case``: a :class:`dem.scene.resolved.Scene`, or a case
     resolved here.
     """
     scene = resolve(case)
@@ -491,7 +493,7 @@ def unmeasured(case, data: dict, kind: str) -> list[str]:
 def plan(
     case, *, threads: int | None = None, cycles: int | None = None, frames: bool = True
 ) -> Plan:
-    """The plan of a :class:`dem.scene.Scene`, or of a :class:`dem.case.Case` resolved here.
+    """The plan of a :class:`~dem.scene.resolved.Scene`, or of a case resolved here.
 
     No fill, no dynamics. ``frames``: the run writes its VTK and HDF5 frames (``dem run
     --no-frames`` does not).
@@ -821,8 +823,8 @@ def suggest(
     import os
     import shutil
 
-    from dem.case import CASE_FILE, load_case, set_case_keys
     from dem.errors import InputError
+    from dem.scene.case import CASE_FILE, load_case, set_case_keys
 
     case_dir = Path(case_dir).expanduser().resolve()
     source = case_dir / CASE_FILE if case_dir.is_dir() else case_dir

@@ -27,9 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from dem import drive, laws, tangential
 from dem.errors import InputError
-from dem.tomltable import Table, suggest
+from dem.physics import drive, laws, tangential
+from dem.scene.tomltable import Table, suggest
 
 #: File name of a case inside its directory.
 CASE_FILE = "case.toml"
@@ -50,7 +50,7 @@ WALL_LEVER_ARMS = ("surface", "midpoint")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
-#: Screw resolution when ``particles.max_bumpiness`` is omitted (:func:`dem.shapes.screw`).
+#: Screw resolution when ``particles.max_bumpiness`` is omitted (:func:`dem.scene.shapes.screw`).
 DEFAULT_MAX_BUMPINESS = 0.25
 
 
@@ -77,9 +77,10 @@ class DriveSpec:
     """The trough's drive: the paper's straight line, optionally a second component and a ramp.
 
     s(t) = r(t) [A sin(omega t) (cos phi, 0, sin phi) + A_2 sin(omega t + psi_2) (cos phi_2, 0,
-    sin phi_2)] (:class:`dem.drive.Motion`): the first component is the paper's drive, a second
+    sin phi_2)] (:class:`dem.physics.drive.Motion`): the first component is the paper's drive, a
+    second
     one out of phase with it makes the drive elliptical, and r(t) rises smoothly from 0 to 1 over
-    ``ramp_cycles`` cycles (:func:`dem.drive.ramp`).
+    ``ramp_cycles`` cycles (:func:`dem.physics.drive.ramp`).
 
     Attributes:
         frequency: f, Hz.
@@ -107,12 +108,12 @@ class DriveSpec:
 
     @property
     def omega(self) -> float:
-        """Angular frequency omega = 2 pi f, rad/s (:func:`dem.drive.omega`)."""
+        """Angular frequency omega = 2 pi f, rad/s (:func:`dem.physics.drive.omega`)."""
         return drive.omega(self.frequency)
 
     @property
     def motion(self) -> drive.Motion:
-        """The trough's motion s(t) (:class:`dem.drive.Motion`)."""
+        """The trough's motion s(t) (:class:`dem.physics.drive.Motion`)."""
         components = [drive.Component(self.amplitude, math.radians(self.angle))]
         if self.second_amplitude > 0.0:
             components.append(
@@ -134,7 +135,7 @@ class DriveSpec:
         """The normalising velocity, m/s: A omega cos(phi) for the paper's drive, else |X| omega.
 
         |X| omega is the peak trough speed along the trough
-        (:attr:`dem.drive.Motion.velocity_scale`).
+        (:attr:`dem.physics.drive.Motion.velocity_scale`).
         """
         if self.second_amplitude == 0.0:
             return drive.drive_velocity_from_omega(self.amplitude, self.omega, self.angle)
@@ -150,7 +151,7 @@ class DriveSpec:
     def effective_throw_number(self, inclination: float) -> float:
         """Peak normal trough acceleration over g cos(alpha) (``throw_number`` for a line drive).
 
-        ``inclination`` alpha in degrees (:meth:`dem.drive.Motion.throw_number`).
+        ``inclination`` alpha in degrees (:meth:`dem.physics.drive.Motion.throw_number`).
         """
         if self.second_amplitude == 0.0:
             return self.throw_number
@@ -169,7 +170,7 @@ class MaterialSpec:
         restitution_normal: eps_n in [0, 1]; 0 maps to critical damping.
         restitution_tangential: eps_t in [0, 1], the paper's Eq. (12): sets the point-mass
             prediction, the calibration target and, with ``contact.tangential = "coulomb"`` and no
-            ``tangential_stiffness_ratio``, the tangential spring (:mod:`dem.tangential`).
+            ``tangential_stiffness_ratio``, the tangential spring (:mod:`dem.physics.tangential`).
         rolling_friction: Rolling resistance coefficient mu_r >= 0 (0: none).
 
     """
@@ -226,7 +227,7 @@ class ContactSpec:
         stiffness: Normal spring constant k_n, N/m (linear), else None.
         tangential_stiffness_ratio: kappa = k_t / k_n (Hertz-Mindlin with "coulomb": k_t over
             the tangent normal stiffness S_n). None: derived from eps_t ("coulomb",
-            :mod:`dem.tangential`), 2/7 (linear, "liggghts"); Hertz-Mindlin with "liggghts"
+            :mod:`dem.physics.tangential`), 2/7 (linear, "liggghts"); Hertz-Mindlin with "liggghts"
             takes k_t from G and refuses the key.
         limit_force: True keeps the normal force repulsive (LIGGGHTS ``limitForce on``).
         tangential: ``"impact"`` (eps_t delivered by each impact, capped by Coulomb, then a
@@ -269,9 +270,9 @@ class ParticlesSpec:
         template: Absolute path of a clump template, lines ``x y z r`` in metres (clump).
         max_bumpiness: Screw resolution (screw): the deepest valley between neighbouring shank
             spheres as a fraction of the shank radius, 0 < b <= 1; a smaller b takes more
-            spheres per screw (:func:`dem.shapes.screw`). Default 0.25: 8 spheres for the
+            spheres per screw (:func:`dem.scene.shapes.screw`). Default 0.25: 8 spheres for the
             shipped screw.
-        grain: The :class:`dem.shapes.Template` built at load (screw, clump), else None; not
+        grain: The :class:`dem.scene.shapes.Template` built at load (screw, clump), else None; not
             part of :meth:`Case.as_dict`.
 
     """
@@ -296,12 +297,13 @@ class RunSpec:
     Attributes:
         settle_cycles: Drive cycles run before measuring (after the fill has come to rest);
             None ("auto" in the file): until the transient of the per-cycle velocity has ended
-            (:func:`dem.measure.steady`), at most ``DEM_AUTO_SETTLE_MAX_CYCLES``.
+            (:func:`dem.physics.measure.steady`), at most ``DEM_AUTO_SETTLE_MAX_CYCLES``.
         cycles: Drive cycles measured.
         timestep: dt, s, or None for automatic (from the stiffest contact).
         seed: Seed of the random generator (insertion positions).
         replicas: Independent fills run and pooled (seeds ``seed``, ``seed + 1``, ...;
-            :func:`dem.measure.pooled`); 1: one run, whose error bar excludes the fill-to-fill
+            :func:`dem.physics.measure.pooled`); 1: one run, whose error bar excludes the
+            fill-to-fill
             spread.
 
     """
@@ -327,7 +329,7 @@ class OutputSpec:
 
 @dataclass(frozen=True)
 class FeederSpec:
-    """A finite feeder (:mod:`dem.feeder`): back wall at x = 0, discharge edge at x = length.
+    """A finite feeder (:mod:`dem.engine.feeder`): back wall at x = 0, discharge edge at x = length.
 
     Attributes:
         feed_rate: Mass fed at the back per second, kg/s (0: the initial charge is emptied).
@@ -518,7 +520,7 @@ def _read_mesh(t: Table) -> Path | None:
         raise t.error(
             "mesh", t.data["mesh"], "no mesh troughs yet: a flat floor and side walls (remove it)"
         )
-    from dem.mesh import load_mesh
+    from dem.scene.mesh import load_mesh
 
     length, width = t.quantity("length"), t.quantity("width")
     try:
@@ -602,7 +604,7 @@ def resolve_drive(
 ) -> DriveSpec:
     """The drive from exactly one of amplitude (m) and throw_number; the other is computed.
 
-    Gamma = A omega^2 sin(phi) / (g cos(alpha)) (:mod:`dem.drive`), phi = ``angle`` and
+    Gamma = A omega^2 sin(phi) / (g cos(alpha)) (:mod:`dem.physics.drive`), phi = ``angle`` and
     alpha = ``inclination`` in degrees. Values are not range-checked here (``load_case`` checks
     a file's values first).
     """
@@ -801,7 +803,7 @@ def _material_density(material: MaterialSpec, particles: ParticlesSpec, t: Table
 
 def _build_grain(particles: ParticlesSpec, density: float | None, t: Table) -> ParticlesSpec:
     """Attach the grain template of a screw or clump (mass if given, else the density)."""
-    from dem import shapes
+    from dem.scene import shapes
 
     if particles.shape == "sphere":
         return particles
@@ -952,12 +954,12 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
 
     The periodic section must hold a grain and its skin twice over (the minimum image must be
     unique) and more than twice a clump's reach; a given ``run.timestep`` must lie within the
-    stability limit of the contact (:func:`dem.timestep.timestep_for`, no fill needed); and
+    stability limit of the contact (:func:`dem.scene.timestep.timestep_for`, no fill needed); and
     ``output.frames_per_cycle`` must not exceed the time steps per cycle.
     """
     from dem import config
-    from dem.timestep import timestep_for
-    from dem.trough import check_section_length
+    from dem.scene.timestep import timestep_for
+    from dem.scene.trough import check_section_length
 
     pt, length = case.particles, case.trough.length
     r_max = pt.radius if pt.shape == "sphere" else None

@@ -5,10 +5,10 @@ tangential``), a damping law that follows from eps_n, and rolling resistance (``
 rolling_friction``), as LAMMPS's ``pair granular`` composes its sub-models. Each row of
 :data:`NORMAL_LAWS` and :data:`TANGENTIAL_LAWS` says everything the rest of dem asks of a law:
 
-- the case keys it reads (the keys of another law are refused at load, :mod:`dem.case`);
+- the case keys it reads (the keys of another law are refused at load, :mod:`dem.scene.case`);
 - its parameter builder (the keyword arguments of :func:`dem.kernels.contacts.make_params`);
 - the floats of contact history it needs (the contact's width is the sum over its sub-models);
-- the stiffness the time step must resolve (:func:`dem.timestep.timestep_limits`);
+- the stiffness the time step must resolve (:func:`dem.scene.timestep.timestep_limits`);
 - its LIGGGHTS mapping: the deck's law, or the nearest one with the note the deck carries;
 - whether ``dem calibrate`` applies, and what it fits.
 
@@ -24,8 +24,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dem import tangential as tangential_fit
 from dem.kernels import contacts
+from dem.physics import tangential as tangential_fit
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ NORMAL_LAWS = {
 
 
 def _coulomb_coefficients(case) -> dict:
-    """kappa, zeta_t and f_t from eps_t and the grain (:func:`dem.tangential.resolve`)."""
+    """kappa, zeta_t and f_t from eps_t and the grain (:func:`dem.physics.tangential.resolve`)."""
     ratio, zeta_t, factor = tangential_fit.resolve(case.contact, case.material, case.particles)
     return {
         "tangential_stiffness_ratio": ratio or 0.0,
@@ -256,16 +256,16 @@ class ContactLaw:
 
     @classmethod
     def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.case.Case`: grain-grain, then grain-wall (``[wall]``).
+        """Law of a :class:`dem.scene.case.Case`: grain-grain, then grain-wall (``[wall]``).
 
         ``params`` holds two rows of :data:`dem.kernels.contacts.N_PARAMS` floats: the
         grain-grain law (the material) and the grain-wall law (the material with ``[wall]``'s
-        friction and restitutions, :attr:`dem.case.Case.wall_material`); the pair kernels read
+        friction and restitutions, :attr:`dem.scene.case.Case.wall_material`); the pair kernels read
         the first, the wall kernels the second (:func:`wall_params`). The tangential law's row
         (:data:`TANGENTIAL_LAWS`) decides its coefficients: with ``"coulomb"`` the tangential
         mass factor follows the grain (a rolling sphere 2/7, rotation locked 1, a clump its
         contact mass over its mass) and an omitted ``tangential_stiffness_ratio`` is derived
-        from eps_t (:mod:`dem.tangential`), each row from its own eps_t.
+        from eps_t (:mod:`dem.physics.tangential`), each row from its own eps_t.
         """
         wall_case = case if case.wall is None else replace(case, material=case.wall_material)
         rows = [_params(case), _params(wall_case)]

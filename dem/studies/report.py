@@ -5,7 +5,7 @@
 
 - ``velocity_per_cycle.png``: the mass-weighted mean x-velocity of every cycle (settling cycles
   grey), the running mean over the measured cycles and its +-1 standard-error band
-  (std(ddof=1) / sqrt(k) of the first k measured cycles, as :mod:`dem.measure`);
+  (std(ddof=1) / sqrt(k) of the first k measured cycles, as :mod:`dem.physics.measure`);
 - ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error beside
   the point-mass prediction for the same drive and material;
 - ``bed_snapshot.png``: the last frame of ``results.h5``, side view x-z and top view x-y,
@@ -30,8 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from dem import measure, plots
 from dem.errors import InputError
+from dem.physics import measure
+from dem.studies import plots
 
 SUMMARY = "summary.json"
 RESULTS = "results.h5"
@@ -63,7 +64,8 @@ COMPARISON_COLUMNS = (
 def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Running mean and its standard error over the first k values, k = 1..C.
 
-    :func:`dem.measure.running_mean_and_stderr`, so the last point is the run's summary value.
+    :func:`dem.physics.measure.running_mean_and_stderr`, so the last point is the run's summary
+    value.
 
     Args:
         values: (C,) samples (per-cycle means, m/s).
@@ -386,7 +388,7 @@ def feeder_lines(f: dict | None) -> list[str]:
     """
     if not f:
         return []
-    from dem.measure import with_error
+    from dem.physics.measure import with_error
 
     return [
         f"discharge          {with_error(f.get('discharge_rate'), f.get('discharge_rate_stderr'))}"

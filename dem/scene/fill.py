@@ -4,7 +4,7 @@ A fill draws each grain's centre (and, for clumps, a uniform random orientation)
 over the trough floor and keeps it if it overlaps nothing placed before (periodic in x); after
 ``DEM_FILL_TRIES`` failed tries the box is made 25 % taller. The box's starting height is a
 function of the case alone (:func:`box_height`), which is what the automatic time step
-(:mod:`dem.timestep`) takes its impact speed from: the time step never depends on the draw.
+(:mod:`dem.scene.timestep`) takes its impact speed from: the time step never depends on the draw.
 
 Cost: O(N). Grains placed so far are kept in a grid of cells at least one interaction range
 wide (a sphere diameter; a clump's bounding diameter), so a try tests only the grains of the 27
@@ -24,7 +24,7 @@ import numpy as np
 from dem.config import DEM_FILL_HEIGHT_FACTOR, DEM_FILL_TRIES
 from dem.errors import InputError
 from dem.kernels.rigid import quat_to_matrix
-from dem.trough import Trough
+from dem.scene.trough import Trough
 
 
 def sphere_box_height(n: int, radius: float, length: float, width: float) -> float:
@@ -38,7 +38,7 @@ def sphere_box_height(n: int, radius: float, length: float, width: float) -> flo
 
 
 def clump_box_height(n: int, template, length: float, width: float) -> float:
-    """Starting fill-box height for n clumps of a :class:`dem.shapes.Template`, m.
+    """Starting fill-box height for n clumps of a :class:`dem.scene.shapes.Template`, m.
 
     ``DEM_FILL_HEIGHT_FACTOR`` times the height of a loose bed (packing fraction 0.3) plus the
     bounding diameter.
@@ -48,7 +48,7 @@ def clump_box_height(n: int, template, length: float, width: float) -> float:
 
 
 def box_height(case) -> float:
-    """Starting fill-box height of a :class:`dem.case.Case`'s grains, m (no fill is drawn)."""
+    """Starting fill-box height of a :class:`dem.scene.case.Case`'s grains, m (no fill is drawn)."""
     pt, t = case.particles, case.trough
     if pt.shape == "sphere":
         return sphere_box_height(pt.count, pt.radius, t.length, t.width)
@@ -102,7 +102,7 @@ def fill_mesh(
     O(N T) for T triangles (every triangle is within reach of the index for this test).
     Centres are drawn in ``start`` <= x < ``start + span`` (default the whole section).
     """
-    from dem.mesh import load_mesh
+    from dem.scene.mesh import load_mesh
 
     pt, t = case.particles, case.trough
     sphere = pt.shape == "sphere"
@@ -337,7 +337,7 @@ def random_fill_clumps(
 
     Args:
         n: Number of clumps.
-        template: A :class:`dem.shapes.Template`.
+        template: A :class:`dem.scene.shapes.Template`.
         length, width: Trough section, m.
         rng: Random generator (seeded by the caller).
         height: Initial box height, m; default ``DEM_FILL_HEIGHT_FACTOR`` times the height of a

@@ -1,10 +1,10 @@
 """The time step of a case, from the case alone: contact time scales and stability limits.
 
-:class:`dem.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
+:class:`dem.physics.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
 :func:`timestep_limits` gives the automatic step and the stability limit for one contact, and
 :func:`timestep_for` applies them to a case: every member radius of its grain, sphere-sphere
 and sphere-wall contacts, and the hardest impact the case can produce, taken from the drive and
-a fall from the top of the fill box (:func:`dem.fill.box_height`). Nothing is filled or
+a fall from the top of the fill box (:func:`dem.scene.fill.box_height`). Nothing is filled or
 simulated, so ``dem export liggghts``, the validation scripts and ``dem run`` agree on dt before
 any grain is placed.
 """
@@ -16,10 +16,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dem import config, fill
+from dem import config
 from dem.errors import InputError
 from dem.kernels import contacts
-from dem.laws import ContactLaw, wall_params
+from dem.physics.laws import ContactLaw, wall_params
+from dem.scene import fill
 
 __all__ = ["ContactLaw", "Timestep", "impact_speed_for", "timestep_for", "timestep_limits"]
 
@@ -115,7 +116,7 @@ def impact_speed_for(case, height: float | None = None, fastest: float = 0.0) ->
     """The hardest impact speed a case's grains meet, m/s.
 
     Peak trough speed A omega, plus the fastest grain's own speed, plus a free fall from
-    ``height`` (default the top of the fill box, :func:`dem.fill.box_height`).
+    ``height`` (default the top of the fill box, :func:`dem.scene.fill.box_height`).
     """
     d = case.drive
     if height is None:
@@ -133,7 +134,7 @@ def timestep_for(
     check_limit: bool = True,
     law: ContactLaw | None = None,
 ) -> Timestep:
-    """The time step of a :class:`dem.case.Case`, without placing a grain.
+    """The time step of a :class:`dem.scene.case.Case`, without placing a grain.
 
     Args:
         case: The case (contact, material, grain, drive, run).
@@ -143,11 +144,11 @@ def timestep_for(
             ``particles.count``.
         check_limit: False lets a given step exceed the stability limit: for stability studies
             (validation/stability), whose runs the instability guard must then stop.
-        law: The case's contact law when it is already built (:func:`dem.scene.resolve`);
+        law: The case's contact law when it is already built (:func:`dem.scene.resolved.resolve`);
             default :meth:`ContactLaw.from_case`.
 
     The step of a clump takes the smallest effective mass a point of its surface has for a force
-    in any direction (:meth:`dem.shapes.Template.contact_mass`; the clump mass M with rotation
+    in any direction (:meth:`dem.scene.shapes.Template.contact_mass`; the clump mass M with rotation
     locked), for every member radius. A given step above the stability limit raises InputError
     naming ``run.timestep``; an automatic step is shortened so that a drive period holds a whole
     number of steps.

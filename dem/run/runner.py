@@ -3,9 +3,9 @@
 What one run does, in order:
 
 1. refuse an output folder that holds an earlier run (unless ``overwrite`` or ``resume``);
-2. fill and settle (:class:`dem.simulation.Simulation`), then switch the drive on at phase 0;
+2. fill and settle (:class:`dem.engine.simulation.Simulation`), then switch the drive on at phase 0;
 3. for each cycle (``settle_cycles`` unmeasured, or with "auto" until the per-cycle velocity's
-   transient has ended, :func:`dem.measure.steady`; then ``cycles`` measured), in
+   transient has ended, :func:`dem.physics.measure.steady`; then ``cycles`` measured), in
    ``frames_per_cycle`` chunks: advance, write a VTK frame and a results.h5 frame; at the end of
    the cycle append its statistics to results.h5;
 4. every ``DEM_CHECKPOINT_EVERY`` cycles, and when SIGINT or SIGTERM arrives (checked between
@@ -41,17 +41,20 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from dem import config, measure, plan, setup, stiffness
+from dem import config
+from dem.engine import setup
+from dem.engine.simulation import Simulation
+from dem.engine.threads import ThreadGuard, starting_threads
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import ResultsWriter, package_versions
 from dem.io.tables import CYCLES_CSV, sidecar_path, write_cycles_csv
 from dem.io.vtk import FRAMES_DIR, PVD_NAME, TROUGH_FILE, VTKSeriesWriter
+from dem.physics import measure
 from dem.provenance import record
-from dem.scene import resolve
-from dem.simulation import Simulation
-from dem.threads import ThreadGuard, starting_threads
+from dem.run import plan, stiffness
+from dem.scene.resolved import resolve
 
 CHECKPOINT = "checkpoint.npz"
 SUMMARY = "summary.json"
@@ -373,7 +376,8 @@ def _ignore_file_size_signal():
 def run_case(case, out_dir: Path, **kwargs) -> dict:
     """Run ``case`` into ``out_dir`` holding the folder's lock; see :func:`_run_case`.
 
-    ``case`` is a :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here once for
+    ``case`` is a :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` resolved
+    here once for
     the plan, the checks and the run.
     """
     out_dir = Path(out_dir)
@@ -418,7 +422,7 @@ def _run_case(
     """Run ``case`` into ``out_dir``; returns the summary (also written to summary.json).
 
     Args:
-        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here.
+        case: A :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` resolved here.
         out_dir: Output folder: summary.json, results.h5, particles.pvd + frames/.
         cycles: Measured cycles (default ``case.run.cycles``).
         threads: numba threads (default all cores or NUMBA_NUM_THREADS).
@@ -684,7 +688,7 @@ def _compile_first(case, progress: bool) -> None:
 
     if kernels.compiled(clumps=case.particles.shape != "sphere", mesh=case.trough.mesh is not None):
         return
-    from dem.progress import Status
+    from dem.run.progress import Status
 
     kind = "clump" if case.particles.shape != "sphere" else "sphere"
     kind += " mesh-trough" if case.trough.mesh is not None else ""
@@ -873,7 +877,8 @@ def _end_cycle(sim: Simulation, case, results: ResultsWriter, loop: dict) -> Non
     """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums.
 
     With ``run.settle_cycles = "auto"`` a settling cycle also tests the settling velocities so
-    far for the end of the transient (:func:`dem.measure.steady`); the first cycle after it is
+    far for the end of the transient (:func:`dem.physics.measure.steady`); the first cycle after it
+    is
     measured. At ``DEM_AUTO_SETTLE_MAX_CYCLES`` the run measures anyway and says so.
     """
     velocity = sim.cycle_velocity()

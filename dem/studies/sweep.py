@@ -2,7 +2,8 @@
 
 ``dem sweep CASE_DIR --set drive.angle=10:60:5 --set material.friction=0.25,0.35`` runs the
 Cartesian product of the ``--set`` values. Each point is the case with those keys overridden
-(:func:`dem.case.load_case` ``overrides``: checked as if written in the file, all of them before
+(:func:`dem.scene.case.load_case` ``overrides``: checked as if written in the file, all of them
+before
 anything runs) and runs ``dem run`` into its own folder under ``--out``. Points run as tasks on
 Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thread workers, one per
 core, by default; a running ``dask scheduler`` when ``--scheduler ADDRESS`` is given (the point
@@ -12,7 +13,7 @@ A grid of more than :data:`MAX_POINTS` points is refused before a case is loaded
 is a whole ``dem run``. A rerun skips the points whose folder holds a summary.json and resumes
 the ones that hold a checkpoint. A finished point is reused only when its case and run options
 are this sweep's: each finished point's folder holds ``sweep_point.json``, the resolved case
-(:func:`dem.runner._fingerprint`, as a checkpoint records it) with the measured cycles and the
+(:func:`dem.run.runner._fingerprint`, as a checkpoint records it) with the measured cycles and the
 frames setting; a finished point without it, or of another case or other options, is refused
 before anything runs, naming the point and each key that differs, and left as it is. A point
 that fails (bad physics the guard stops, a lost worker) is reported with its error and leaves
@@ -143,7 +144,7 @@ def _fmt(value) -> str:
 def plan_points(case_dir: Path, sets: list[tuple[str, list]], out: Path, *,
                 cycles: int | None = None, frames: bool = False) -> list[SweepPoint]:  # fmt: skip
     """The points, each checked by loading its case (an error names the point and the key)."""
-    from dem.case import load_case
+    from dem.scene.case import load_case
 
     points = []
     for i, overrides in enumerate(grid(sets)):
@@ -163,7 +164,7 @@ def record(case, cycles: int | None, frames: bool) -> dict:
     The resolved case as a checkpoint records it (every key but the name and the folder), the
     measured cycles and whether frames were written.
     """
-    from dem.runner import _fingerprint
+    from dem.run.runner import _fingerprint
 
     measured = case.run.cycles if cycles is None else int(cycles)
     return _fingerprint(case) | {"cycles": measured, "frames": bool(frames)}
@@ -173,12 +174,12 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
     """Refuse to reuse a finished point that this sweep would not have made.
 
     Each finished point's :data:`RECORD` must equal its planned record and its summary.json
-    must read (:func:`dem.report.read_summary`); otherwise an :class:`InputError` names the
+    must read (:func:`dem.studies.report.read_summary`); otherwise an :class:`InputError` names the
     point and each key that differs (or what is missing). Nothing is changed: the finished
     point stays for the user to keep or move away.
     """
-    from dem.report import read_summary
-    from dem.runner import SUMMARY, _changes
+    from dem.run.runner import SUMMARY, _changes
+    from dem.studies.report import read_summary
 
     differ: list[tuple[SweepPoint, str]] = []
     for p in points:
@@ -211,7 +212,7 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
 
 def status(point: SweepPoint) -> str:
     """Whether a point is "done" (summary.json), "interrupted" (a checkpoint) or "new"."""
-    from dem.runner import CHECKPOINT, SUMMARY
+    from dem.run.runner import CHECKPOINT, SUMMARY
 
     if (point.folder / SUMMARY).is_file():
         return "done"
@@ -227,10 +228,10 @@ def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
     The point's :data:`RECORD` is removed before the run and written after it finished, so a
     summary.json beside a record is always the record's.
     """
-    from dem.case import load_case
     from dem.io.files import replace_text
-    from dem.plan import PlanWarning
-    from dem.runner import run_case
+    from dem.run.plan import PlanWarning
+    from dem.run.runner import run_case
+    from dem.scene.case import load_case
 
     case = load_case(case_dir, overrides)
     point = SweepPoint(0, overrides, Path(folder))
@@ -333,8 +334,8 @@ def dask_client(scheduler: str | None, workers: int, command: str):
 
 def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
     """The plan's warnings for one point, once (``dem run`` would give them for every point)."""
-    from dem import plan
-    from dem.case import load_case
+    from dem.run import plan
+    from dem.scene.case import load_case
 
     estimate = plan.plan(load_case(case_dir, point.overrides), threads=threads, cycles=cycles)
     for a in estimate.warnings():
@@ -344,8 +345,8 @@ def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
 
 def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     """One row per point: its overrides, its summary's values, and its status."""
-    from dem.report import read_summary
-    from dem.runner import SUMMARY
+    from dem.run.runner import SUMMARY
+    from dem.studies.report import read_summary
 
     rows = []
     for p in points:
@@ -415,7 +416,7 @@ def held_values(case_dir: Path, sets: list[tuple[str, list]]) -> dict:
     The drive as the case gives it (its throw number or its amplitude), the angle, frequency,
     friction and inclination: what a sweep's figure names as held fixed.
     """
-    from dem.case import load_case
+    from dem.scene.case import load_case
 
     case = load_case(case_dir)
     d = case.drive
@@ -439,7 +440,7 @@ def plot(rows: list[dict], path: Path, keys: list[str], held: dict | None = None
     velocity in m/s is its v_norm times the run's velocity scale A omega cos phi). The title
     names the case's values the sweep held fixed (``held``, :func:`held_values`).
     """
-    from dem import plots
+    from dem.studies import plots
 
     plt = plots.plt
     first, rest = keys[0], keys[1:]

@@ -8,7 +8,7 @@ period ``length``. Inclination alpha > 0 means the trough rises in +x, so gravit
 
 Drive. In the laboratory the trough moves by s(t) = A sin(omega t) e, e = (cos phi, 0, sin phi)
 (the paper's line drive; a second component and a start-up ramp generalise s(t), see
-:class:`dem.drive.Motion`; what follows holds for any s(t)).
+:class:`dem.physics.drive.Motion`; what follows holds for any s(t)).
 A grain's laboratory position is X = s(t) + x, with x its position relative to the trough, so
 
     m X'' = F_contact + m g_vec   =>   m x'' = F_contact + m g_vec - m s''(t),
@@ -38,9 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dem import drive
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.physics import drive
 
 #: The kernel's walls in its order w = 0, 1, 2: (name, inward unit normal). Wall w lies where
 #: the gap of :meth:`Trough.wall_gaps` is zero: z = 0, y = -width/2 and y = +width/2.
@@ -58,7 +58,7 @@ class Trough:
 
     The drive is the paper's straight line A sin(omega t) (cos phi, 0, sin phi), optionally a
     second component A_2 sin(omega t + psi_2) (cos phi_2, 0, sin phi_2) (an elliptical drive) and
-    a start-up ramp (:class:`dem.drive.Motion`).
+    a start-up ramp (:class:`dem.physics.drive.Motion`).
 
     Attributes:
         length: Period along x, m.
@@ -73,7 +73,7 @@ class Trough:
         ramp_time: Start-up ramp of the drive, s (0: none).
         discharge: x of a finite feeder's discharge edge, m (inf: a periodic section). A finite
             feeder has a back wall at x = 0 and ``length`` is then the period of the domain the
-            kernels wrap, longer than the trough by an empty gap (:mod:`dem.feeder`).
+            kernels wrap, longer than the trough by an empty gap (:mod:`dem.engine.feeder`).
 
     """
 
@@ -106,7 +106,7 @@ class Trough:
 
     @classmethod
     def from_case(cls, case) -> Trough:
-        """Trough of a :class:`dem.case.Case` (angles converted from degrees)."""
+        """Trough of a :class:`dem.scene.case.Case` (angles converted from degrees)."""
         d = case.drive
         return cls(
             length=case.trough.length,
@@ -123,7 +123,7 @@ class Trough:
 
     @property
     def motion(self) -> drive.Motion:
-        """The trough's laboratory motion s(t) (:class:`dem.drive.Motion`)."""
+        """The trough's laboratory motion s(t) (:class:`dem.physics.drive.Motion`)."""
         components = [drive.Component(self.amplitude, self.angle)]
         if self.second_amplitude > 0.0:
             components.append(
@@ -149,7 +149,7 @@ class Trough:
 
     @property
     def drive_speed(self) -> float:
-        """Peak trough speed, m/s: A omega for a line (:attr:`dem.drive.Motion.peak_speed`)."""
+        """Peak trough speed, m/s: A omega for a line (``Motion.peak_speed``)."""
         if self.second_amplitude == 0.0:
             return self.amplitude * self.omega
         return self.motion.peak_speed
@@ -158,7 +158,8 @@ class Trough:
     def throw_number(self) -> float:
         """Peak normal trough acceleration over g cos(alpha): the paper's Gamma for a line drive.
 
-        (:func:`dem.drive.throw_number`; :meth:`dem.drive.Motion.throw_number` with two
+        (:func:`dem.physics.drive.throw_number`; :meth:`dem.physics.drive.Motion.throw_number` with
+        two
         components.)
         """
         if self.second_amplitude > 0.0:
@@ -171,7 +172,7 @@ class Trough:
         )
 
     def drive_array(self, on: bool = True) -> np.ndarray:
-        """Kernel form of the drive (:meth:`dem.drive.Motion.kernel_array`); zeros when off."""
+        """Kernel form of the drive (``Motion.kernel_array``); zeros if off."""
         if not on:
             return np.zeros(drive.KERNEL_DRIVE_SIZE)
         return self.motion.kernel_array()

@@ -1,4 +1,4 @@
-"""The DEM step loop: fill, settle, drive; :mod:`dem.runner` runs it behind ``dem run``.
+"""The DEM step loop: fill, settle, drive; :mod:`dem.run.runner` runs it behind ``dem run``.
 
 Order of operations in one step n -> n + 1 (t_n = n dt, drive time counted from the moment the
 drive was switched on), all inside :func:`dem.kernels.integrate.advance`:
@@ -38,6 +38,7 @@ import numba
 import numpy as np
 
 from dem import config
+from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.contacts import P_BETA, P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR
 from dem.kernels.integrate import (
@@ -51,10 +52,9 @@ from dem.kernels.integrate import (
 from dem.kernels.layout import Geometry, MeshArrays
 from dem.kernels.neighbours import OK, OVERFLOW_PAIRS
 from dem.kernels.rigid import rotational_energy
-from dem.mesh import TriangleMesh
-from dem.state import Bodies, PairList, Spheres
-from dem.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
-from dem.trough import WALLS, Trough, check_section_length
+from dem.scene.mesh import TriangleMesh
+from dem.scene.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
+from dem.scene.trough import WALLS, Trough, check_section_length
 
 
 class Simulation:
@@ -72,12 +72,14 @@ class Simulation:
         rotation: False locks rotation (spins stay zero, torques are not integrated).
         skin: Verlet skin, m; default ``DEM_SKIN_FRACTION`` times the largest radius.
         reference_speed: Speed scale for the instability check, m/s (drive and free fall).
-        bodies: Rigid clumps owning the spheres (:meth:`dem.state.Bodies.create`), or None for
+        bodies: Rigid clumps owning the spheres (:meth:`dem.engine.state.Bodies.create`), or None
+        for
             plain spheres.
         timestep_limit: The stability limit dt was chosen under, s (reported; nan if unknown).
-        mesh: A trough mesh (:class:`dem.mesh.TriangleMesh`) replacing the flat floor and side
+        mesh: A trough mesh (:class:`dem.scene.mesh.TriangleMesh`) replacing the flat floor and side
             walls, or None.
-        feeder: A finite feeder (:class:`dem.feeder.Feeder`): grains past the discharge edge are
+        feeder: A finite feeder (:class:`dem.engine.feeder.Feeder`): grains past the discharge edge
+        are
             removed and new ones fed at the back while the drive is on; None for a periodic
             section.
 
@@ -150,7 +152,8 @@ class Simulation:
             top = max(top, float(self._mesh_box[1][2]))
         throw = config.DEM_MAX_SPEED_FACTOR * self.reference_speed
         self._ceiling = top + throw * throw / (2.0 * config.GRAVITY)
-        #: A :class:`dem.threads.ThreadGuard` (the runner sets one for runs on several threads).
+        #: A :class:`dem.engine.threads.ThreadGuard` (the runner sets one for runs on several
+        # threads).
         self.guard = None
         self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
@@ -242,7 +245,8 @@ class Simulation:
     def wall_gaps(self, x: np.ndarray) -> np.ndarray:
         """Distance of points (n, 3) from each wall, (walls, n), m.
 
-        The flat floor, side walls and back wall (:meth:`dem.trough.Trough.wall_gaps`), or with
+        The flat floor, side walls and back wall (:meth:`dem.scene.trough.Trough.wall_gaps`), or
+        with
         a mesh two rows: the distance to the mesh and to the back wall (inf without one).
         """
         if self.mesh is None:
@@ -335,7 +339,7 @@ class Simulation:
         """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``.
 
         A finite feeder exchanges grains (discharge, and feed once the drive is on) after every
-        chunk of at most :attr:`dem.feeder.Feeder.interval` steps. ``stop`` (a callable, or
+        chunk of at most :attr:`dem.engine.feeder.Feeder.interval` steps. ``stop`` (a callable, or
         None) is asked after every chunk; when it returns True the run returns early. Without a
         feeder the chunks then shorten to about ``DEM_STOP_LATENCY_S`` of wall time each, from
         the last chunk's speed. Returns the steps advanced.

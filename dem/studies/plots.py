@@ -341,7 +341,7 @@ def bed_snapshot_figure(
     import numpy as np
     from matplotlib.collections import EllipseCollection
 
-    from dem.trough import Trough
+    from dem.scene.trough import Trough
 
     x = Trough(length, width).wrap(positions)
     r = np.asarray(radius, float)
@@ -387,7 +387,8 @@ def bed_snapshot_figure(
 def calibration_figure(cal, friction: float, path: str | Path) -> Path:
     """eps_t of the virtual impacts against incidence, before and after ``dem calibrate``.
 
-    ``cal`` is a :class:`dem.calibrate.Calibration`; the Coulomb bound 1 - mu cot(theta) of a
+    ``cal`` is a :class:`dem.studies.calibrate.Calibration`; the Coulomb bound 1 - mu cot(theta) of
+    a
     sliding impact (eps_n = 0) is drawn for reference.
     """
     import numpy as np

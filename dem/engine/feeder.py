@@ -21,7 +21,7 @@ The kernels stay periodic, over a domain of length L + gap (:func:`domain_gap`):
 empty (grains are removed once past L) and wide enough that no grain near the back wall and no
 grain at the edge can see each other through the periodic image. Grains are exchanged at most
 every :data:`EXCHANGE_FRACTION` of a drive period (:attr:`Feeder.interval`), and only when one
-leaves or arrives, each exchange O(n) (:meth:`dem.simulation.Simulation.replace_grains`).
+leaves or arrives, each exchange O(n) (:meth:`dem.engine.simulation.Simulation.replace_grains`).
 
 Conservation: grains inserted (the initial charge plus the feed) = grains in the trough +
 grains discharged, at every moment (:meth:`Feeder.balance`); ``dem run`` stores the three in
@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dem.state import Bodies, Spheres
+from dem.engine.state import Bodies, Spheres
 
 #: Grains are exchanged at most every this fraction of a drive period.
 EXCHANGE_FRACTION = 1.0 / 16.0
@@ -173,7 +173,7 @@ class Feeder:
 
     def _place(self, sim, count: int, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """Up to ``count`` free poses in the feed zone, at the height of the grains there."""
-        from dem.fill import random_orientations
+        from dem.scene.fill import random_orientations
 
         s = sim.spheres
         b = self.bound

@@ -205,10 +205,10 @@ def bulk_optimum(
     progress: bool = True,
 ) -> dict:
     """Search the bulk optimum of a case; writes optimum.json, optimum.csv and optimum.png."""
-    from dem.case import load_case
     from dem.pointmass.sweep import optimum as pointmass_optimum
     from dem.provenance import record
-    from dem.sweep import folder_name
+    from dem.scene.case import load_case
+    from dem.studies.sweep import folder_name
 
     if over not in OVER:
         raise InputError("--over", over, f"one of {', '.join(OVER)}")
@@ -245,7 +245,7 @@ def bulk_optimum(
     key = "mean_velocity_norm" if objective == "velocity_norm" else "mean_velocity"
     counter = [0]
     from dem import config
-    from dem.sweep import dask_client
+    from dem.studies.sweep import dask_client
 
     client, cluster = dask_client(scheduler, workers or config.default_threads(), "dem optimum")
     try:
@@ -257,7 +257,7 @@ def bulk_optimum(
         raise
 
     def evaluate(batch):
-        from dem.sweep import run_point
+        from dem.studies.sweep import run_point
 
         jobs = []
         for x, rep in batch:
@@ -324,8 +324,8 @@ def _write_csv(path: Path, samples, over: str, objective: str) -> None:
 
 def replot(out: str | Path) -> None:
     """Redraw optimum.png from optimum.json (and the point mass, recomputed)."""
-    from dem.case import load_case
     from dem.pointmass.sweep import optimum as pointmass_optimum
+    from dem.scene.case import load_case
 
     out = Path(out)
     d = json.loads((out / "optimum.json").read_text())
@@ -411,7 +411,7 @@ def plateau(result: NoisyOptimum, z: float = 2.0) -> dict:
 
 
 def _plot(path: Path, result: NoisyOptimum, pm, over: str, objective: str, name: str) -> None:
-    from dem import plots
+    from dem.studies import plots
 
     plt = plots.plt
     fig, ax = plt.subplots(figsize=(7.5, 4.6))

@@ -1,9 +1,12 @@
-"""Building a :class:`dem.simulation.Simulation` from a case: grains, trough, law and time step.
+"""Building a :class:`~dem.engine.simulation.Simulation` from a case: grains, trough, law, step.
 
-:func:`from_case` fills the case's trough at random (:func:`dem.fill.fill`); :func:`from_grains`
+:func:`from_case` fills the case's trough at random (:func:`dem.scene.fill.fill`);
+:func:`from_grains`
 places the case's grain at chosen poses and velocities (virtual impacts, validation studies).
-Both take a :class:`dem.scene.Scene` (the case resolved once: grain, law, step, trough) or a
-case, which they resolve at the door. The time step is :func:`dem.timestep.timestep_for`'s, which
+Both take a :class:`dem.scene.resolved.Scene` (the case resolved once: grain, law, step, trough) or
+a
+case, which they resolve at the door. The time step is :func:`dem.scene.timestep.timestep_for`'s,
+which
 depends on the case alone.
 """
 
@@ -13,25 +16,26 @@ from dataclasses import replace
 
 import numpy as np
 
-from dem import fill
-from dem.mesh import TriangleMesh
-from dem.scene import resolve
-from dem.simulation import Simulation
-from dem.state import Bodies, Spheres
-from dem.timestep import impact_speed_for, timestep_for
-from dem.trough import Trough
+from dem.engine.simulation import Simulation
+from dem.engine.state import Bodies, Spheres
+from dem.scene import fill
+from dem.scene.mesh import TriangleMesh
+from dem.scene.resolved import resolve
+from dem.scene.timestep import impact_speed_for, timestep_for
+from dem.scene.trough import Trough
 
 
 def from_case(case, *, timestep: float | None = None, check_limit: bool = True) -> Simulation:
     """The case's trough filled with its grains (seeded), ready to settle and drive.
 
-    ``case`` is a :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here
-    (:func:`dem.scene.resolve` with ``timestep`` and ``check_limit``).
+    ``case`` is a :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` resolved here
+    (:func:`dem.scene.resolved.resolve` with ``timestep`` and ``check_limit``).
 
-    Spheres: :func:`dem.fill.random_fill`. Screws and clumps: N copies of the case's grain
+    Spheres: :func:`dem.scene.fill.random_fill`. Screws and clumps: N copies of the case's grain
     template at random positions and orientations without member overlap
-    (:func:`dem.fill.random_fill_clumps`). The time step is the scene's
-    (:func:`dem.timestep.timestep_for`, impact from the top of the fill box; ``check_limit`` as
+    (:func:`dem.scene.fill.random_fill_clumps`). The time step is the scene's
+    (:func:`dem.scene.timestep.timestep_for`, impact from the top of the fill box; ``check_limit``
+    as
     there); the instability check's speed scale takes the box as it was finally drawn.
     """
     scene = resolve(case, timestep=timestep, check_limit=check_limit)
@@ -51,7 +55,8 @@ def from_grains(
     """The case's grains at chosen poses and velocities (the case's count is not used).
 
     Args:
-        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` (contact, material,
+        case: A :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` (contact,
+        material,
             grain, trough, drive, run) resolved here.
         positions: Centres (spheres) or centres of mass (clumps), trough frame, (G, 3), m.
         orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
@@ -62,7 +67,8 @@ def from_grains(
             the instability check; default the drive speed plus the fastest grain plus a
             fall from the highest grain.
 
-    The time step follows :func:`dem.timestep.timestep_for` with these grains' count and impact
+    The time step follows :func:`dem.scene.timestep.timestep_for` with these grains' count and
+    impact
     speed; a given step above the stability limit raises InputError naming ``run.timestep``.
 
     """
@@ -119,7 +125,7 @@ def _build(scene, positions, orientations, velocities, step, reference_speed) ->
 def _finite(scene, trough: Trough, mesh, dt: float, reference_speed: float):
     """The finite feeder's periodic domain (the trough and an empty gap) and its Feeder."""
     from dem import config
-    from dem.feeder import EXCHANGE_FRACTION, Feeder, domain_gap, grain_factory
+    from dem.engine.feeder import EXCHANGE_FRACTION, Feeder, domain_gap, grain_factory
 
     case = scene.case
     bound, r_max = scene.grain.bounding_radius, scene.max_radius
@@ -141,9 +147,9 @@ def _finite(scene, trough: Trough, mesh, dt: float, reference_speed: float):
 
 
 def trough_mesh(case):
-    """The case's trough mesh (:class:`dem.mesh.TriangleMesh`), or None for flat walls."""
+    """The case's trough mesh (:class:`dem.scene.mesh.TriangleMesh`), or None for flat walls."""
     if case.trough.mesh is None:
         return None
-    from dem.mesh import load_mesh
+    from dem.scene.mesh import load_mesh
 
     return load_mesh(case.trough.mesh, length=case.trough.length)

@@ -111,7 +111,7 @@ class Spheres:
         """The spheres ``index`` (int, in the order given) as new arrays, owned by grains ``body``.
 
         Per-sphere rows, wall springs (``N_WALLS`` rows each) and mesh slots follow the
-        spheres; a finite feeder drops discharged grains this way (:mod:`dem.feeder`).
+        spheres; a finite feeder drops discharged grains this way (:mod:`dem.engine.feeder`).
         """
         index = np.asarray(index, dtype=np.int64)
 

@@ -7,7 +7,7 @@ eps_n = 0 a linear contact is critically damped and never separates, but its for
 k_n x + gamma_n dx/dt still vanishes at omega_n t = 2 (x = v t exp(-omega_n t)); under gravity
 the grain then rests on the floor and slides or sticks by Coulomb friction, as the point mass
 does after its instantaneous landing. So eps_t is defined, and measured by
-:mod:`dem.calibrate`, for a gravity-free impact of one grain on the floor.
+:mod:`dem.studies.calibrate`, for a gravity-free impact of one grain on the floor.
 
 **Mapping.** The tangential part of the contact is a spring k_t with dashpot gamma_t acting on
 the tangential effective mass f_t m* (f_t: :func:`tangential_mass_factor`), with
@@ -42,7 +42,7 @@ with the default zeta_t = 0.3. For Hertz the tangent stiffness S_n takes the pla
 velocity is large against the normal one slides for part of the contact, and Coulomb friction
 then takes at most mu (1 + eps_n) v_n from v_t: no tangential law that respects Coulomb can give
 less than eps_t = 1 - mu (1 + eps_n) v_n / v_t there. The formula is the starting point; the
-virtual impacts of :mod:`dem.calibrate` measure what a grain actually does over the impact
+virtual impacts of :mod:`dem.studies.calibrate` measure what a grain actually does over the impact
 angles of conveying, rotation and the Coulomb cap included.
 """
 
@@ -183,7 +183,8 @@ def tangential_mass_factor(shape: str, rotation: bool, template=None) -> float:
 
     A solid sphere that rolls: 2/7 (the contact point of a sphere pushed tangentially moves as a
     mass 2/7 m). Rotation locked: 1. A clump that rotates: its contact mass over its mass
-    (:meth:`dem.shapes.Template.contact_mass`: the smallest effective mass of any surface point).
+    (:meth:`dem.scene.shapes.Template.contact_mass`: the smallest effective mass of any surface
+    point).
     """
     if not rotation:
         return 1.0

@@ -1,11 +1,13 @@
 """Replicas: one case from N independent fills, pooled into one answer with an honest error bar.
 
 One run's standard error comes from its own per-cycle means (autocorrelation-aware,
-:func:`dem.measure.correlated_stderr`); it cannot see how much the answer depends on the fill.
+:func:`dem.physics.measure.correlated_stderr`); it cannot see how much the answer depends on the
+fill.
 Refilled with another seed, a bed conveys a few per cent differently, several times that error.
 ``[run] replicas = N`` (or ``dem run --replicas N``) runs the case N times, replica k seeded
 ``run.seed + k``, on the cores available (up to one process per core, the cores shared out as
-numba threads), and pools the N values by a random-effects model (:func:`dem.measure.pooled`),
+numba threads), and pools the N values by a random-effects model
+(:func:`dem.physics.measure.pooled`),
 so the error bar includes the fill-to-fill spread.
 
 Output: replica 0 writes its frames, results.h5 and checkpoint in the output folder itself, as a
@@ -31,8 +33,9 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import replace
 from pathlib import Path
 
-from dem import config, measure
+from dem import config
 from dem.io.files import json_text, replace_text
+from dem.physics import measure
 
 #: Folder of the replicas' own outputs, inside the run's output folder.
 REPLICAS_DIR = "replicas"
@@ -63,7 +66,7 @@ def _cores(threads: int | None) -> int:
 
 def _run_one(case, k: int, out_dir: str, kwargs: dict) -> dict:
     """Run replica ``k`` in a worker process; its summary, or how it was interrupted."""
-    from dem.runner import RunInterrupted, run_case
+    from dem.run.runner import RunInterrupted, run_case
 
     try:
         return {"k": k, "summary": run_case(case, Path(out_dir), **kwargs)}
@@ -87,17 +90,17 @@ def run_replicas(
 ) -> dict:
     """Run ``case.run.replicas`` fills of ``case`` into ``out_dir`` and pool them.
 
-    Arguments as :func:`dem.runner.run_case`; ``threads`` is the number of cores shared among
+    Arguments as :func:`dem.run.runner.run_case`; ``threads`` is the number of cores shared among
     the replicas (default: the default thread count); ``all_replicas`` keeps every replica's
     frames and results.h5 (default: replica 0's only). Returns the pooled summary, also
-    written to ``out_dir/summary.json``. With one replica this is :func:`dem.runner.run_case`.
+    written to ``out_dir/summary.json``. With one replica this is :func:`dem.run.runner.run_case`.
 
     Raises:
-        dem.runner.RunInterrupted: a signal stopped a replica; finished replicas are kept and
+        dem.run.runner.RunInterrupted: a signal stopped a replica; finished replicas are kept and
             the interrupted ones left a checkpoint (``resume`` continues them).
 
     """
-    from dem.runner import RunInterrupted, run_case
+    from dem.run.runner import RunInterrupted, run_case
 
     n = case.run.replicas
     if n == 1:
@@ -185,7 +188,7 @@ def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:
     replicas leaves no stale ones behind).
     """
     from dem.errors import InputError
-    from dem.runner import RUN_OUTPUTS
+    from dem.run.runner import RUN_OUTPUTS
 
     folder = out_dir / REPLICAS_DIR
     if folder.is_symlink():
@@ -210,7 +213,7 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def _has_checkpoint(run_dir: Path) -> bool:
-    from dem.runner import CHECKPOINT
+    from dem.run.runner import CHECKPOINT
 
     return (Path(run_dir) / CHECKPOINT).is_file()
 
@@ -224,7 +227,7 @@ def _keep_own_summary(out_dir: Path, k: int, summary: dict) -> None:
 
 def _drop_run_files(run_dir: Path) -> None:
     """Remove a replica's results.h5 and frames (never written with frames off but the h5)."""
-    from dem.runner import FRAMES_DIR, PVD_NAME, RESULTS
+    from dem.run.runner import FRAMES_DIR, PVD_NAME, RESULTS
 
     for name in (RESULTS, PVD_NAME):
         (run_dir / name).unlink(missing_ok=True)
@@ -238,10 +241,11 @@ def pool_summaries(
 ) -> dict:
     """The pooled summary of replica summaries (replica 0's fields, pooled values over all).
 
-    Each (value, standard error) pair of :data:`POOLED` is pooled by :func:`dem.measure.pooled`
-    and gets a ``_ci95`` half-width; the mass flow rates are the pooled velocity times each
-    replica's mass over length, pooled likewise; ``per_replica`` lists every replica's values;
-    ``replica_spread`` is the fill-to-fill standard deviation of v beyond the runs' own errors.
+    Each (value, standard error) pair of :data:`POOLED` is pooled by
+    :func:`dem.physics.measure.pooled` and gets a ``_ci95`` half-width; the mass flow rates are
+    the pooled velocity times each replica's mass over length, pooled likewise; ``per_replica``
+    lists every replica's values; ``replica_spread`` is the fill-to-fill standard deviation of v
+    beyond the runs' own errors.
     ``wall_time_s`` sums the replicas' step loops and ``particle_steps_per_s`` is their mean
     rate times the ``processes`` that ran at once; ``elapsed_s`` is the whole wait.
     """
@@ -272,7 +276,7 @@ def pool_summaries(
     out["replicas"] = len(summaries)
     out["error_bar"] = (
         f"pooled over {len(summaries)} fills (random-effects, fill-to-fill spread included; "
-        "dem.measure.pooled)"
+        "dem.physics.measure.pooled)"
     )
     out["per_replica"] = [
         {

@@ -1,4 +1,4 @@
-"""A typed reader of one TOML table, for the case file (:mod:`dem.case`).
+"""A typed reader of one TOML table, for the case file (:mod:`dem.scene.case`).
 
 Each getter reads one key, checks its type and range, and raises
 :class:`dem.errors.InputError` naming the dotted key (``drive.angle``), the value as written,

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from dem.errors import InputError
-from dem.laws import TANGENTIAL_LAWS
+from dem.physics.laws import TANGENTIAL_LAWS
 from dem.pointmass import elliptic
 from dem.pointmass.stepped import step_motion, step_point_mass
-from dem.scene import resolve
+from dem.scene.resolved import resolve
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
 LANDING_STEPS = 4000
@@ -78,7 +78,8 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     """Throw one grain of ``case`` at the floor (module docstring) and measure eps_n and eps_t.
 
     Args:
-        case: A :class:`dem.scene.Scene`, or a :class:`dem.case.Case` resolved here; its
+        case: A :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` resolved here;
+        its
             contact, material and grain are used.
         incidence: theta in [0, 90), deg from the floor normal.
         speed: V > 0, m/s.
@@ -86,7 +87,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
         max_steps: Give up (RuntimeError) if the impact has not ended after this many steps.
 
     """
-    from dem import setup
+    from dem.engine import setup
 
     if not 0.0 <= incidence < 90.0:
         raise ValueError(f"incidence must lie in [0, 90) deg, got {incidence}")
@@ -298,7 +299,8 @@ def _with_tangential(case, kappa: float, zeta_t: float):
 def _measure(case, impacts, quats, strict=True) -> tuple[np.ndarray, np.ndarray]:
     """Return eps_t per impact and orientation, (L, Q), and eps_n, (L Q,).
 
-    ``case``: a :class:`dem.scene.Scene`, or a case resolved here once for all its impacts. An
+    ``case``: a :class:`dem.scene.resolved.Scene`, or a case resolved here once for all its
+    impacts. An
     impact that never ends is left out (nan) rather than stopping the fit, unless every
     orientation of one impact fails and ``strict``.
     """
@@ -352,11 +354,12 @@ def calibrate(
     The target of each landing is what Coulomb lets it reach (:func:`bounded_targets`), so a
     grazing landing that friction bounds neither pulls the fit nor counts against it.
     ``tangential = "impact"`` leaves nothing to fit: its impacts are measured and reported as
-    they are (``fitted`` False). ``case`` is a :class:`dem.scene.Scene`, or a
-    :class:`dem.case.Case` resolved here.
+    they are (``fitted`` False). ``case`` is a :class:`dem.scene.resolved.Scene`, or a
+    :class:`dem.scene.case.Case` resolved here.
 
     What a law leaves to fit, and whether it may be calibrated, is its registry row's
-    (:data:`dem.laws.TANGENTIAL_LAWS`). ``progress(kappa, mean_eps_t, done, total)`` is called
+    (:data:`dem.physics.laws.TANGENTIAL_LAWS`). ``progress(kappa, mean_eps_t, done, total)`` is
+    called
     after each evaluation (``total`` is the most the search can make: the grid, the start and
     the golden section's bound).
 
@@ -396,7 +399,7 @@ def calibrate(
     if case.particles.shape != "sphere" and poses is not None:
         quats = [np.asarray(q, dtype=np.float64) for q in np.reshape(poses, (-1, 4))]
     elif case.particles.shape != "sphere":
-        from dem.fill import random_orientations
+        from dem.scene.fill import random_orientations
 
         rng = np.random.default_rng(case.run.seed)
         quats = list(random_orientations(orientations, rng))

@@ -1,13 +1,13 @@
 """A case resolved once: the grain, the contact law, the time step and the trough.
 
-:func:`resolve` turns a :class:`dem.case.Case` into a :class:`Scene`, and the consumers
-(:mod:`dem.setup`, :mod:`dem.runner`, :mod:`dem.plan`, :mod:`dem.io.liggghts`,
-:mod:`dem.calibrate`, ``dem export``) take the scene instead of deriving these again. A case
+:func:`resolve` turns a :class:`dem.scene.case.Case` into a :class:`Scene`, and the consumers
+(:mod:`dem.engine.setup`, :mod:`dem.run.runner`, :mod:`dem.run.plan`, :mod:`dem.io.liggghts`,
+:mod:`dem.studies.calibrate`, ``dem export``) take the scene instead of deriving these again. A case
 changed after loading (another count, another tangential stiffness) is resolved anew.
 
-The trough mesh is not part of a scene: a :class:`dem.mesh.TriangleMesh` is mutable (the fill
+The trough mesh is not part of a scene: a :class:`dem.scene.mesh.TriangleMesh` is mutable (the fill
 and the simulation each re-index it for their own reach), so every simulation loads its own
-(:func:`dem.setup.trough_mesh`) and a scene stays immutable and shareable.
+(:func:`dem.engine.setup.trough_mesh`) and a scene stays immutable and shareable.
 """
 
 from __future__ import annotations
@@ -18,14 +18,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from dem import shapes
 from dem.errors import InputError
-from dem.laws import ContactLaw
-from dem.timestep import Timestep, timestep_for
-from dem.trough import Trough
+from dem.physics.laws import ContactLaw
+from dem.scene import shapes
+from dem.scene.timestep import Timestep, timestep_for
+from dem.scene.trough import Trough
 
 if TYPE_CHECKING:
-    from dem.case import Case
+    from dem.scene.case import Case
 
 
 @dataclass(frozen=True)
@@ -35,14 +35,15 @@ class Scene:
     Every consumer takes these from here; nobody rebuilds them.
 
     Attributes:
-        case: The :class:`dem.case.Case` it was resolved from.
-        grain: The grain as a :class:`dem.shapes.Template`: the one-sphere template
-            (:func:`dem.shapes.sphere`) of radius R and density rho for spheres, the case's
+        case: The :class:`dem.scene.case.Case` it was resolved from.
+        grain: The grain as a :class:`dem.scene.shapes.Template`: the one-sphere template
+            (:func:`dem.scene.shapes.sphere`) of radius R and density rho for spheres, the case's
             template for screws and clumps.
-        law: The contact law in kernel form (:meth:`dem.laws.ContactLaw.from_case`).
-        step: The time step of the case's fill (:func:`dem.timestep.timestep_for` with ``law``):
+        law: The contact law in kernel form (:meth:`dem.physics.laws.ContactLaw.from_case`).
+        step: The time step of the case's fill (:func:`dem.scene.timestep.timestep_for` with
+        ``law``):
             dt, automatic step and stability limit, s, and the impact speed, m/s.
-        trough: The trough's geometry and drive (:meth:`dem.trough.Trough.from_case`).
+        trough: The trough's geometry and drive (:meth:`dem.scene.trough.Trough.from_case`).
 
     """
 
@@ -56,7 +57,8 @@ class Scene:
     def grain_mass(self) -> float:
         """Mass of one grain, kg.
 
-        A sphere: rho 4/3 pi R^3 evaluated as :meth:`dem.state.Spheres.create` gives each sphere
+        A sphere: rho 4/3 pi R^3 evaluated as :meth:`dem.engine.state.Spheres.create` gives each
+        sphere
         (the one-sphere template's rho V equals it to rounding); a clump: its template's mass.
         """
         pt = self.case.particles
@@ -74,14 +76,15 @@ def resolve(case, *, timestep: float | None = None, check_limit: bool = True) ->
     """Resolve a case into a :class:`Scene`, building its contact law exactly once.
 
     Args:
-        case: A :class:`dem.case.Case`; a :class:`Scene` passes through as it was resolved
+        case: A :class:`dem.scene.case.Case`; a :class:`Scene` passes through as it was resolved
             (with ``timestep`` given: its step taken again with that dt, its law kept).
         timestep: dt, s; default ``case.run.timestep``, else automatic.
-        check_limit: As :func:`dem.timestep.timestep_for`: False lets a given step exceed the
+        check_limit: As :func:`dem.scene.timestep.timestep_for`: False lets a given step exceed the
             stability limit.
 
     Raises:
-        InputError: A clump case without its template (not read by :func:`dem.case.load_case`),
+        InputError: A clump case without its template (not read by
+        :func:`dem.scene.case.load_case`),
             or a given step above the stability limit (``check_limit``).
 
     """
@@ -102,4 +105,4 @@ def check_buildable(case) -> None:
     """Refuse what the engine cannot build (a grain without its template)."""
     pt = case.particles
     if pt.shape != "sphere" and pt.grain is None:
-        raise InputError("particles.shape", pt.shape, "a case read by dem.case.load_case")
+        raise InputError("particles.shape", pt.shape, "a case read by dem.scene.case.load_case")

@@ -2,7 +2,7 @@
 
 A terminal (stderr is a TTY) sees the line rewritten every second, ``dem: compiling ... 23 s``;
 a log file or a pipe gets the line once when the work starts and once when it ends, so logs
-stay short. The cycles of a run have their own bars (tqdm, :mod:`dem.runner`).
+stay short. The cycles of a run have their own bars (tqdm, :mod:`dem.run.runner`).
 """
 
 import sys

@@ -9,8 +9,9 @@ normal part of the peak trough acceleration over the normal part of gravity,
 and conveying velocities are reported over the drive velocity A omega cos(phi) (DESIGN.md,
 section 3). The inverse forms (the frequency at which a held amplitude or a held peak speed
 A omega gives Gamma) live here too. Every function takes angles in degrees and broadcasts over
-numpy arrays; with scalars it returns a float. :func:`dem.case.resolve_drive`,
-:class:`dem.trough.Trough`, :mod:`dem.measure`, the point-mass model and its sweeps, and the
+numpy arrays; with scalars it returns a float. :func:`dem.scene.case.resolve_drive`,
+:class:`dem.scene.trough.Trough`, :mod:`dem.physics.measure`, the point-mass model and its sweeps,
+and the
 validation scripts all call these.
 """
 

@@ -7,7 +7,7 @@
   std sqrt(2 tau_int / cycles), with tau_int the integrated autocorrelation time of the
   per-cycle means (:func:`integrated_autocorrelation_time`; 1/2 for independent cycles).
 - Normalised velocity v / (A omega cos phi) (the paper's Fig. 6; the scale is
-  :func:`dem.drive.drive_velocity_from_omega`).
+  :func:`dem.physics.drive.drive_velocity_from_omega`).
 - Mass flow rate through a cross-section of the periodic section: M v / L, kg/s (M total grain
   mass, L the section length); per metre of width: M v / (L W), kg/(s m).
 """
@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dem import drive
+from dem.physics import drive
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class VelocityStatistics:
 
 
 def drive_velocity_scale(amplitude: float, omega: float, angle: float) -> float:
-    """A omega cos phi, m/s (omega in rad/s, angle phi in degrees; :mod:`dem.drive`)."""
+    """A omega cos phi, m/s (omega in rad/s, angle phi in degrees; :mod:`dem.physics.drive`)."""
     return drive.drive_velocity_from_omega(amplitude, omega, angle)
 
 
@@ -272,7 +272,7 @@ def conveying_velocity(
     The standard error accounts for the correlation of successive cycles
     (:func:`correlated_stderr`); the independent-cycle value is kept beside it. Velocities are
     normalised by A omega cos(phi) (``amplitude``, ``omega``, ``angle``) or by ``scale`` (m/s;
-    an elliptical drive's :attr:`dem.case.DriveSpec.velocity_scale`).
+    an elliptical drive's :attr:`dem.scene.case.DriveSpec.velocity_scale`).
     """
     if scale is None:
         scale = drive_velocity_scale(amplitude, omega, angle)
