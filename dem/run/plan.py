@@ -192,16 +192,18 @@ class Plan:
             f"  cycles            {self.settle_cycles} settling"
             f"{' (auto: estimated)' if self.settle_cycles_auto else ''} + {self.cycles} measured,"
             f" {self.steps:.3g} steps in all",
-            f"  memory            {_size(self.memory_bytes)} "
+            f"  memory            {format_size(self.memory_bytes)} "
             f"({self.memory_bytes / self.spheres:.0f} B per sphere)",
-            f"  wall time         about {_duration(self.wall_time_s)} on {self.threads} thread(s)"
+            f"  wall time         about {format_duration(self.wall_time_s)} "
+            f"on {self.threads} thread(s)"
             + (
-                f": compiling {_duration(self.compile_s)} (no numba cache yet, once per machine),"
+                f": compiling {format_duration(self.compile_s)} "
+                "(no numba cache yet, once per machine),"
                 if self.compile_s
                 else ":"
             )
-            + f" filling {_duration(self.fill_s)}, {self.frames} frames "
-            f"{_duration(self.frames_s)}, steps at "
+            + f" filling {format_duration(self.fill_s)}, {self.frames} frames "
+            f"{format_duration(self.frames_s)}, steps at "
             f"{self.particle_steps_per_s:.2g} particle-steps/s ({self.rate_source})",
             f"  expected error    {100 * self.expected_error:.1f} % of the bulk velocity ("
             + ", ".join(f"{k} {100 * v:.1f} %" for k, v in self.error_parts.items())
@@ -215,7 +217,8 @@ class Plan:
         return "\n".join(lines)
 
 
-def _size(n: float) -> str:
+def format_size(n: float) -> str:
+    """A byte count in B, kB, MB or GB, 3 significant digits."""
     for unit in ("B", "kB", "MB", "GB"):
         if n < 1000 or unit == "GB":
             return f"{n:.3g} {unit}"
@@ -223,7 +226,8 @@ def _size(n: float) -> str:
     return f"{n:.3g} GB"
 
 
-def _duration(s: float) -> str:
+def format_duration(s: float) -> str:
+    """A duration in seconds as s, min, h, days or years, readable at a glance."""
     if s < 10:
         return f"{s:.2g} s"
     if s < 120:
@@ -569,10 +573,10 @@ def plan(
     if calibrated is not None:
         advice.append(calibrated)
     mem = memory_bytes(scene, spheres, grains, threads)
-    total = _physical_memory()
+    total = physical_memory()
     if total and mem > 0.5 * total:
-        advice.append(Advice("warn", "particles.count", f"the state needs {_size(mem)}, over half "
-                             f"of this machine's {_size(total)}"))  # fmt: skip
+        advice.append(Advice("warn", "particles.count", f"the state needs {format_size(mem)}, "
+                             f"over half of this machine's {format_size(total)}"))  # fmt: skip
     return Plan(
         case=case.name, grains=grains, spheres_per_grain=per_grain, spheres=spheres,
         timestep=step.dt, timestep_auto=step.auto, timestep_limit=step.limit,
@@ -643,7 +647,8 @@ def _expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str
     return math.sqrt(systematic**2 + statistical**2 + reference**2), parts, source
 
 
-def _physical_memory() -> int | None:
+def physical_memory() -> int | None:
+    """This machine's physical memory in bytes, or None where the OS does not say."""
     try:
         import os
 
@@ -652,7 +657,7 @@ def _physical_memory() -> int | None:
         return None
 
 
-def _up(x: float) -> float:
+def round_up(x: float) -> float:
     """``x`` rounded up to 3 significant digits (a limit met, not missed by rounding)."""
     digits = 2 - math.floor(math.log10(abs(x)))
     return float(math.ceil(x * 10.0**digits) / 10.0**digits)
@@ -673,12 +678,12 @@ def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
             advice.append(Advice("warn", "contact.youngs_modulus",
                 f"{e_equiv:.3g} Pa is far stiffer than the answer needs: the study stayed within "
                 f"{TOLERANCE:.0%} down to {e_ok:.3g} Pa, about "
-                f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps", _up(e_ok)))  # fmt: skip
+                f"{(e_equiv / e_ok) ** 0.4:.1f}x fewer steps", round_up(e_ok)))  # fmt: skip
         elif e_equiv < e_ok / FAR:
             advice.append(Advice("warn", "contact.youngs_modulus",
                 f"{e_equiv:.3g} Pa is softer than the stiffness sweep found accurate "
                 f"(validation/bulk-convergence: {e_ok:.3g} Pa stayed within {TOLERANCE:.0%})",
-                _up(e_ok)))  # fmt: skip
+                round_up(e_ok)))  # fmt: skip
     f_ok = cheap["timestep_fraction"]
     if case.run.timestep is not None and fraction < f_ok / FAR:
         advice.append(Advice("warn", "run.timestep",
@@ -703,14 +708,14 @@ def _advise_section(case, data, g_len, advice) -> None:
         advice.append(Advice("warn", "trough.length",
             f"{case.trough.length:g} m is {n_len:.1f} grain lengths, shorter than the "
             f"{min_len:.1f} the study needed to stay within {TOLERANCE:.0%}: the periodic "
-            "section holds too few grains along the flow", _up(min_len * g_len)))  # fmt: skip
+            "section holds too few grains along the flow", round_up(min_len * g_len)))  # fmt: skip
     min_w = data["cheapest"]["section_width_grains"]
     n_w = case.trough.width / g_len
     if n_w < min_w * 0.999:
         advice.append(Advice("warn", "trough.width",
             f"{case.trough.width:g} m is {n_w:.1f} grain lengths, narrower than the "
             f"{min_w:.1f} the study needed: the side walls set the answer",
-            _up(min_w * g_len)))  # fmt: skip
+            round_up(min_w * g_len)))  # fmt: skip
 
 
 def _advise_cycles(statistical, within, cycles, advice) -> None:
@@ -791,7 +796,8 @@ class Suggestion:
         lines = [f"wrote {self.path}, with:"]
         lines += [f"  {key} = {value!r}" for key, value in self.changes.items()]
         lines.append(
-            f"wall time about {_duration(a.wall_time_s)} (was {_duration(b.wall_time_s)}, "
+            f"wall time about {format_duration(a.wall_time_s)} "
+            f"(was {format_duration(b.wall_time_s)}, "
             f"{a.wall_time_s / b.wall_time_s:.2g}x)"
         )
         if math.isfinite(a.expected_error) or math.isfinite(b.expected_error):

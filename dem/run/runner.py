@@ -454,7 +454,7 @@ def _run_case(
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT
 
-    fingerprint = _fingerprint(case)
+    record = fingerprint(case)
     if resume:  # the checkpoint is checked against the case before the fill
         try:
             state, loop = checkpoint_io.read(checkpoint)
@@ -463,7 +463,7 @@ def _run_case(
                 "--resume", str(checkpoint), f"a readable checkpoint of an interrupted run "
                 f"({type(exc).__name__}: {exc}); start the run again without --resume",
             ) from None  # fmt: skip
-        changed = _changes(loop.get("case"), fingerprint)
+        changed = fingerprint_changes(loop.get("case"), record)
         if changed:
             raise InputError(
                 "--resume", str(checkpoint), "a checkpoint of the same case: it was made with "
@@ -514,7 +514,7 @@ def _run_case(
             sim.start_drive()
         sim.stats[:] = 0.0
         loop = {
-            "case": fingerprint,
+            "case": record,
             "discharged_mark": 0.0,
             "cycle": 0,
             "chunk": 0,
@@ -701,12 +701,12 @@ def _compile_first(case, progress: bool) -> None:
 
 def _check_memory(case, estimate) -> None:
     """Refuse a case whose state (the estimate ``dem plan`` prints) exceeds this machine."""
-    total = plan._physical_memory()
+    total = plan.physical_memory()
     if total and estimate.memory_bytes > total:
         raise InputError(
             "particles.count", case.particles.count, f"a count whose state fits this machine: "
-            f"it needs {plan._size(estimate.memory_bytes)}, the machine has "
-            f"{plan._size(total)} (dem plan {case.name} says more)",
+            f"it needs {plan.format_size(estimate.memory_bytes)}, the machine has "
+            f"{plan.format_size(total)} (dem plan {case.name} says more)",
             source=str(case.source),
         )  # fmt: skip
 
@@ -723,8 +723,8 @@ def _check_duration(case, estimate) -> None:
             f"a run this machine finishes within a year: {estimate.steps:.3g} steps "
             f"(dt = {estimate.timestep:.3g} s, {estimate.steps_per_cycle:.3g} a cycle) of "
             f"{estimate.spheres} spheres would take about "
-            f"{plan._duration(estimate.wall_time_s)}; fewer cycles or grains, or a longer step "
-            f"(a softer contact, larger grains) shorten it (dem plan {case.name} says more)",
+            f"{plan.format_duration(estimate.wall_time_s)}; fewer cycles or grains, or a longer "
+            f"step (a softer contact, larger grains) shorten it (dem plan {case.name} says more)",
             source=str(case.source),
         )  # fmt: skip
 
@@ -745,7 +745,7 @@ def _warn_plan(estimate) -> None:
 RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
 
 
-def _fingerprint(case) -> dict:
+def fingerprint(case) -> dict:
     """The resolved case as flat JSON data, {"table.key": value}: what a checkpoint records."""
     flat: dict = {}
 
@@ -762,7 +762,7 @@ def _fingerprint(case) -> dict:
     return flat
 
 
-def _changes(before: dict | None, now: dict) -> list[str]:
+def fingerprint_changes(before: dict | None, now: dict) -> list[str]:
     """Each key that differs, as "key = old (now new)"; none for a checkpoint without a record."""
     if before is None:
         return []

@@ -102,7 +102,7 @@ def advice(scene):
 
     One grain (no bed) gets none: validation/impact-law covers it.
     """
-    from dem.run.plan import Advice, _up
+    from dem.run.plan import Advice, round_up
 
     data = study()
     if data is None or scene.case.particles.count < 2:
@@ -119,8 +119,8 @@ def advice(scene):
         f"{mode.layers:.1f} layers) is close enough to the drive that the bed conveys unlike "
         f"the rigid material: (omega / omega_bed)^2 = {mode.compliance:.3f} > {limit:.3f}, where "
         f"validation/bulk-convergence measured more than 2 % from the rigid limit "
-        f"({data['evidence']}); set {key} >= {_up(value):.3g}",
-        _up(value),
+        f"({data['evidence']}); set {key} >= {round_up(value):.3g}",
+        round_up(value),
     )
 
 
@@ -133,7 +133,7 @@ def assessment(scene) -> dict | None:
     data = study()
     if data is None or scene.case.particles.count < 2:
         return None
-    from dem.run.plan import _up
+    from dem.run.plan import round_up
 
     limit = data["compliance_limit"]
     mode = bed_mode(scene)
@@ -145,7 +145,7 @@ def assessment(scene) -> dict | None:
     }
     if not out["converged"]:
         key, value = stiffness_for(scene, limit)
-        out |= {"key": key, "value": _up(value)}
+        out |= {"key": key, "value": round_up(value)}
     out["measured"] = measured_near(data, mode.compliance)
     return out
 
