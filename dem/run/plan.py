@@ -648,7 +648,7 @@ def _expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str
 
 
 def physical_memory() -> int | None:
-    """This machine's physical memory in bytes, or None where the OS does not say."""
+    """Physical memory of this machine in bytes, or None where the OS does not say."""
     try:
         import os
 
