@@ -39,14 +39,19 @@ from dem import provenance
 JOB = r"""
 import json, os, sys, time
 import numba
-from dem.scene.case import load_case
+import dem
+try:  # the layer folders (issue 27); before them the modules sat at dem/'s top level
+    from dem.scene.case import load_case
+except ImportError:
+    from dem.case import load_case
 case = load_case(sys.argv[1])
 steps = int(sys.argv[2])
-import dem
-if os.path.exists(os.path.join(dem.__path__[0], "setup.py")):
+if os.path.exists(os.path.join(dem.__path__[0], "engine", "setup.py")):
     from dem.engine.setup import from_case
-else:  # before dem.engine.setup (an editable install would supply the new module to an old tree)
-    from dem.engine.simulation import Simulation
+elif os.path.exists(os.path.join(dem.__path__[0], "setup.py")):
+    from dem.setup import from_case
+else:  # before dem.setup (an editable install would supply the new module to an old tree)
+    from dem.simulation import Simulation
     from_case = Simulation.from_case
 print("dem from", dem.__path__[0], file=sys.stderr)
 sim = from_case(case)

@@ -37,7 +37,7 @@ import numba
 import numpy as np
 from pathlib import Path
 from dem.scene.case import load_case
-from dem import setup
+from dem.engine import setup
 from dem.io import checkpoint
 from dem.kernels import integrate as I
 from dem.kernels.forces import pair_forces, pair_forces_serial

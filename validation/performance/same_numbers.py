@@ -89,14 +89,24 @@ CONFIGS = [
     ("single-sphere", "cases/single-sphere", {}),
     ("u-trough", "cases/u-trough", {**SCREWS_THEN, "particles.count": 40}),
     ("feeder", "cases/feeder", SCREWS_THEN),
+    # the shipped cases as shipped (2e9 Pa, 4e-6 s), fewer grains
+    ("shipped-sphere-bed", "cases/sphere-bed", {"particles.count": 120}),
+    ("shipped-screw-trough", "cases/screw-trough", {"particles.count": 24}),
+    ("shipped-u-trough", "cases/u-trough", {"particles.count": 40}),
+    ("shipped-v-trough", "cases/v-trough", {"particles.count": 40}),
+    ("shipped-feeder", "cases/feeder", {}),
 ]
 
 JOB = r"""
 import hashlib, json, sys
 import numba
 import numpy as np
-from dem.scene.case import load_case
-from dem import setup
+try:  # the layer folders (issue 27); before them the modules sat at dem/'s top level
+    from dem.scene.case import load_case
+    from dem.engine import setup
+except ImportError:
+    from dem.case import load_case
+    from dem import setup
 numba.set_num_threads(1)
 name, folder, overrides, steps = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), int(sys.argv[4])
 case = load_case(folder, overrides)

@@ -30,7 +30,7 @@ JOB = r"""
 import json, resource, sys, time
 import numpy as np
 from dem.scene.case import load_case
-from dem import setup
+from dem.engine import setup
 n = int(sys.argv[1])
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 r = 0.002

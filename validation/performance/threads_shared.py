@@ -44,7 +44,7 @@ WORKER = """
 import sys, time, numba
 from pathlib import Path
 from dem.scene.case import load_case
-from dem import setup
+from dem.engine import setup
 from dem.io import checkpoint
 from dem.engine.threads import ThreadGuard
 threads, steps = sys.argv[1], int(sys.argv[2])

@@ -1,0 +1,94 @@
+"""The pinned regression run: 20 seeded screws, one settle cycle and two measured cycles.
+
+``python tests/regression/pinned.py --why "..."`` reruns it and rewrites ``pinned.json``; the
+reason is required and recorded beside the numbers, with the commit and the date, so the file's
+history says why each change of the physics moved them. tests/regression/test_pinned.py reruns
+it and compares every number to 12 significant digits.
+
+A refactor must leave these numbers alone. Regenerate only for a change that is meant to move
+them (a fixed law, a new default), and say so in ``--why``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+PINNED = HERE / "pinned.json"
+CASE = ROOT / "cases" / "screw-trough"
+OVERRIDES = {"particles.count": 20, "run.settle_cycles": 1, "run.cycles": 2, "run.seed": 7}
+#: summary.json entries that are physics, not timing or provenance.
+SKIP = ("wall_time", "per_s", "compile", "provenance", "plan", "date", "load", "git", "version",
+        "stiffness", "warnings", "rate", "host")  # fmt: skip
+DIGITS = 12
+
+
+def flatten(value, prefix: str = "") -> dict:
+    """{"a.b": number} for every number (and list of numbers) in a nested summary."""
+    out: dict = {}
+    if isinstance(value, dict):
+        for key, v in value.items():
+            out |= flatten(v, f"{prefix}{key}.")
+    elif isinstance(value, bool) or value is None or isinstance(value, str):
+        pass
+    elif isinstance(value, int | float):
+        out[prefix[:-1]] = float(value)
+    elif isinstance(value, list) and all(isinstance(v, int | float) for v in value):
+        for i, v in enumerate(value):
+            out[f"{prefix}{i}"] = float(v)
+    return out
+
+
+def run() -> dict:
+    """The run's physical numbers, {"key": value}; one thread, no frames, in a scratch folder."""
+    import numba
+
+    from dem.run.runner import run_case
+    from dem.scene.case import load_case
+
+    numba.set_num_threads(1)
+    case = load_case(CASE, OVERRIDES)
+    with tempfile.TemporaryDirectory() as tmp:
+        summary = run_case(case, Path(tmp) / "out", threads=1, progress=False, frames=False)
+    numbers = flatten(summary)
+    return {k: v for k, v in sorted(numbers.items()) if not any(s in k for s in SKIP)}
+
+
+def same(a: float, b: float) -> bool:
+    """Equal to :data:`DIGITS` significant digits (zeros: to 1e-300)."""
+    if a == b:
+        return True
+    return math.isfinite(a) and math.isfinite(b) and abs(a - b) <= 10**-DIGITS * max(abs(a), abs(b))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--why", required=True, help="why the pinned numbers move (recorded)")
+    args = parser.parse_args()
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    from dem import provenance
+
+    numbers = run()
+    old = json.loads(PINNED.read_text())["numbers"] if PINNED.exists() else {}
+    moved = sorted(k for k in numbers if k not in old or not same(old[k], numbers[k]))
+    record = {
+        "what": __doc__.splitlines()[0],
+        "case": str(CASE.relative_to(ROOT)),
+        "overrides": OVERRIDES,
+        "why": args.why,
+        "moved": moved,
+        "provenance": provenance.record(),
+        "numbers": numbers,
+    }
+    PINNED.write_text(json.dumps(record, indent=1) + "\n")
+    print(f"wrote {PINNED}: {len(numbers)} numbers, {len(moved)} moved")
+
+
+if __name__ == "__main__":
+    main()
