@@ -64,7 +64,7 @@ def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_na
 def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(capsys):
     """summary.json's ``stiffness`` and the terminal's line: the 5e7 Pa LIGGGHTS-parity sphere
     bed is too soft and names the value its warning names; at that value it is stiff enough."""
-    from dem.cli import _print_summary
+    from dem.studies.answers import run_summary_lines
 
     soft = resolve(load_case(PARITY))
     found = stiffness.assessment(soft)
@@ -80,15 +80,14 @@ def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(cap
         "mass_flow_rate_per_width": 11.8, "timestep": 6.5e-6, "steps": 77250,
         "wall_time_s": 16.0, "stiffness": found,
     }  # fmt: skip
-    _print_summary(summary)
-    out = capsys.readouterr().out
+    out = "\n".join(run_summary_lines(summary))
     assert "TOO SOFT" in out and f"{found['key']} >= {found['value']:.3g}" in out
     # the study's own point at this stiffness: the shipped sphere bed, 20 % slow
     own = [m for m in found["measured"] if m["bed"] == "sphere-bed"]
     assert own and own[0]["youngs_modulus_pa"] == 5e7 and own[0]["error_vs_rigid"] < -0.1
     assert "sphere-bed at E = 5e+07 Pa" in out
-    _print_summary(summary | {"stiffness": stiffness.assessment(stiff)})
-    assert "stiff enough" in capsys.readouterr().out
+    stiff_lines = run_summary_lines(summary | {"stiffness": stiffness.assessment(stiff)})
+    assert "stiff enough" in "\n".join(stiff_lines)
 
 
 @pytest.mark.parametrize("name", ["sphere-bed", "screw-trough", "u-trough", "v-trough", "feeder"])

@@ -22,15 +22,20 @@ orientations), and says how far the target is out of reach where Coulomb frictio
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.files import replace_file, replace_text
 from dem.physics.laws import TANGENTIAL_LAWS
 from dem.pointmass import elliptic
 from dem.pointmass.stepped import step_motion, step_point_mass
+from dem.scene.case import CASE_FILE, load_case, set_contact_keys
 from dem.scene.resolved import resolve
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
@@ -488,3 +493,73 @@ def calibrate(
         targets=targets,
         bounded=bounded,
     )
+
+
+# --- what dem calibrate keeps: every evaluation, and the case file written back ------------------
+
+#: File in the case's output folder that keeps every evaluation of ``dem calibrate``.
+EVALUATIONS_FILE = "calibration_evaluations.csv"
+
+
+class EvaluationTrail:
+    """Every evaluation of a fit, written as it comes, so that a stopped search keeps them.
+
+    :data:`EVALUATIONS_FILE` in the case's output folder gets its header when the trail is
+    made and a row per :meth:`record`: the evaluation's number, k_t / k_n, the mean eps_t and
+    the target eps_t (the floor's ``restitution_tangential``).
+    """
+
+    def __init__(self, case):
+        self.target = case.wall_material.restitution_tangential
+        self.path = case.directory / "output" / EVALUATIONS_FILE
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.tried: list[tuple[float, float]] = []
+        with open(self.path, "w", encoding="utf-8") as fh:
+            fh.write("evaluation,tangential_stiffness_ratio,mean_eps_t,target_eps_t\n")
+
+    def record(self, kappa: float, eps: float, done: int) -> None:
+        """Keep evaluation ``done``: k_t / k_n = ``kappa`` gave the mean eps_t ``eps``."""
+        self.tried.append((kappa, eps))
+        with open(self.path, "a", encoding="utf-8") as fh:
+            fh.write(f"{done},{kappa:.6g},{eps:.6g},{self.target:g}\n")
+
+    def closest(self) -> tuple[float, float] | None:
+        """(k_t / k_n, mean eps_t) of the evaluation nearest the target so far; None if none."""
+        return min(self.tried, key=lambda t: abs(t[1] - self.target), default=None)
+
+
+def write_calibration(
+    case, cal: Calibration, on_keep: Callable[[Path], None] | None = None
+) -> Path:
+    """Write the fitted k_t / k_n and zeta_t into the case's case.toml and return its path.
+
+    The two ``[contact]`` keys are set in place (:func:`dem.scene.case.set_contact_keys`), k_t /
+    k_n to 6 digits, with a comment naming the day and the drive they fit (eps_t reached, Gamma,
+    phi, mu, alpha); the rest of the file, comments included, is kept. The first calibration
+    keeps the file as it was in ``case.toml.orig`` and calls ``on_keep`` with that path. The new
+    file replaces the old one whole (:func:`dem.io.files.replace_file`), and only if it loads.
+    """
+    source = case.directory / CASE_FILE
+    stamp = datetime.date.today().isoformat()
+    text = set_contact_keys(
+        source,
+        {
+            "tangential_stiffness_ratio": float(f"{cal.kappa:.6g}"),
+            "tangential_damping_ratio": cal.zeta_t,
+        },
+        f"dem calibrate {stamp}: eps_t {cal.eps_t:.3f} for {cal.target:g} at Gamma "
+        f"{case.drive.throw_number:.6g}, phi {case.drive.angle:g} deg, mu "
+        f"{case.wall_material.friction:g}, alpha {case.trough.inclination:g} deg",
+    )
+    original = source.with_name(CASE_FILE + ".orig")
+    if not original.exists():
+        replace_text(original, source.read_text(encoding="utf-8"))
+        if on_keep is not None:
+            on_keep(original)
+
+    def write_checked(tmp):
+        tmp.write_text(text, encoding="utf-8")
+        load_case(tmp)  # never replace a case with one that does not load
+
+    replace_file(source, write_checked)
+    return source

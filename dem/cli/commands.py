@@ -1,0 +1,305 @@
+"""One function per ``dem`` command: check, call the library, print. No physics here."""
+
+import sys
+from pathlib import Path
+
+from dem.cli.options import check_numbers, option_name, parse_bounds, print_json, set_overrides
+from dem.errors import InputError
+from dem.io.paths import plot_path, writable_path
+
+
+def cmd_thresholds(args) -> int:
+    """``dem pointmass thresholds``: the regime limits of a material and angle."""
+    from dem.pointmass.answers import thresholds_answer
+
+    check_numbers(args)
+    result, lines = thresholds_answer(args.angle, args.friction, args.inclination)
+    if args.json:
+        print_json(result)
+    else:
+        print("\n".join(lines))
+    return 0
+
+
+def cmd_velocity(args) -> int:
+    """``dem pointmass velocity``: the point mass's conveying velocity at one drive."""
+    from dem import pointmass
+    from dem.pointmass.answers import velocity_answer
+
+    check_numbers(args)
+    r = pointmass.velocity(
+        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n,
+        impact=args.impact,
+    )  # fmt: skip
+    result, lines = velocity_answer(r, args.frequency)
+    if args.json:
+        print_json(result)
+    else:
+        print("\n".join(lines))
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    """``dem pointmass sweep``: the point-mass velocity over a range, as a table and plot."""
+    from dem.pointmass.sweep import parse_values, sweep, write_csv
+
+    values = {
+        key: parse_values(getattr(args, key), option_name(key))
+        for key in ("throw_number", "angle", "friction", "inclination", "eps_t", "eps_n")
+    }
+    if args.out:
+        writable_path("--out", args.out, folder=False)
+    result = sweep(**values, impact=args.impact)
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as stream:
+            write_csv(result, stream)
+        print(f"wrote {len(result['velocity_norm'])} rows to {args.out}", file=sys.stderr)
+    else:
+        write_csv(result, sys.stdout)
+    return 0
+
+
+def cmd_optimum(args) -> int:
+    """``dem pointmass optimum``: the best vibration angle or throw number."""
+    from dem.pointmass.answers import optimum_lines
+    from dem.pointmass.sweep import optimum
+
+    check_numbers(args)
+    bounds = parse_bounds(args.bounds, "LOW:HIGH, two numbers")
+    plot = plot_path("--plot", args.plot, "optimum.png") if args.plot else None
+    held = ("friction", "angle", "throw_number", "amplitude", "peak_acceleration",
+            "drive_velocity", "frequency", "inclination", "eps_t", "eps_n", "impact")  # fmt: skip
+    o = optimum(args.over, args.hold, bounds=bounds, **{k: getattr(args, k) for k in held})
+    if plot is not None:
+        from dem.studies.plots import optimum_figure
+
+        optimum_figure(o, plot)
+        print(f"wrote {plot}", file=sys.stderr)
+    if args.json:
+        print_json(o.as_dict(with_curve=args.curve))
+    else:
+        print("\n".join(optimum_lines(o, args.over, args.hold)))
+    return 0
+
+
+def cmd_run(args) -> int:
+    """``dem run``: one case, its summary printed and written."""
+    from dem.run.replicas import run_replicas
+    from dem.run.runner import RunInterrupted
+    from dem.scene.case import load_case
+    from dem.studies.answers import run_summary_lines
+
+    overrides = set_overrides(args.set)
+    if args.replicas is not None:
+        overrides["run.replicas"] = args.replicas
+    case = load_case(args.case_dir, overrides)
+    out = writable_path("--out", args.out or case.directory / "output", folder=True)
+    try:
+        summary = run_replicas(
+            case, out, cycles=args.cycles, threads=args.threads, progress=True,
+            overwrite=args.overwrite, resume=args.resume, frames=not args.no_frames,
+            lab_frame=args.lab_frame, all_replicas=args.all_replicas,
+        )  # fmt: skip
+    except RunInterrupted as stop:
+        print(f"dem: stopped by {stop}", file=sys.stderr)
+        if stop.checkpoint is not None:
+            print(f"dem: continue with: {resume_command(args, case, out)}", file=sys.stderr)
+        return 128 + stop.signum
+    print("\n".join(run_summary_lines(summary)))
+    print(f"wrote {out / 'summary.json'}")
+    return 0
+
+
+def resume_command(args, case, out: Path) -> str:
+    """The ``dem run`` line that resumes this run: every option a resume must repeat.
+
+    The folder, the ``--set`` keys, the measured cycles (a resume is refused with others) and
+    the frames setting (``--no-frames``, ``--lab-frame``), and the threads if they were given.
+    """
+    import shlex
+
+    parts = ["dem", "run", str(args.case_dir), "--out", str(out), "--resume"]
+    for text in args.set or ():
+        parts += ["--set", text]
+    parts += ["--cycles", str(args.cycles if args.cycles is not None else case.run.cycles)]
+    if args.no_frames:
+        parts.append("--no-frames")
+    if args.lab_frame:
+        parts.append("--lab-frame")
+    if args.threads is not None:
+        parts += ["--threads", str(args.threads)]
+    if args.replicas is not None:
+        parts += ["--replicas", str(args.replicas)]
+    if args.all_replicas:
+        parts.append("--all-replicas")
+    return shlex.join(parts)
+
+
+def cmd_plan(args) -> int:
+    """``dem plan``: cost, memory and expected error of a case before it runs."""
+    from dem.run.plan import plan
+    from dem.scene.case import load_case
+
+    overrides = set_overrides(args.set)
+    if args.suggest:
+        from dem.run.plan import suggest
+
+        done = suggest(args.case_dir, args.suggest, overrides, threads=args.threads,
+                       cycles=args.cycles)  # fmt: skip
+        if args.json:
+            before, after = done.before.as_dict(), done.after.as_dict()
+            print_json({"path": str(done.path), "changes": done.changes, "before": before,
+                         "after": after})  # fmt: skip
+        else:
+            print(done.text())
+        return 0
+    case = load_case(args.case_dir, overrides)
+    result = plan(case, threads=args.threads, cycles=args.cycles)
+    if args.json:
+        print_json(result.as_dict())
+    else:
+        print(result.text())
+    return 0
+
+
+def cmd_dem_sweep(args) -> int:
+    """``dem sweep``: runs of one case over the values of its keys."""
+    from dem.studies.sweep import parse_set, run_sweep
+
+    check_numbers(args)
+    sets = [parse_set(text) for text in args.set]
+    out = writable_path("--out", args.out or Path(args.case_dir) / "sweep", folder=True)
+    result = run_sweep(
+        args.case_dir, sets, out, scheduler=args.scheduler, workers=args.workers,
+        threads=args.threads or 1, cycles=args.cycles, frames=args.frames,
+    )  # fmt: skip
+    if args.json:
+        print_json(result)
+    else:
+        failed = len(result["failed"])
+        print(f"{result['points']} points: {result['done']} done "
+              f"({result['skipped']} from an earlier run), {failed} failed")  # fmt: skip
+        print(f"wrote {result['csv']}, sweep.h5 and sweep.png")
+    for name, error in result["failed"].items():
+        print(f"dem: sweep point {name} failed: {error}", file=sys.stderr)
+    return 1 if result["failed"] else 0
+
+
+def cmd_dem_optimum(args) -> int:
+    """``dem optimum``: the DEM's best angle or throw number around the point mass's."""
+    from dem.studies.optimum import bulk_optimum
+
+    check_numbers(args)
+    bounds = parse_bounds(args.bounds, "LO:HI, two numbers")
+    out = writable_path("--out", args.out or Path(args.case_dir) / "optimum", folder=True)
+    result = bulk_optimum(
+        args.case_dir, args.over, args.hold, out, bounds=bounds, tolerance=args.tolerance,
+        max_runs=args.max_runs, scheduler=args.scheduler, workers=args.workers,
+        cycles=args.cycles,
+    )  # fmt: skip
+    if args.json:
+        print_json(result)
+    else:
+        b, p = result["bulk"], result["pointmass"]
+        print(f"bulk optimum {args.over} = {b['x']:.4g} +- {b['uncertainty']:.2g} "
+              f"({result['objective']} {b['value']:.4g}; {b['reason']}; "
+              f"{len(result['samples'])} runs)")  # fmt: skip
+        print(f"point-mass optimum {args.over} = {p['value']:.4g} "
+              f"(90 % plateau {p['plateau_90'][0]:.3g}-{p['plateau_90'][1]:.3g})")  # fmt: skip
+        print(f"wrote {out / 'optimum.json'}, optimum.csv and optimum.png")
+    return 0
+
+
+def cmd_report(args) -> int:
+    """``dem report``: a finished run's figures and comparison with the point mass."""
+    from dem.studies.report import make_report
+
+    for out in args.out_dirs:
+        if not (Path(out) / "summary.json").is_file():
+            raise InputError("OUT", out, "a run output folder holding summary.json")
+    dest = writable_path("--out", args.dest, folder=True) if args.dest else None
+    paths = make_report([Path(p) for p in args.out_dirs], dest)
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def cmd_export_liggghts(args) -> int:
+    """``dem export liggghts``: the case as a LIGGGHTS deck."""
+    from dem.io.liggghts.export import export_deck, plan_export
+    from dem.scene.case import load_case
+
+    case = load_case(args.case_dir)
+    plan = plan_export(case, timestep=args.timestep, settle_cycles=args.settle_cycles,
+                       from_run=args.from_run)  # fmt: skip
+    out = writable_path("OUT_DIR", args.out_dir, folder=True)
+    path = export_deck(plan, out, dump=not args.no_dump, overwrite=args.overwrite)
+    print(f"wrote {path} (dt = {plan.timestep:.4g} s, {plan.settle_cycles} settling and "
+          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
+    if plan.settle_note:
+        print(f"settle: {plan.settle_note}")
+    return 0
+
+
+def cmd_calibrate(args) -> int:
+    """``dem calibrate``: fit the tangential spring to eps_t, and write it back."""
+    import time
+
+    from dem.scene.case import load_case
+    from dem.studies.answers import calibration_lines
+    from dem.studies.calibrate import EvaluationTrail, calibrate, write_calibration
+    from dem.studies.plots import calibration_figure
+
+    case = load_case(args.case_dir)
+    plot = plot_path("--plot", args.plot, "calibration.png") if args.plot else None
+    print(
+        f"dem calibrate {case.name}: eps_t target {case.wall_material.restitution_tangential:g}, "
+        f"virtual impacts of one grain over the point mass's landings",
+        file=sys.stderr,
+    )
+    trail = EvaluationTrail(case)
+    started = time.perf_counter()
+
+    def progress(kappa, eps, done, total):
+        """Each evaluation: count, ETA, and a row of the trail kept if the search is stopped."""
+        trail.record(kappa, eps, done)
+        spent = time.perf_counter() - started
+        eta = spent / done * max(total - done, 0)
+        print(f"  [{done:2d}/{total}] k_t / k_n = {kappa:<10.4g} mean eps_t = {eps:.4f}   "
+              f"{spent:.0f} s, at most {eta:.0f} s to go", file=sys.stderr)  # fmt: skip
+
+    try:
+        cal = calibrate(case, progress=progress)
+    except KeyboardInterrupt:
+        best = trail.closest()
+        text = ""
+        if best is not None:
+            text = (f"; the closest so far: k_t / k_n = {best[0]:.4g} "
+                    f"(mean eps_t {best[1]:.4f} for {trail.target:g})")  # fmt: skip
+        print(f"dem calibrate: stopped after {len(trail.tried)} evaluations, case.toml unchanged; "
+              f"every evaluation is in {trail.path}{text}", file=sys.stderr)  # fmt: skip
+        return 130
+    print("\n".join(calibration_lines(case, cal)))
+    strict_fail = args.strict and not cal.reachable
+    if not cal.reachable:
+        print(
+            f"dem calibrate: {'no k_t / k_n brings' if cal.fitted else 'the law does not bring'} "
+            f"every impact within 0.02 of its target (worst {cal.worst:.4f}); "
+            + ("the closest fit is written. " if cal.fitted and not args.dry_run else "")
+            + ("--strict: exit 1" if args.strict else "use --strict to fail on this"),
+            file=sys.stderr,
+        )
+    if plot is None:
+        plot = case.directory / "output" / "calibration.png"
+        plot.parent.mkdir(parents=True, exist_ok=True)
+    calibration_figure(cal, case.wall_material.friction, plot)
+    print(f"wrote {plot}")
+    if not cal.fitted:
+        print("case.toml unchanged: nothing to calibrate")
+        return 1 if strict_fail else 0
+    if args.dry_run:
+        print("dry run: case.toml unchanged")
+        return 1 if strict_fail else 0
+    source = write_calibration(case, cal, lambda kept: print(f"kept the previous file as {kept}"))
+    print(f"wrote {source} ([contact] tangential_stiffness_ratio, tangential_damping_ratio)")
+    return 1 if strict_fail else 0

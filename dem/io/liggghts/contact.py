@@ -1,0 +1,136 @@
+"""The material and contact-law block of a LIGGGHTS deck: dem's laws mapped one-to-one.
+
+- ``hertz_mindlin`` -> ``model hertz tangential history`` with the same Young's modulus Y and
+  Poisson ratio nu (one material for grains and walls), friction mu and normal restitution e.
+  LIGGGHTS computes k_n = (4/3) Y* sqrt(R* d_n) and damping from
+  beta = ln(e) / sqrt(ln(e)^2 + pi^2); it refuses e <= 0.05, so e is clamped to
+  :data:`MIN_HERTZ_RESTITUTION` and the deck says so.
+- ``linear`` -> ``model hooke/stiffness`` with ``absolute_damping on``: k_n (N/m),
+  k_t = kappa k_n, and the damping coefficients (N s/m)
+
+      gamma_n = 2 zeta sqrt(k_n m*),   zeta = -ln(e) / sqrt(ln(e)^2 + pi^2)   (1 for e = 0),
+
+  with m* = m/2 for grain-grain (atom types 1-1) and m* = m for grain-wall contacts (1-2), so the
+  restitution is exact for both and e = 0 needs no clamp; gamma_t = gamma_n as dem's
+  ``tangential = "liggghts"`` uses it, or 2 zeta_t sqrt(k_t f_t m*) for ``"coulomb"``.
+
+LIGGGHTS has one tangential convention, the spring capped at mu F_n with the dashpot added while
+sticking: dem's ``tangential = "liggghts"``. A case with ``"coulomb"`` (dem's default) is written
+with the same coefficients and a NOTE in the deck; use ``"liggghts"`` on both sides of a
+comparison.
+
+``limitForce`` is written out (on or off as ``[contact] limit_force``), and so is
+``tangential_damping on`` (the LIGGGHTS default). Grains are atom type 1, walls type 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+from dem.io.liggghts.text import fmt
+from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
+from dem.physics.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
+from dem.scene.resolved import Scene
+from dem.scene.timestep import ContactLaw
+
+#: LIGGGHTS refuses coefficientRestitution <= 0.05; Hertz decks use at least this value.
+MIN_HERTZ_RESTITUTION = 0.06
+
+
+def damping_ratio(restitution: float) -> float:
+    """Return the damping ratio zeta of a linear spring-dashpot with restitution e in [0, 1].
+
+    zeta = -beta = -ln(e) / sqrt(ln(e)^2 + pi^2) (:func:`dem.kernels.contacts.damping_beta`, the
+    kernels' value), from e = exp(-zeta pi / sqrt(1 - zeta^2)); e = 0 gives critical damping,
+    zeta = 1.
+    """
+    return -damping_beta(restitution)
+
+
+def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str]:
+    """Return the property/global lines, the model string and the model settings."""
+    case = scene.case
+    lines = [
+        "# grains are atom type 1, walls type 2; each matrix below is (1-1 1-2 2-1 2-2): "
+        "grain-grain the material, grain-wall [wall] (the material's where it gives nothing)",
+    ]
+    row = TANGENTIAL_LAWS[case.contact.tangential]
+    if row.liggghts_as != row.name:
+        note = row.liggghts_note
+        if case.contact.model != "linear" and row.name == "coulomb":
+            note += ", with Mindlin's k_t = 8 G* sqrt(R* d)"
+        lines.append("# NOTE: " + note)
+        if row.name != "coulomb":  # "coulomb" keeps its own k_t / k_n and zeta_t (below)
+            case = case.with_tangential(row.liggghts_as)
+    contact, material, wall = case.contact, case.material, case.wall_material
+    limit = "on" if contact.limit_force else "off"
+
+    def pair(grains: float, walls: float) -> str:
+        return " ".join(fmt(x) for x in (grains, walls, walls, walls))
+
+    mu = pair(material.friction, wall.friction)
+    if contact.wall_lever_arm == "surface":
+        lines.append(
+            "# NOTE: the case's wall contacts act at r - delta (contact.wall_lever_arm = "
+            "'surface'); LIGGGHTS's walls at r - delta/2, as dem's wall_lever_arm = 'midpoint'"
+        )
+    lines += [
+        f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu}",
+    ]
+    if contact.model == "hertz_mindlin":
+        es = []
+        for e_case in (material.restitution_normal, wall.restitution_normal):
+            e = max(e_case, MIN_HERTZ_RESTITUTION)
+            if e != e_case and e_case not in es:
+                lines.append(
+                    f"# NOTE: restitution_normal = {e_case} in the case; LIGGGHTS refuses "
+                    f"e <= 0.05, so e = {e} is used here (use the same value on both sides of a "
+                    "comparison)"
+                )  # fmt: skip
+            es.append(e)
+        y, nu = fmt(contact.youngs_modulus), fmt(contact.poisson_ratio)
+        lines += [
+            f"fix m_Y all property/global youngsModulus peratomtype {y} {y}",
+            f"fix m_nu all property/global poissonsRatio peratomtype {nu} {nu}",
+            f"fix m_e all property/global coefficientRestitution peratomtypepair 2 {pair(*es)}",
+        ]
+        model = NORMAL_LAWS[contact.model].liggghts
+        settings = f"limitForce {limit} tangential_damping on"
+    else:
+        # the scene's law, or the law of the case switched to "liggghts" above (its own)
+        law = scene.law if case is scene.case else ContactLaw.from_case(case)
+        kn = contact.stiffness
+        rows = (law.params, wall_params(law.params))  # grain-grain, grain-wall
+        kts = [rows[0][P_KT_RATIO] * kn] + [rows[1][P_KT_RATIO] * kn] * 3
+        zetas = [damping_ratio(material.restitution_normal)]
+        zetas += [damping_ratio(wall.restitution_normal)] * 3
+        # m* = m/2 grain-grain (1-1), m for grain-wall (1-2 and 2-1); type 2-2 never meets
+        meff = (0.5 * sphere_mass, sphere_mass, sphere_mass, sphere_mass)
+        gn = [2.0 * z * math.sqrt(kn * m) for z, m in zip(zetas, meff, strict=True)]
+        if contact.tangential == "liggghts":
+            gt, gt_text = gn, "gamma_t = gamma_n (as dem's liggghts convention)"
+        else:
+            gt = [
+                2.0 * row[P_ZETA_T] * math.sqrt(kt * row[P_MASS_T] * m)
+                for row, kt, m in zip((rows[0],) + (rows[1],) * 3, kts, meff, strict=True)
+            ]
+            gt_text = (f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {rows[0][P_ZETA_T]:.6g}, "
+                       f"f_t = {rows[0][P_MASS_T]:.6g}")  # fmt: skip
+        lines += [
+            f"# linear spring-dashpot: zeta = {zetas[0]:.6g} (grain-wall {zetas[1]:.6g}) from e = "
+            f"{material.restitution_normal} (wall {wall.restitution_normal}), "
+            "gamma_n = 2 zeta sqrt(k m*), m* = m/2 (1-1) or m (1-2); " + gt_text,
+            f"fix m_kn all property/global kn peratomtypepair 2 {' '.join([fmt(kn)] * 4)}",
+            "fix m_kt all property/global kt peratomtypepair 2 " + " ".join(map(fmt, kts)),
+            "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(fmt, gn)),
+            "fix m_gt all property/global gammat_abs peratomtypepair 2 " + " ".join(map(fmt, gt)),
+        ]
+        model = NORMAL_LAWS[contact.model].liggghts
+        settings = f"absolute_damping on limitForce {limit} tangential_damping on"
+    if material.rolling_friction > 0.0 or wall.rolling_friction > 0.0:
+        mr = pair(material.rolling_friction, wall.rolling_friction)
+        lines.append(
+            f"fix m_mur all property/global coefficientRollingFriction peratomtypepair 2 {mr}"
+        )
+        model += " rolling_friction cdt"
+    return lines, model, settings

@@ -1,0 +1,59 @@
+"""Output paths checked before any work: each refused with the option or key and the cause.
+
+A command that will write a file or a folder checks the path first (:func:`writable_path`), so
+nothing is computed for output that cannot be written: a file where a folder is wanted or the
+reverse, a name or path longer than the system allows, a missing parent folder, a place that is
+not writable. :func:`plot_path` does the same for a figure named by a file or a folder.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from dem.errors import InputError
+
+#: Longest file name and path the guards accept (Linux NAME_MAX and PATH_MAX).
+NAME_MAX, PATH_MAX = 255, 4096
+
+
+def writable_path(key: str, path: str | Path, *, folder: bool) -> Path:
+    """``path`` as an output file (``folder`` False) or folder, refused before any work.
+
+    Refused with the key and the cause: a file where a folder is wanted or the reverse, a name
+    or path longer than the system allows, or a nearest existing folder that is not writable.
+    A file's parent folder must exist (dem does not create it); a folder is created later.
+    """
+    path = Path(path)
+    if len(str(path.absolute())) >= PATH_MAX or any(len(part) > NAME_MAX for part in path.parts):
+        raise InputError(key, str(path), f"a path the system allows (names <= {NAME_MAX} "
+                         f"characters, paths < {PATH_MAX})")  # fmt: skip
+    if path.exists() and path.is_dir() != folder:
+        what = "a folder (this is a file)" if folder else "a file name (this is a folder)"
+        raise InputError(key, str(path), what)
+    parent = path if folder else path.parent
+    if not folder and not parent.absolute().is_dir():
+        raise InputError(key, str(path), f"a file in an existing folder ({parent} does not exist)")
+    base = parent.absolute()
+    while not base.exists():
+        base = base.parent
+    if not base.is_dir():
+        raise InputError(key, str(path), f"a path under a folder ({base} is a file)")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise InputError(key, str(path), f"a writable place ({base} is not writable)")
+    return path
+
+
+def plot_path(key: str, text: str, default_name: str) -> Path:
+    """The figure path that option ``key`` names, refused before any work if it cannot be one.
+
+    A .png file name (any case) is taken as it is; an existing folder gets ``default_name``
+    inside it; anything else is refused, since matplotlib would write it with .png added.
+    """
+    path = Path(text)
+    if path.is_dir():
+        path = path / default_name
+    elif path.suffix.lower() != ".png":
+        raise InputError(key, text, f"a .png file name, or an existing folder to write "
+                         f"{default_name} in")  # fmt: skip
+    return writable_path(key, path, folder=False)

@@ -1,0 +1,104 @@
+"""The answers of ``dem run`` and ``dem calibrate`` in words, as the command prints them.
+
+:func:`run_summary_lines` turns a run's summary.json into lines, each value with its unit and
+the digits its error allows (:func:`dem.physics.measure.with_error`): the velocity, its error
+bar, the point mass beside it, the mass flow, a feeder's discharge, whether the material is
+stiff enough for the rigid answer, and the cost. :func:`calibration_lines` is the table of a
+calibration's impacts with eps_t before and after the fit (:mod:`dem.studies.calibrate`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from dem.physics.laws import TANGENTIAL_LAWS
+from dem.physics.measure import with_error
+from dem.studies.report import feeder_lines
+
+if TYPE_CHECKING:
+    from dem.studies.calibrate import Calibration
+
+
+def run_summary_lines(s: dict) -> list[str]:
+    """The answer of a run (its summary.json ``s``), one line each, labels in a column."""
+    lines = []
+
+    def line(label: str, text: str) -> None:
+        lines.append(f"{label:<18s} {text}")
+
+    line("mean velocity", with_error(s["mean_velocity"], s["mean_velocity_stderr"], "m/s"))
+    line("normalised", with_error(s["mean_velocity_norm"], s["mean_velocity_norm_stderr"])
+         + "  (v / A omega cos phi)")  # fmt: skip
+    if s.get("replicas", 1) > 1:
+        line("error bar", f"{s['replicas']} fills pooled, fill-to-fill spread included (95 %: "
+             f"+- {s['mean_velocity_ci95']:.2g} m/s; spread between fills "
+             f"{s['replica_spread']:.2g} m/s)")  # fmt: skip
+    else:
+        line("error bar", "this run only: it excludes the fill-to-fill spread (pool fills "
+             "with --replicas N)")  # fmt: skip
+    paper, bounded = s.get("pointmass_velocity_norm"), s.get("pointmass_bounded_velocity_norm")
+    if paper is not None:
+        text = f"{paper:.3f} (paper's model)"
+        if bounded is not None and abs(bounded - paper) > 5e-4:
+            text += f", {bounded:.3f} (Coulomb-bounded, the DEM's reference)"
+        line("point mass", text + " in v_norm")
+    flow = with_error(s["mass_flow_rate"], s.get("mass_flow_rate_stderr")
+                      or abs(s["mass_flow_rate"] * s["mean_velocity_stderr"]
+                             / (s["mean_velocity"] or float("nan"))), "kg/s")  # fmt: skip
+    line("mass flow", f"{flow} through the section ({s['mass_flow_rate_per_width']:.3g} kg/s "
+         "per m of width)")  # fmt: skip
+    lines += feeder_lines(s.get("feeder"))  # the discharge: a feeder's answer
+    stiff = s.get("stiffness")
+    if stiff:
+        sign = "<=" if stiff["converged"] else ">"
+        ratio = f"(omega / omega_bed)^2 = {stiff['compliance']:.2g} {sign} "
+        ratio += f"{stiff['compliance_limit']:.2g}"
+        near = "; ".join(
+            f"{m['bed']} at E = {m['youngs_modulus_pa']:.0e} Pa (c = {m['compliance']:.2g}): "
+            f"{100 * m['error_vs_rigid']:+.1f} +- {100 * m['error_stderr']:.1f} %"
+            for m in stiff.get("measured") or []
+        )
+        near = f" (the bulk study against the rigid limit, near this c: {near})" if near else ""
+        if stiff["converged"]:
+            line("stiffness", f"stiff enough for the rigid material's bulk velocity, {ratio}"
+                 + near)  # fmt: skip
+        else:
+            line("stiffness", f"TOO SOFT for the rigid material's answer: {ratio}, beyond "
+                 f"which the bulk study measured more than 2 % off{near}; set "
+                 f"{stiff['key']} >= {stiff['value']:.3g}")  # fmt: skip
+    rate = s.get("particle_steps_per_s")
+    line("cost", f"dt {s['timestep']:.3g} s, {s['steps']} steps, {s['wall_time_s']:.0f} s"
+         + (f", {rate:.3g} particle-steps/s" if rate else ""))  # fmt: skip
+    return lines
+
+
+def calibration_lines(case, cal: Calibration) -> list[str]:
+    """The impacts of a calibration of ``case``, eps_t per impact, and the fit, one line each."""
+    theta = cal.impacts[:, 0]
+    lines = [
+        f"impacts          {len(theta)}, incidence {theta.min():.1f}-{theta.max():.1f} deg",
+        "  incidence  speed   target  eps_t   residual",
+    ]
+    for (inc, speed), target, eps, bound in zip(
+        cal.impacts, cal.targets, cal.after, cal.bounded, strict=True
+    ):
+        mark = "  friction-bound (Coulomb caps eps_t here)" if bound else ""
+        lines.append(
+            f"  {inc:6.1f} deg {speed:5.3f}   {target:.4f}  {eps:.4f}  {eps - target:+.4f}{mark}"
+        )
+    if not cal.fitted:
+        lines.append(
+            f"nothing to fit     {TANGENTIAL_LAWS[case.contact.tangential].calibration}; "
+            f"weighted rms residual {cal.deviation:.4f}"
+        )
+    else:
+        spread = f"{cal.eps_t:.4f} +- {cal.eps_t_spread:.4f}"
+        lines += [
+            f"before           mean eps_t = {cal.before.mean():.4f}, weighted rms deviation "
+            f"{cal.deviation_before:.4f}",
+            f"after            k_t / k_n = {cal.kappa:.6g}, zeta_t = {cal.zeta_t:g}",
+            f"                 eps_t = {spread}, eps_n = {cal.eps_n:.4f}",
+            f"                 weighted rms deviation {cal.deviation:.4f} (the fit minimises it)",
+        ]
+    lines.append(f"residual         {cal.residual:+.4f} (mean eps_t - mean reachable target)")
+    return lines
