@@ -18,6 +18,7 @@ import numpy as np
 
 from dem.engine.simulation import Simulation
 from dem.engine.state import Bodies, Spheres
+from dem.kernels.rigid import quat_to_matrix
 from dem.scene import fill
 from dem.scene.mesh import TriangleMesh
 from dem.scene.resolved import resolve
@@ -49,6 +50,7 @@ def from_grains(
     *,
     orientations: np.ndarray | None = None,
     velocities: np.ndarray | None = None,
+    spins: np.ndarray | None = None,
     timestep: float | None = None,
     impact_speed: float | None = None,
 ) -> Simulation:
@@ -62,6 +64,10 @@ def from_grains(
         orientations: Clumps: unit quaternions (w, x, y, z) body -> trough frame, (G, 4);
             default the template's principal axes along the trough axes.
         velocities: Centre-of-mass velocities relative to the trough, (G, 3), m/s; default 0.
+        spins: Angular velocities omega, trough frame, (G, 3), rad/s; default 0. A clump's
+            angular momentum is set to L = R (I * (R^T omega)), with R its rotation matrix and
+            I its principal moments of inertia, kg m^2. Needs ``particles.rotation`` on
+            (ValueError otherwise).
         timestep: dt, s; default ``case.run.timestep``, else automatic.
         impact_speed: Speed of the hardest impact expected, m/s, for the automatic step and
             the instability check; default the drive speed plus the fastest grain plus a
@@ -85,10 +91,16 @@ def from_grains(
         fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
         impact_speed = impact_speed_for(case, top, fastest)
     step = timestep_for(case, timestep=timestep, impact_speed=impact_speed, grains=n, law=scene.law)
-    return _build(scene, positions, orientations, velocities, step, impact_speed)
+    if spins is not None:
+        if not case.particles.rotation:
+            raise ValueError("spins need particles.rotation = true: the grains cannot turn")
+        spins = np.asarray(spins, dtype=np.float64).reshape(n, 3)
+    return _build(scene, positions, orientations, velocities, step, impact_speed, spins)
 
 
-def _build(scene, positions, orientations, velocities, step, reference_speed) -> Simulation:
+def _build(
+    scene, positions, orientations, velocities, step, reference_speed, spins=None
+) -> Simulation:
     case = scene.case
     pt, mat = case.particles, case.material
     n = positions.shape[0]
@@ -97,6 +109,8 @@ def _build(scene, positions, orientations, velocities, step, reference_speed) ->
         spheres = Spheres.create(positions, pt.radius, mat.density)
         if velocities is not None:
             spheres.v[:] = velocities
+        if spins is not None:
+            spheres.omega[:] = spins
     else:
         if orientations is None:
             orientations = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
@@ -104,6 +118,10 @@ def _build(scene, positions, orientations, velocities, step, reference_speed) ->
         bodies, spheres = Bodies.create(scene.grain, positions, quats)
         if velocities is not None:
             bodies.v[:] = velocities
+        if spins is not None:
+            for i in range(n):
+                r = quat_to_matrix(bodies.q[i])
+                bodies.ang_mom[i] = r @ (bodies.moments[i] * (r.T @ spins[i]))
         bodies.place(spheres)
     trough = scene.trough
     mesh = trough_mesh(case)

@@ -46,6 +46,9 @@ from dem.run.replicas import run_replicas
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import replicas  # noqa: E402
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 SCRATCH = HERE / "scratch"
@@ -252,7 +255,7 @@ def fills(bed: str, moduli: list[float], seed: int, replicas: int) -> None:
             "bed": bed, "youngs_modulus_pa": youngs, "dt_fraction_of_limit": DT_FRACTION,
             "fills": len(values), "seeds": f"1-{len(old)}, {seed}-{seed + replicas - 1}",
             "mean_velocity_m_s": float(values.mean()),
-            "stderr_m_s": float(values.std(ddof=1) / math.sqrt(len(values))),
+            "stderr_m_s": replicas.replica_stderr(values),
             "fill_to_fill_sd_m_s": float(values.std(ddof=1)),
             "per_fill_m_s": " ".join(f"{v:.6g}" for v in values),
             "cpu_s_new_fills": summary["wall_time_s"],
@@ -548,7 +551,7 @@ def rigid_limit(rows: list[dict], bed: str) -> dict:
             "held_out_youngs_pa": float(e[held]), "held_out_z": z_held,
             "rejected_fit_v_inf_m_s": float(v_inf),
             "v_inf_m_s": float(np.mean(stiff)),
-            "v_inf_stderr_m_s": float(np.std(stiff, ddof=1) / math.sqrt(stiff.size)),
+            "v_inf_stderr_m_s": replicas.replica_stderr(stiff),
             "scatter_m_s": float(np.std(stiff, ddof=1)), "chi2": chi2,
             "dof": int(use.sum() - 2),
         }  # fmt: skip

@@ -26,8 +26,10 @@ the mean x-velocity of every step and is binned here into exactly the drive cycl
 (cycle c = driven steps round(c P / dt) + 1 ... round((c + 1) P / dt)). Equal sphere masses, so
 the plain mean is the mass-weighted mean. Skipped with a message if ``liggghts`` is not on PATH.
 
-Both: v = mean of the per-cycle means, standard error = std(ddof=1) / sqrt(cycles).
-Not part of the test suite.
+Both: v = mean of the per-cycle means, standard error = the correlated standard error of the
+per-cycle means (``dem.physics.measure.correlated_stderr``; std(ddof=1) / sqrt(cycles) would
+understate it, successive cycles of a bed being correlated). The run of both codes is
+validation/_lib/pair.py's. Not part of the test suite.
 """
 
 from __future__ import annotations
@@ -37,33 +39,24 @@ import csv
 import dataclasses
 import json
 import math
-import re
-import shutil
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from dem import __version__, pointmass, provenance
-from dem.io.liggghts import (
-    DECK_NAME,
-    LIGGGHTS_INSTALL,
-    VX_FILE,
-    find_liggghts,
-    machine_info,
-    run_liggghts,
-    write_deck,
-)
-from dem.physics.measure import conveying_velocity
+from dem import pointmass
+from dem.io.liggghts import DECK_NAME
 from dem.scene.case import load_case
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header, pair, replicas  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
 ANGLES = (5.0, 15.0, 25.0, 35.0, 45.0, 55.0)
 RESTITUTION = 0.06
-TAU_RE = re.compile(r"variable tau equal \(step-(\d+)\)\*")
 POINTMASS_EPS_T, POINTMASS_EPS_N = 0.8, 0.0
 
 
@@ -82,12 +75,6 @@ def make_case(base, angle: float, args):
     )
 
 
-def cycle_edges(case, n_cycles: int) -> list[int]:
-    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
-    period = 1.0 / case.drive.frequency
-    return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
-
-
 def diagnostics(per_cycle) -> dict:
     """Checks on the per-cycle standard error (not used for the comparison itself).
 
@@ -103,9 +90,7 @@ def diagnostics(per_cycle) -> dict:
     d = u - u.mean()
     r1 = float(np.dot(d[:-1], d[1:]) / np.dot(d, d)) if u.size > 2 else math.nan
     return {
-        "stderr_pair_means": float(pairs.std(ddof=1) / math.sqrt(pairs.size))
-        if pairs.size > 1
-        else math.nan,
+        "stderr_pair_means": replicas.replica_stderr(pairs) if pairs.size > 1 else math.nan,
         "trend_per_10_cycles": 10.0 * slope,
         "lag1_autocorrelation": r1,
     }
@@ -115,83 +100,47 @@ def tag(angle: float) -> str:
     return f"phi_{angle:g}"
 
 
-# --------------------------------------------------------------------------- LIGGGHTS
-def liggghts_point(case, args) -> dict:
-    """LIGGGHTS on the case's deck; per-cycle means binned into dem's drive cycles."""
-    if find_liggghts() is None:
-        msg = f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})"
-        print(msg)
-        return {"skipped": msg}
-    s, c = case.run.settle_cycles, case.run.cycles
-    edges = cycle_edges(case, s + c)
-    deck_dir = Path(args.decks) / tag(case.drive.angle)
-    deck = write_deck(
+# --------------------------------------------------------------------------- the pair
+def run_both(case, args) -> pair.Pair:
+    """LIGGGHTS (unless --skip-liggghts), then dem (unless --skip-dem), at one angle."""
+    name = tag(case.drive.angle)
+    return pair.run_pair(
         case,
-        deck_dir,
-        timestep=case.run.timestep,
-        steps=edges[-1] - edges[s],
-        settle_steps=edges[s],
-        sample_steps=1,
+        deck_dir=Path(args.decks) / name,
+        work=Path(args.scratch) / "liggghts" / name,
+        dem_out=Path(args.scratch) / "dem" / name,
+        threads=args.threads,
+        skip_reference=args.skip_liggghts,
+        skip_dem=args.skip_dem,
+        min_loops=2,
+        strict_settle=False,
     )
-    found = TAU_RE.search(deck.read_text())
-    if found is None:
-        raise SystemExit(f"no 'variable tau equal (step-N)*dt' line in {deck}")
-    drive_start = int(found.group(1))
-    work = Path(args.scratch) / "liggghts" / tag(case.drive.angle)
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(deck_dir, work)
-    run = run_liggghts(work, DECK_NAME, min_loops=2)
-    atoms = run.loop_times[-1].atoms
-    if atoms != case.particles.count:
-        raise SystemExit(f"LIGGGHTS kept {atoms} atoms, not {case.particles.count} (grains lost)")
-    data = np.loadtxt(work / VX_FILE, comments="#")
-    steps, vx = data[:, 0].astype(np.int64) - drive_start, data[:, 1]
-    per_cycle = []
-    for k in range(s, s + c):
-        inside = (steps > edges[k]) & (steps <= edges[k + 1])
-        if inside.sum() != edges[k + 1] - edges[k]:
-            expected = edges[k + 1] - edges[k]
-            raise SystemExit(f"cycle {k}: {inside.sum()} samples in {VX_FILE}, not {expected}")
-        per_cycle.append(float(vx[inside].mean()))
-    settle_cycle = []
-    for k in range(s):
-        inside = (steps > edges[k]) & (steps <= edges[k + 1])
-        settle_cycle.append(float(vx[inside].mean()) if inside.any() else math.nan)
-    d = case.drive
-    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
-    mean, se = v.mean, v.stderr
-    print(f"  LIGGGHTS phi = {d.angle:g}: v = {mean:.5f} +- {se:.5f} m/s ({run.wall_s:.0f} s)")
+
+
+def liggghts_entry(case, lig: pair.ReferenceRun) -> dict:
+    """results.json's LIGGGHTS half of a point: per-cycle means binned into dem's cycles."""
+    run, work = lig.run, lig.work
+    mean, se = replicas.series_mean(lig.per_cycle)
+    print(f"  LIGGGHTS phi = {case.drive.angle:g}: v = {mean:.5f} +- {se:.5f} m/s "
+          f"({run.wall_s:.0f} s)")  # fmt: skip
     return {
         "version": run.version,
-        "deck": str(deck.relative_to(ROOT)),
+        "deck": str(lig.deck.relative_to(ROOT)),
         "command": f"cd {work.relative_to(ROOT)} && liggghts -in {DECK_NAME}",
         "log": str((work / "log.liggghts").relative_to(ROOT)),
         "mean_velocity": mean,
         "mean_velocity_stderr": se,
-        "per_cycle_velocity": per_cycle,
-        "settle_cycle_velocity": settle_cycle,
-        "drive_start_step": drive_start,
+        "per_cycle_velocity": lig.per_cycle,
+        "settle_cycle_velocity": lig.settle_cycle,
+        "drive_start_step": lig.drive_start,
         "loop_times_s": [x.seconds for x in run.loop_times],
         "wall_time_s": run.wall_s,
     }
 
 
-# --------------------------------------------------------------------------- dem
-def run_dem(case, args) -> dict:
-    try:
-        from dem.run.runner import run_case
-    except ImportError as exc:
-        msg = f"dem.run.runner is not available ({exc}): dem half skipped"
-        print(msg)
-        return {"skipped": msg}
-    out = Path(args.scratch) / "dem" / tag(case.drive.angle)
-    t0 = time.perf_counter()
-    summary = run_case(
-        case, out, cycles=case.run.cycles, threads=args.threads, progress=False, overwrite=True,
-        frames=False,
-    )  # fmt: skip
-    wall = time.perf_counter() - t0
+def dem_entry(case, dem: pair.DemRun, args) -> dict:
+    """results.json's dem half of a point: the numbers of run_case's summary."""
+    summary, wall = dem.summary, dem.wall_s
     print(
         f"  dem      phi = {case.drive.angle:g}: v = {summary['mean_velocity']:.5f} +- "
         f"{summary['mean_velocity_stderr']:.5f} m/s ({wall:.0f} s)"
@@ -239,14 +188,10 @@ def compare(entry: dict) -> None:
         if "per_cycle_velocity" in half:
             half["diagnostics"] = diagnostics(half["per_cycle_velocity"])
     if "mean_velocity" in dem and "mean_velocity" in lig:
-        diff = dem["mean_velocity"] - lig["mean_velocity"]
-        sigma = math.hypot(dem["mean_velocity_stderr"], lig["mean_velocity_stderr"])
-        entry["difference"] = {
-            "dem_minus_liggghts": diff,
-            "combined_stderr": sigma,
-            "sigma": diff / sigma,
-            "percent_of_liggghts": 100.0 * diff / lig["mean_velocity"],
-        }
+        entry["difference"] = replicas.difference(
+            dem["mean_velocity"], dem["mean_velocity_stderr"],
+            lig["mean_velocity"], lig["mean_velocity_stderr"],
+        )  # fmt: skip
 
 
 def table_rows(results: dict) -> list[dict]:
@@ -381,19 +326,17 @@ def main(argv=None) -> None:
     if args.report_only:
         plot(write_tables(results), seed_check_rows(args))
         return
+    top = header.results_header("validation/liggghts-bulk/run.py", argv)
     results.update(
         {
             "case": str(Path(args.case).resolve().relative_to(ROOT)),
-            "script": "validation/liggghts-bulk/run.py "
-            + " ".join(sys.argv[1:] if argv is None else argv),
+            "script": top.pop("script"),
             "restitution_normal": RESTITUTION,
             "timestep": args.timestep,
             "settle_cycles": args.settle_cycles,
             "cycles": args.cycles,
             "seed": args.seed,
-            "dem_version": __version__,
-            "git_commit": provenance.git_commit(),
-            "machine": machine_info(),
+            **top,  # dem_version, git_commit, machine
         }
     )
     results.setdefault("points", {})
@@ -412,15 +355,17 @@ def main(argv=None) -> None:
                 "pointmass": point_mass(case),
             }
         )
-        stamp = {"date": provenance.utc_now()}
-        if not args.skip_liggghts:
-            done = liggghts_point(case, args)
-            if "skipped" in done and "mean_velocity" in entry.get("liggghts", {}):
+        stamp = header.stamp()
+        both = run_both(case, args)
+        if isinstance(both.reference, str):  # liggghts is not on PATH
+            if "mean_velocity" in entry.get("liggghts", {}):
                 print("  keeping the earlier LIGGGHTS result of this point")
             else:
-                entry["liggghts"] = {**stamp, **done}
-        if not args.skip_dem:
-            entry["dem"] = {**stamp, **run_dem(case, args)}
+                entry["liggghts"] = {**stamp, "skipped": both.reference}
+        elif both.reference is not None:
+            entry["liggghts"] = {**stamp, **liggghts_entry(case, both.reference)}
+        if both.dem is not None:
+            entry["dem"] = {**stamp, **dem_entry(case, both.dem, args)}
         compare(entry)
         results["points"][key] = entry
         path.write_text(json.dumps(results, indent=2) + "\n")  # after each point

@@ -31,8 +31,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -43,17 +43,18 @@ from dem.engine.feeder import grain_mass
 from dem.io.liggghts import (
     BALANCE_FILE,
     DECK_NAME,
-    LIGGGHTS_INSTALL,
     VX_FILE,
     discharge_per_cycle,
-    find_liggghts,
     machine_info,
     read_balance,
     run_liggghts,
     write_deck,
 )
-from dem.physics import measure
 from dem.scene.case import load_case
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import cycles as drive_cycles  # noqa: E402
+from validation._lib import pair, replicas  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -88,21 +89,16 @@ def make_case(name: str, seed: int):
     return load_case(CASES / "u-trough", overrides=overrides), overrides
 
 
-def steady(per_cycle) -> tuple[float, float]:
-    """Mean and correlated standard error of per-cycle values."""
-    u = np.asarray(per_cycle, dtype=float)
-    return float(u.mean()), float(measure.correlated_stderr(u)[0])
-
-
 def run_liggghts_case(name: str, case, args) -> dict:
-    if find_liggghts() is None:
-        return {"skipped": f"liggghts is not on PATH ({LIGGGHTS_INSTALL})"}
+    missing = pair.liggghts_missing()
+    if missing is not None:
+        return {"skipped": missing}
     period, dt = 1.0 / case.drive.frequency, case.run.timestep
     s, c = case.run.settle_cycles, case.run.cycles
     deck_dir = HERE / "decks" / name
     if deck_dir.exists():
         shutil.rmtree(deck_dir)
-    steps_per_cycle = period / dt
+    steps_per_cycle = drive_cycles.steps_per_cycle(case)
     deck = write_deck(
         case,
         deck_dir,
@@ -112,9 +108,7 @@ def run_liggghts_case(name: str, case, args) -> dict:
         sample_steps=max(1, round(steps_per_cycle / SAMPLES_PER_CYCLE)),
     )
     work = Path(args.scratch) / "liggghts" / name
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(deck_dir, work)
+    pair.fresh_copy(deck_dir, work)
     run = run_liggghts(work, DECK_NAME, min_loops=3)
     members = 1 if case.particles.shape == "sphere" else case.particles.grain.count
     bal = read_balance(work / BALANCE_FILE, members)
@@ -123,8 +117,8 @@ def run_liggghts_case(name: str, case, args) -> dict:
     cycles = rates.size
     ends = period * np.arange(1, cycles + 1)
     held = np.interp(ends, bal.tau, bal.in_trough) * m
-    rate, rate_se = steady(rates[s : s + c])
-    hold, hold_se = steady(held[s : s + c])
+    rate, rate_se = replicas.series_mean(rates[s : s + c])
+    hold, hold_se = replicas.series_mean(held[s : s + c])
     v, v_se = liggghts_velocity(work, case)
     print(
         f"  LIGGGHTS {name}: discharge {rate:.4f} +- {rate_se:.4f} kg/s, hold-up "
@@ -157,31 +151,27 @@ def liggghts_velocity(work: Path, case) -> tuple[float, float]:
     The windows (1/SAMPLES_PER_CYCLE of a cycle) ending in each measured cycle are averaged
     into per-cycle means; the drive starts at the step in the deck's ``tau`` variable.
     """
-    start = int(re.search(r"variable tau equal \(step-(\d+)\)", (work / DECK_NAME).read_text())[1])
+    start = pair.drive_start_step(work / DECK_NAME)
     data = np.loadtxt(work / VX_FILE, comments="#", ndmin=2)
     tau = (data[:, 0] - start) * case.run.timestep
     period = 1.0 / case.drive.frequency
     s, c = case.run.settle_cycles, case.run.cycles
     k = np.floor(tau / period - 1e-9).astype(int)  # the cycle each window ends in
     per_cycle = [float(data[k == j, 1].mean()) for j in range(s, s + c) if np.any(k == j)]
-    return steady(per_cycle)
+    return replicas.series_mean(per_cycle)
 
 
 def run_dem(name: str, case, args) -> dict:
     from dem.io.hdf5 import read_results
-    from dem.run.runner import run_case
 
     out = Path(args.scratch) / "dem" / name
-    t0 = time.perf_counter()
-    summary = run_case(
-        case, out, cycles=case.run.cycles, threads=1, progress=False, overwrite=True, frames=False
-    )
-    wall = time.perf_counter() - t0
+    dem = pair.run_dem(case, out, threads=1, cycles=case.run.cycles)
+    summary, wall = dem.summary, dem.wall_s
     cyc = read_results(out / "results.h5")["cycles"]
     rates, held = cyc["discharge_rate"], cyc["mass_in_trough"]
     s, c = summary["settle_cycles"], case.run.cycles
-    rate, rate_se = steady(rates[s : s + c])
-    hold, hold_se = steady(held[s : s + c])
+    rate, rate_se = replicas.series_mean(rates[s : s + c])
+    hold, hold_se = replicas.series_mean(held[s : s + c])
     f = summary["feeder"]
     print(
         f"  dem      {name}: discharge {rate:.4f} +- {rate_se:.4f} kg/s, hold-up "
@@ -218,14 +208,7 @@ def compare(entry: dict, lig: dict | None = None) -> None:
     for key, se in errors.items():
         if key not in lig:
             continue
-        diff = dem[key] - lig[key]
-        sigma = math.hypot(dem[se], lig[se])
-        out[key] = {
-            "dem_minus_liggghts": diff,
-            "combined_stderr": sigma,
-            "sigma": diff / sigma,
-            "percent_of_liggghts": 100.0 * diff / lig[key],
-        }
+        out[key] = replicas.difference(dem[key], dem[se], lig[key], lig[se])
     entry["difference"] = out
 
 
@@ -245,7 +228,7 @@ def pooled(results: dict) -> dict:
                 v = np.array([e[code][key] for e in entries])
                 row[f"{code}_{key}"] = float(v.mean())
                 if v.size > 1:
-                    row[f"{code}_{key}_seed_stderr"] = float(v.std(ddof=1) / math.sqrt(v.size))
+                    row[f"{code}_{key}_seed_stderr"] = replicas.replica_stderr(v)
         if len(entries) > 1:
             for key in ("discharge_rate", "hold_up_kg", "mean_velocity"):
                 if f"dem_{key}_seed_stderr" not in row or f"liggghts_{key}_seed_stderr" not in row:

@@ -33,8 +33,13 @@ The method is that of validation/liggghts-bulk/run.py:
   the screws' centres of mass) is binned into exactly the drive cycles dem uses.
 - dem: ``dem.run.runner.run_case(case, scratch/dem/<case>, cycles=20, threads=1, progress=False,
   overwrite=True, frames=False)``; per-cycle mass-weighted mean x-velocities from its summary.
-- both: v = mean of the per-cycle means, se = std(ddof=1) / sqrt(cycles); dem - LIGGGHTS in %
-  of LIGGGHTS and in combined standard errors sqrt(se_dem^2 + se_L^2).
+- both: v = mean of the per-cycle means, se = the correlated standard error of the per-cycle
+  means (``dem.physics.measure.correlated_stderr``: a bed's successive cycles are not
+  independent, so std(ddof=1) / sqrt(cycles) would understate it; runs recorded before
+  2026-12 give LIGGGHTS's se as std(ddof=1) / sqrt(cycles)); dem - LIGGGHTS in % of LIGGGHTS
+  and in combined standard errors sqrt(se_dem^2 + se_L^2).
+
+The run of both codes is validation/_lib/pair.py's.
 
 One code at a time (dem on one thread, LIGGGHTS on one rank). Not part of the test suite.
 """
@@ -45,26 +50,18 @@ import argparse
 import json
 import math
 import re
-import shutil
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-from dem import __version__, provenance
-from dem.io.liggghts import (
-    DECK_NAME,
-    LIGGGHTS_INSTALL,
-    MESH_FILE,
-    VX_FILE,
-    find_liggghts,
-    machine_info,
-    run_liggghts,
-    write_deck,
-)
+from dem import provenance
+from dem.io.liggghts import DECK_NAME, MESH_FILE
 from dem.scene.case import load_case
 from dem.scene.mesh import extrude, load_mesh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header, pair, replicas  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -75,7 +72,6 @@ SPHERE_RADIUS = 0.002  # m
 SPHERE_COUNT = 2400  # about 25 mm deep in the 30 mm pan at a packing fraction of 0.6
 SPHERE_TIMESTEP = 5e-6  # s: 0.59 of dem's stability limit for these spheres (8.5e-6 s)
 BOX_WALL = 0.06  # m, walls of the box mesh (validation/mesh: taller than the bed climbs)
-TAU_RE = re.compile(r"variable tau equal \(step-(\d+)\)\*")
 FINAL_DUMP = "final.atoms"
 #: Overlap of a final member sphere with the mesh beyond which it counts as through it, m
 #: (LIGGGHTS dumps 6 significant digits; resting overlaps are below 1e-5 m here).
@@ -137,17 +133,6 @@ def make_case(name: str, args):
     return load_case(CASES / source[name], overrides=overrides), overrides
 
 
-def cycle_edges(case, n_cycles: int) -> list[int]:
-    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
-    period = 1.0 / case.drive.frequency
-    return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
-
-
-def stats(per_cycle) -> tuple[float, float]:
-    u = np.asarray(per_cycle, dtype=float)
-    return float(u.mean()), float(u.std(ddof=1) / math.sqrt(u.size))
-
-
 def inside_check(case, work: Path) -> dict:
     """The final member spheres of a LIGGGHTS run against the mesh (or the flat walls)."""
     data = np.loadtxt(work / FINAL_DUMP, skiprows=9)
@@ -174,60 +159,51 @@ def inside_check(case, work: Path) -> dict:
     return out
 
 
-# --------------------------------------------------------------------------- LIGGGHTS
-def run_liggghts_case(name: str, case, args) -> dict:
-    if find_liggghts() is None:
-        msg = f"liggghts is not on PATH: LIGGGHTS half skipped ({LIGGGHTS_INSTALL})"
-        print(msg)
-        return {"skipped": msg}
-    s, c = case.run.settle_cycles, case.run.cycles
-    edges = cycle_edges(case, s + c)
-    deck_dir = HERE / "decks" / name.split("-curvature")[0]  # the variant runs the same deck
-    if deck_dir.exists():
-        shutil.rmtree(deck_dir)
-    deck = write_deck(
-        case,
-        deck_dir,
-        timestep=case.run.timestep,
-        steps=edges[-1] - edges[s],
-        settle_steps=edges[s],
-        sample_steps=1,
-    )
-    drive_start = int(TAU_RE.search(deck.read_text()).group(1))
-    work = Path(args.scratch) / "liggghts" / name
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(deck_dir, work)
+# --------------------------------------------------------------------------- the pair
+def deck_edit(args):
+    """The edit of the copied deck (validation/_lib/pair.py's ``edit``) and the list of changes
+    it records: a final dump of the member spheres, and the mesh curvature option if asked."""
     changes = [f"appended: write_dump all custom {FINAL_DUMP} id type x y z radius"]
-    with open(work / DECK_NAME, "a") as f:
-        f.write(f"write_dump all custom {FINAL_DUMP} id type x y z radius\n")
-    if args.mesh_curvature is not None:
-        # facets meeting at less than this angle count as one surface: LIGGGHTS then carries
-        # the tangential spring across their edge (as dem does up to 45 deg) and drops the
-        # edge contacts between them; the option refuses thin triangles unless tolerant
-        text = (work / DECK_NAME).read_text()
-        line = f"fix trough all mesh/surface file {MESH_FILE} type 2"
-        extra = f" curvature {args.mesh_curvature:g} curvature_tolerant yes"
-        if line + "\n" not in text:
-            raise SystemExit(f"no '{line}' line in the deck")
-        (work / DECK_NAME).write_text(text.replace(line + "\n", line + extra + "\n"))
-        changes.append(f"'{line}' + '{extra}'")
-    run = run_liggghts(work, DECK_NAME, min_loops=3)
-    members = 1 if case.particles.shape == "sphere" else case.particles.grain.count
-    atoms = run.loop_times[-1].atoms
-    if atoms != case.particles.count * members:
-        raise SystemExit(f"LIGGGHTS kept {atoms} spheres, not {case.particles.count * members}")
-    data = np.loadtxt(work / VX_FILE, comments="#")
-    steps, vx = data[:, 0].astype(np.int64) - drive_start, data[:, 1]
 
-    def cycle_mean(k: int) -> float:
-        inside = (steps > edges[k]) & (steps <= edges[k + 1])
-        if inside.sum() != edges[k + 1] - edges[k]:
-            raise SystemExit(f"cycle {k}: {inside.sum()} samples in {VX_FILE}")
-        return float(vx[inside].mean())
+    def edit(deck: Path) -> None:
+        with open(deck, "a") as f:
+            f.write(f"write_dump all custom {FINAL_DUMP} id type x y z radius\n")
+        if args.mesh_curvature is not None:
+            # facets meeting at less than this angle count as one surface: LIGGGHTS then carries
+            # the tangential spring across their edge (as dem does up to 45 deg) and drops the
+            # edge contacts between them; the option refuses thin triangles unless tolerant
+            text = deck.read_text()
+            line = f"fix trough all mesh/surface file {MESH_FILE} type 2"
+            extra = f" curvature {args.mesh_curvature:g} curvature_tolerant yes"
+            if line + "\n" not in text:
+                raise SystemExit(f"no '{line}' line in the deck")
+            deck.write_text(text.replace(line + "\n", line + extra + "\n"))
+            changes.append(f"'{line}' + '{extra}'")
 
-    per_cycle = [cycle_mean(k) for k in range(s, s + c)]
-    mean, se = stats(per_cycle)
+    return edit, changes
+
+
+def run_both(name: str, case, args) -> tuple[pair.Pair, list[str]]:
+    """LIGGGHTS (unless --skip-liggghts), then dem (unless --skip-dem), on one case."""
+    edit, changes = deck_edit(args)
+    both = pair.run_pair(
+        case,
+        deck_dir=HERE / "decks" / name.split("-curvature")[0],  # the variant runs the same deck
+        work=Path(args.scratch) / "liggghts" / name,
+        dem_out=Path(args.scratch) / "dem" / name,
+        skip_reference=args.skip_liggghts,
+        skip_dem=args.skip_dem,
+        min_loops=3,
+        edit=edit,
+        fresh_deck=True,
+    )
+    return both, changes
+
+
+def liggghts_entry(name: str, case, lig: pair.ReferenceRun, changes: list[str]) -> dict:
+    """results.json's LIGGGHTS half of a case: the per-cycle means and the final-state check."""
+    run, work = lig.run, lig.work
+    mean, se = replicas.series_mean(lig.per_cycle)
     check = inside_check(case, work)
     print(
         f"  LIGGGHTS {name}: v = {mean:.5f} +- {se:.5f} m/s ({run.wall_s:.0f} s); "
@@ -235,15 +211,15 @@ def run_liggghts_case(name: str, case, args) -> dict:
     )
     return {
         "version": run.version,
-        "deck": str(deck.relative_to(ROOT)),
+        "deck": str(lig.deck.relative_to(ROOT)),
         "command": f"cd {work.relative_to(ROOT)} && liggghts -in {DECK_NAME}",
         "deck_changed": changes,
         "mean_velocity": mean,
         "mean_velocity_stderr": se,
-        "per_cycle_velocity": per_cycle,
-        "settle_cycle_velocity": [cycle_mean(k) for k in range(s)],
-        "drive_start_step": drive_start,
-        "atoms": atoms,
+        "per_cycle_velocity": lig.per_cycle,
+        "settle_cycle_velocity": lig.settle_cycle,
+        "drive_start_step": lig.drive_start,
+        "atoms": run.loop_times[-1].atoms,
         "final_state": check,
         "loop_times_s": [x.seconds for x in run.loop_times],
         "loop_steps": [x.steps for x in run.loop_times],
@@ -251,16 +227,9 @@ def run_liggghts_case(name: str, case, args) -> dict:
     }
 
 
-# --------------------------------------------------------------------------- dem
-def run_dem(name: str, case, args) -> dict:
-    from dem.run.runner import run_case
-
-    out = Path(args.scratch) / "dem" / name
-    t0 = time.perf_counter()
-    summary = run_case(
-        case, out, cycles=case.run.cycles, threads=1, progress=False, overwrite=True, frames=False
-    )
-    wall = time.perf_counter() - t0
+def dem_entry(name: str, case, dem: pair.DemRun) -> dict:
+    """results.json's dem half of a case: the numbers of run_case's summary."""
+    summary, out, wall = dem.summary, dem.out, dem.wall_s
     print(
         f"  dem      {name}: v = {summary['mean_velocity']:.5f} +- "
         f"{summary['mean_velocity_stderr']:.5f} m/s ({wall:.0f} s)"
@@ -289,14 +258,10 @@ def compare(entry: dict, dem: dict | None = None) -> None:
     """entry["difference"]: dem - LIGGGHTS (dem: the entry's own, or the one given)."""
     dem, lig = dem or entry.get("dem", {}), entry.get("liggghts", {})
     if "mean_velocity" in dem and "mean_velocity" in lig:
-        diff = dem["mean_velocity"] - lig["mean_velocity"]
-        sigma = math.hypot(dem["mean_velocity_stderr"], lig["mean_velocity_stderr"])
-        entry["difference"] = {
-            "dem_minus_liggghts": diff,
-            "combined_stderr": sigma,
-            "sigma": diff / sigma,
-            "percent_of_liggghts": 100.0 * diff / lig["mean_velocity"],
-        }
+        entry["difference"] = replicas.difference(
+            dem["mean_velocity"], dem["mean_velocity_stderr"],
+            lig["mean_velocity"], lig["mean_velocity_stderr"],
+        )  # fmt: skip
 
 
 def refresh(results: dict) -> None:
@@ -328,7 +293,7 @@ def pooled(results: dict) -> dict:
         for key in ("dem", "liggghts"):
             v = np.array([e[key]["mean_velocity"] for e in done])
             row[f"{key}_mean"] = float(v.mean())
-            row[f"{key}_seed_stderr"] = float(v.std(ddof=1) / math.sqrt(v.size))
+            row[f"{key}_seed_stderr"] = replicas.replica_stderr(v)
         diff = row["dem_mean"] - row["liggghts_mean"]
         sigma = math.hypot(row["dem_seed_stderr"], row["liggghts_seed_stderr"])
         row["percent_of_liggghts"] = 100.0 * diff / row["liggghts_mean"]
@@ -452,17 +417,9 @@ def main(argv=None) -> None:
         path.write_text(json.dumps(results, indent=2) + "\n")
         plot(results)
         return
-    invocation = "validation/liggghts-mesh/run.py " + " ".join(
-        sys.argv[1:] if argv is None else argv
-    )
-    results.update(
-        {
-            "script": invocation,  # the last one; each run records its own
-            "dem_version": __version__,
-            "git_commit": provenance.git_commit(),
-            "machine": machine_info(),
-        }
-    )
+    invocation = header.invocation("validation/liggghts-mesh/run.py", argv)
+    # "script": the last invocation; each run records its own
+    results.update(header.results_header("validation/liggghts-mesh/run.py", argv))
     results.setdefault("cases", {})
     for kind in args.cases:
         name = kind if args.seed == 1 else f"{kind}-seed{args.seed}"
@@ -489,14 +446,18 @@ def main(argv=None) -> None:
                 * math.cos(math.radians(case.drive.angle)),
             }
         )  # fmt: skip
-        if not args.skip_liggghts:
-            stamp = {"date": provenance.utc_now(), "invocation": invocation}  # at the start
-            entry["liggghts"] = {**stamp, **run_liggghts_case(name, case, args)}
-        if not args.skip_dem:
-            stamp = {"date": provenance.utc_now(), "invocation": invocation}
+        both, changes = run_both(name, case, args)
+        lig, dem = both.reference, both.dem
+        if isinstance(lig, str):  # liggghts is not on PATH
+            entry["liggghts"] = {**header.stamp(invocation=invocation), "skipped": lig}
+        elif lig is not None:  # dated at its start
+            half = liggghts_entry(name, case, lig, changes)
+            entry["liggghts"] = {"date": lig.date, "invocation": invocation, **half}
+        if dem is not None:
+            stamp = {"date": dem.date, "invocation": invocation}
             stamp["git_commit"] = provenance.git_commit()  # None for an exported tree
             stamp["dem_package"] = str(Path(provenance.__file__).resolve().parent)
-            entry["dem"] = {**stamp, **run_dem(name, case, args)}
+            entry["dem"] = {**stamp, **dem_entry(name, case, dem)}
         base = results["cases"].get(name.split("-curvature")[0], {})
         if "dem" not in entry and "dem" in base:  # a LIGGGHTS variant against dem's run
             entry["dem_of"] = name.split("-curvature")[0]

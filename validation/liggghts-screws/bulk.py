@@ -8,9 +8,9 @@ grouped into blocks of one drive period; dem's per-cycle means come from ``run_c
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 from study import AS_MEASURED, CASE, DECKS, SCRATCH, fresh_copy, rel, write_results
@@ -18,10 +18,11 @@ from study import AS_MEASURED, CASE, DECKS, SCRATCH, fresh_copy, rel, write_resu
 from dem import provenance
 from dem.io.liggghts import DECK_NAME, VX_FILE, run_liggghts, write_deck
 from dem.physics import drive
-from dem.physics.measure import conveying_velocity
-from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import pair, replicas  # noqa: E402
 
 BULK_RESTITUTION = 0.06  # both codes; LIGGGHTS refuses e <= 0.05
 BULK_SETTLE_CYCLES = 5
@@ -92,9 +93,8 @@ def bulk_liggghts(case, tag: str, dt: float, edit=None) -> dict:
     windows = windows[:n_win]
     sample = int(round(windows[1, 0] - windows[0, 0]))
     per_cycle = windows[:, 1].reshape(case.run.cycles, fpc).mean(axis=1)
-    d = case.drive
-    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
-    print(f"  LIGGGHTS {tag}: v = {v.mean:.5f} +- {v.stderr:.5f} m/s ({run.wall_s:.0f} s)")
+    mean, stderr = replicas.series_mean(per_cycle)
+    print(f"  LIGGGHTS {tag}: v = {mean:.5f} +- {stderr:.5f} m/s ({run.wall_s:.0f} s)")
     return {
         "version": run.version,
         "deck": rel(deck),
@@ -107,8 +107,8 @@ def bulk_liggghts(case, tag: str, dt: float, edit=None) -> dict:
         "window_steps": sample,
         "first_window_end_step": int(windows[0, 0]),
         "windows_per_cycle": fpc,
-        "mean_velocity": v.mean,
-        "mean_velocity_stderr": v.stderr,
+        "mean_velocity": mean,
+        "mean_velocity_stderr": stderr,
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "loop_times_s": [x.seconds for x in run.loop_times],
         "wall_time_s": run.wall_s,
@@ -118,9 +118,8 @@ def bulk_liggghts(case, tag: str, dt: float, edit=None) -> dict:
 def bulk_dem(case, tag: str) -> dict:
     """dem's ``run_case`` on one thread (own fill and settling); its summary's numbers."""
     out = SCRATCH / "dem" / f"bulk_{tag}"
-    t0 = time.perf_counter()
-    s = run_case(case, out, threads=1, progress=False, frames=False, overwrite=True)
-    wall = time.perf_counter() - t0
+    dem = pair.run_dem(case, out, threads=1)
+    s, wall = dem.summary, dem.wall_s
     print(f"  dem      {tag}: v = {s['mean_velocity']:.5f} +- {s['mean_velocity_stderr']:.5f} "
           f"m/s ({wall:.0f} s)")  # fmt: skip
     keys = (
@@ -134,11 +133,6 @@ def bulk_dem(case, tag: str) -> dict:
         **{k: s[k] for k in keys},
         "total_wall_time_s": wall,
     }
-
-
-def seed_stderr(values) -> float:
-    """Standard error of a mean over seeds, std(ddof=1) / sqrt(n)."""
-    return float(values.std(ddof=1) / math.sqrt(values.size))
 
 
 def part_bulk(results: dict) -> None:
@@ -173,12 +167,14 @@ def part_bulk(results: dict) -> None:
         }
         entry["pointmass_velocity_norm"] = entry["dem"]["pointmass_velocity_norm"]
         lig, dem = entry["liggghts"], entry["dem"]
-        diff = dem["mean_velocity"] - lig["mean_velocity"]
-        sigma = math.hypot(dem["mean_velocity_stderr"], lig["mean_velocity_stderr"])
+        d = replicas.difference(
+            dem["mean_velocity"], dem["mean_velocity_stderr"],
+            lig["mean_velocity"], lig["mean_velocity_stderr"],
+        )  # fmt: skip
         entry["dem_minus_liggghts"] = {
-            "m_per_s": diff,
-            "percent": 100.0 * diff / lig["mean_velocity"],
-            "sigma": diff / sigma,
+            "m_per_s": d["dem_minus_liggghts"],
+            "percent": d["percent_of_liggghts"],
+            "sigma": d["sigma"],
         }
         runs[tag] = entry
         write_results(results)
@@ -190,9 +186,9 @@ def part_bulk(results: dict) -> None:
         dv = np.array([r["dem"]["mean_velocity"] for r in free])
         section["seeds_pooled" + suffix] = {
             "liggghts_mean": float(lv.mean()),
-            "liggghts_seed_stderr": seed_stderr(lv),
+            "liggghts_seed_stderr": replicas.replica_stderr(lv),
             "dem_mean": float(dv.mean()),
-            "dem_seed_stderr": seed_stderr(dv),
+            "dem_seed_stderr": replicas.replica_stderr(dv),
             "percent": float(100.0 * (dv.mean() - lv.mean()) / lv.mean()),
         }
     write_results(results)

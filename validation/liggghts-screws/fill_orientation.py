@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import sys
 import time
@@ -41,8 +40,12 @@ from study import HERE, RESULTS, SCRATCH, rel, write_results
 
 from dem import provenance
 from dem.engine import setup
+from dem.engine.simulation import measure_cycles
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
 from dem.physics.measure import correlated_stderr
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import replicas  # noqa: E402
 
 TAG = "seed1_dt2x"
 MEASURED = 60  # cycles after part A's 5 settle cycles
@@ -121,12 +124,9 @@ def dem_from_bed(case, bed: np.ndarray, cycles: int) -> dict:
     arm = np.einsum("bij,kj->bki", rot, np.asarray(grain.centres, dtype=float))
     v = (bed[:, 4:7].reshape(-1, k, 3) - np.cross(omega[:, None, :], arm)).mean(axis=1)
     q = np.array([matrix_to_quat(r) for r in rot])
-    sim = setup.from_grains(case, x, orientations=q, velocities=v, timestep=case.run.timestep)
-    b = sim.bodies
-    for i in range(b.n):
-        r = quat_to_matrix(b.q[i])
-        b.ang_mom[i] = r @ (b.moments[i] * (r.T @ omega[i]))
-    b.place(sim.spheres)
+    sim = setup.from_grains(
+        case, x, orientations=q, velocities=v, spins=omega, timestep=case.run.timestep
+    )
     return {
         "fit_residual_max_m": resid,
         "member_spin_spread_rad_s": spread,
@@ -136,20 +136,18 @@ def dem_from_bed(case, bed: np.ndarray, cycles: int) -> dict:
 
 def drive_cycles(sim, settle: int, cycles: int) -> dict:
     """Drive on at phase 0; ``settle`` unmeasured cycles, then per measured cycle the velocity
-    and, at its start, the bed's height and order."""
-    sim.start_drive()
-    period = sim.trough.period
+    and, at its start, the bed's height and order.
+
+    Each cycle is one call of ``dem.engine.simulation.measure_cycles``, which ends every cycle
+    on a whole number of drive periods since the drive started.
+    """
+    measure_cycles(sim, 0, settle_cycles=settle)  # switches the drive on (phase 0)
     per_cycle, height, order_x = [], [], []
-    for c in range(settle + cycles):
-        if c >= settle:
-            z, s = order_of_sim(sim)
-            height.append(z)
-            order_x.append(s)
-        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
-        sim.stats[:] = 0.0
-        sim.run(end - sim.step_index)
-        if c >= settle:
-            per_cycle.append(sim.cycle_velocity())
+    for _ in range(cycles):
+        z, s = order_of_sim(sim)
+        height.append(z)
+        order_x.append(s)
+        per_cycle.append(float(measure_cycles(sim, 1)[0]))
     return {"per_cycle_velocity": per_cycle, "height": height, "order_x": order_x}
 
 
@@ -172,7 +170,7 @@ def summary(v) -> dict:
     v = np.asarray(v)
     return {
         "mean": float(v.mean()),
-        "naive_stderr": float(v.std(ddof=1) / math.sqrt(v.size)),
+        "naive_stderr": replicas.replica_stderr(v),  # as if the cycles were independent
         "blocks_of_10": [float(b) for b in v[: v.size // 10 * 10].reshape(-1, 10).mean(axis=1)],
     }
 

@@ -83,9 +83,8 @@ def impact_dem(
     sphere. ``shift`` (body frame, m) moves every member of the template by the same vector,
     leaving mass and moments as they are: LIGGGHTS's body, whose members sit off the centre of
     mass by the error of its Monte Carlo centre of mass. The body is placed by
-    ``dem.engine.setup.from_grains`` at LIGGGHTS's position, orientation and velocity; its spin is
-    set
-    after (a clump's through its angular momentum L = R diag(I) R^T omega).
+    ``dem.engine.setup.from_grains`` at LIGGGHTS's position, orientation, velocity and spin (a
+    clump's spin through its angular momentum L = R (I * (R^T omega))).
     """
     t0, x, v, w, q = start[0], start[1:4], start[4:7], start[7:10], start[10:14]
     if body == "sphere_plain_dem_sphere":
@@ -97,8 +96,7 @@ def impact_dem(
             ),
             material=dataclasses.replace(case.material, density=density),
         )
-        sim = setup.from_grains(one, [x], velocities=[v], timestep=dt)
-        sim.spheres.omega[0] = w
+        sim = setup.from_grains(one, [x], velocities=[v], spins=[w], timestep=dt)
     else:
         grain = grain_of(body, case)
         if shift is not None:
@@ -106,11 +104,7 @@ def impact_dem(
         one = dataclasses.replace(
             case, particles=dataclasses.replace(case.particles, grain=grain, rotation=True)
         )
-        sim = setup.from_grains(one, [x], orientations=[q], velocities=[v], timestep=dt)
-        bodies = sim.bodies
-        rot = quat_to_matrix(bodies.q[0])
-        bodies.ang_mom[0] = rot @ np.diag(grain.moments) @ rot.T @ w
-        bodies.place(sim.spheres)
+        sim = setup.from_grains(one, [x], orientations=[q], velocities=[v], spins=[w], timestep=dt)
     rows, done = [], 0
     for t in times:
         target = round((t - t0) / dt)

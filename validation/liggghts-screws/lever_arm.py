@@ -18,17 +18,19 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import re
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 from bulk import bulk_cases
 from study import DECKS, RESULTS, SCRATCH, rel, write_results
 
 from dem import provenance
-from dem.run.runner import run_case
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import pair, replicas  # noqa: E402
 
 ARMS = ("surface", "midpoint")
 TAGS = ("seed1_dt2x", "seed2_dt2x", "seed3_dt2x")
@@ -60,9 +62,8 @@ def main() -> int:
                 contact=dataclasses.replace(base.contact, wall_lever_arm=arm, youngs_modulus=young),
             )
             work = SCRATCH / "dem" / f"lever_{arm}_{tag}"
-            t0 = time.perf_counter()
-            s = run_case(case, work, threads=1, progress=False, frames=False, overwrite=True)
-            wall = time.perf_counter() - t0
+            dem = pair.run_dem(case, work, threads=1)
+            s, wall = dem.summary, dem.wall_s
             v, se = s["mean_velocity"], s["mean_velocity_stderr"]
             print(f"{tag} {arm:8s} v = {v:.5f} +- {se:.5f} m/s, LIGGGHTS {lig:.5f}: "
                   f"{100 * (v - lig) / lig:+.1f} % ({wall:.0f} s)", flush=True)  # fmt: skip
@@ -89,7 +90,7 @@ def main() -> int:
         d = np.array([r["percent_of_liggghts"] for r in rows])
         out[f"pooled_{arm}"] = {
             "percent_of_liggghts": float(d.mean()),
-            "seed_stderr_percent": float(d.std(ddof=1) / math.sqrt(d.size)),
+            "seed_stderr_percent": replicas.replica_stderr(d),
             "seeds": len(rows),
         }
         print(arm, out[f"pooled_{arm}"])

@@ -22,7 +22,7 @@ x-velocity of the bodies' centres of mass is written to vx_mean.txt in windows o
 after fill + settle (the first two ``run N`` of in.dem) are grouped in blocks of
 frames_per_cycle = one drive period each, giving per-cycle means. dem: ``run_case`` (own fill
 and settle), per-cycle means from its summary. Both: v = mean of the per-cycle means, standard
-error std(ddof=1)/sqrt(cycles).
+error the correlated standard error of the per-cycle means (validation/_lib/replicas.py).
 
 Part B, single impacts: one body, no drive, static gravity, 0.15 s, Hertz e = 0.5, mu = 0.35,
 periodic 0.06 m x 0.06 m section of the case's trough. LIGGGHTS inserts it with
@@ -48,6 +48,7 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 import numba
 from bulk import part_bulk
@@ -55,8 +56,8 @@ from impact import part_impact
 from report import plot, print_tables
 from study import RESULTS, write_results
 
-from dem import __version__, provenance
-from dem.io.liggghts import machine_info
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 
 def main(argv=None) -> None:
@@ -71,17 +72,7 @@ def main(argv=None) -> None:
     if not args.report_only:
         numba.set_num_threads(1)
         t_start = time.perf_counter()
-        results.update(
-            {
-                "script": "validation/liggghts-screws/run.py "
-                + " ".join(sys.argv[1:] if argv is None else argv),
-                "date": provenance.utc_now(),
-                "dem_version": __version__,
-                "git_commit": provenance.git_commit(),
-                "machine": machine_info(),
-                "load_average": provenance.load_average(),
-            }
-        )
+        results.update(header.results_header("validation/liggghts-screws/run.py", argv, dated=True))
         if args.part in ("all", "bulk"):
             part_bulk(results)
         if args.part in ("all", "impact"):

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import json
-import shutil
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib.pair import fresh_copy  # noqa: E402, F401 (the parts import it from here)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -20,13 +23,6 @@ RESULTS = HERE / "results.json"
 def write_results(results: dict) -> None:
     """results.json, rewritten after every run so that an interrupted study keeps its runs."""
     RESULTS.write_text(json.dumps(results, indent=2) + "\n")
-
-
-def fresh_copy(deck_dir: Path, work: Path) -> None:
-    """A clean copy of a deck directory to run LIGGGHTS in (scratch/ is git-ignored)."""
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(deck_dir, work)
 
 
 def fmt(x) -> str:

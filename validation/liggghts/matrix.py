@@ -43,26 +43,19 @@ import dataclasses
 import json
 import math
 import os
-import shutil
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 from dem import pointmass, provenance
-from dem.io.liggghts import (
-    DECK_NAME,
-    LIGGGHTS_INSTALL,
-    VX_FILE,
-    find_liggghts,
-    run_liggghts,
-    write_deck,
-)
+from dem.io.liggghts import DECK_NAME, LIGGGHTS_INSTALL, find_liggghts
 from dem.physics.measure import correlated_stderr, drive_velocity_scale
-from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header, pair, replicas  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -167,46 +160,20 @@ def statistics(per_cycle) -> dict:
     return {
         "mean_velocity": float(v.mean()),
         "stderr": se,
-        "naive_stderr": float(v.std(ddof=1) / math.sqrt(v.size)),
+        "naive_stderr": replicas.replica_stderr(v),  # as if the cycles were independent
         "tau_int_cycles": tau,
         "per_cycle_velocity": [float(u) for u in v],
     }
 
 
-def cycle_edges(case) -> list[int]:
-    """Driven-step index ending each cycle, as dem.run.runner counts them: round(c P / dt)."""
-    period, dt = 1.0 / case.drive.frequency, case.run.timestep
-    return [int(round(c * period / dt)) for c in range(SETTLE_CYCLES + CYCLES + 1)]
-
-
 def run_liggghts_point(p: Point, case) -> dict:
-    edges = cycle_edges(case)
-    deck_dir = DECKS / p.name
-    deck = write_deck(
-        case, deck_dir, timestep=case.run.timestep, steps=edges[-1] - edges[SETTLE_CYCLES],
-        settle_steps=edges[SETTLE_CYCLES], sample_steps=1,
-    )  # fmt: skip
-    text = deck.read_text()
-    key = "variable tau equal (step-"
-    drive_start = int(text[text.index(key) + len(key) :].split(")")[0])
-    work = SCRATCH / "liggghts" / p.name
-    if work.exists():
-        shutil.rmtree(work)
-    shutil.copytree(deck_dir, work)
-    run = run_liggghts(work, DECK_NAME, min_loops=3)
+    """LIGGGHTS on the point's deck (validation/_lib/pair.py), per-cycle means in dem's cycles."""
+    lig = pair.run_reference(
+        case, DECKS / p.name, SCRATCH / "liggghts" / p.name, min_loops=3, strict_settle=False
+    )
+    run, deck, work = lig.run, lig.deck, lig.work
     members = 1 if case.particles.shape == "sphere" else case.particles.grain.count
-    atoms = run.loop_times[-1].atoms
-    if atoms != case.particles.count * members:
-        raise SystemExit(f"{p.name}: LIGGGHTS kept {atoms} spheres, not "
-                         f"{case.particles.count * members}")  # fmt: skip
-    data = np.loadtxt(work / VX_FILE, comments="#")
-    steps, vx = data[:, 0].astype(np.int64) - drive_start, data[:, 1]
-    per_cycle = []
-    for k in range(SETTLE_CYCLES, SETTLE_CYCLES + CYCLES):
-        inside = (steps > edges[k]) & (steps <= edges[k + 1])
-        if inside.sum() != edges[k + 1] - edges[k]:
-            raise SystemExit(f"{p.name}: cycle {k} has {inside.sum()} samples in {VX_FILE}")
-        per_cycle.append(float(vx[inside].mean()))
+    per_cycle = lig.per_cycle
     driven = run.loop_times[-2:]
     driven_s = sum(x.seconds for x in driven)
     driven_steps = sum(x.steps for x in driven)
@@ -225,9 +192,8 @@ def run_liggghts_point(p: Point, case) -> dict:
 
 def run_dem_point(p: Point, case, label: str) -> dict:
     out = SCRATCH / "dem" / f"{p.name}_{label}"
-    t0 = time.perf_counter()
-    s = run_case(case, out, threads=1, progress=False, frames=False, overwrite=True)
-    wall = time.perf_counter() - t0
+    dem = pair.run_dem(case, out, threads=1)
+    s, wall = dem.summary, dem.wall_s
     members = 1 if case.particles.shape == "sphere" else case.particles.grain.count
     return {
         **statistics(s["per_cycle_velocity"]),
@@ -255,14 +221,13 @@ def point_mass(case) -> dict:
 
 def difference(a: dict, b: dict) -> dict:
     """a - b in m/s, % of b and combined standard errors; agree by the issue's criterion."""
-    diff = a["mean_velocity"] - b["mean_velocity"]
-    sigma = math.hypot(a["stderr"], b["stderr"])
-    percent = 100.0 * diff / b["mean_velocity"]
+    d = replicas.difference(a["mean_velocity"], a["stderr"], b["mean_velocity"], b["stderr"])
+    diff, sigma, percent = d["dem_minus_liggghts"], d["combined_stderr"], d["percent_of_liggghts"]
     return {
         "m_per_s": diff,
         "percent": percent,
         "combined_stderr": sigma,
-        "sigma": diff / sigma,
+        "sigma": d["sigma"],
         "agree": abs(percent) <= AGREE_PERCENT or abs(diff) <= AGREE_SIGMA * sigma,
     }
 
@@ -328,7 +293,7 @@ def pooled_points(results: dict) -> dict[str, dict]:
             v = np.array([r["mean_velocity"] for r in runs])
             se = math.sqrt(sum(r["stderr"] ** 2 for r in runs)) / len(runs)
             if len(runs) > 1:
-                se = max(se, float(v.std(ddof=1) / math.sqrt(len(runs))))
+                se = max(se, replicas.replica_stderr(v))
             e[key] = {
                 "mean_velocity": float(v.mean()),
                 "stderr": se,
@@ -525,7 +490,7 @@ def main(argv=None) -> int:
     results.setdefault("points", {})
     if not args.report_only:
         results.setdefault("invocations", []).append({
-            "command": "validation/liggghts/matrix.py " + " ".join(argv or sys.argv[1:]),
+            "command": header.invocation("validation/liggghts/matrix.py", argv or None),
             "git_commit": provenance.git_commit(),
             "date": provenance.utc_now(),
             "cores": os.cpu_count(),

@@ -38,6 +38,9 @@ from dem.scene import fill  # noqa: E402
 from dem.scene.case import load_case  # noqa: E402
 from dem.scene.mesh import extrude  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import replicas  # noqa: E402
+
 
 def box_mesh(path: Path, length: float, width: float, wall: float) -> Path:
     """Floor z = 0 and side walls y = +-width/2 (height ``wall``) as triangles."""
@@ -102,7 +105,7 @@ def main() -> int:
     for key, (m, f) in labels.items():
         mine = [r for r in rows if r["case"] == "screw-trough" and r["mesh"] == m]
         v = np.array([r["v_norm"] for r in mine if r["fill"] == f])
-        se = float(v.std(ddof=1) / math.sqrt(len(v))) if len(v) > 1 else math.nan
+        se = replicas.replica_stderr(v) if len(v) > 1 else math.nan
         stats[key] = (float(v.mean()), se)
     a, sa = stats["flat walls"]
     print(f"\nv / (A omega cos phi), {len(args.seeds)} seeds, {args.cycles} cycles:")

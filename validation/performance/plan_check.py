@@ -33,8 +33,8 @@ DEM = str(Path(sys.executable).with_name("dem"))
 WARM = """
 import sys
 from dem.scene.case import load_case
-from dem.run.runner import _compile_first
-_compile_first(load_case(sys.argv[1]), progress=False)
+from dem.run.checks import compile_first
+compile_first(load_case(sys.argv[1]), progress=False)
 """
 
 

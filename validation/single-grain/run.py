@@ -19,13 +19,14 @@ import argparse
 import csv
 import dataclasses
 import math
+import sys
 import time
 from multiprocessing import Pool
 from pathlib import Path
 
 import numpy as np
 
-from dem import pointmass, provenance
+from dem import pointmass
 from dem.config import GRAVITY
 from dem.engine import setup
 from dem.engine.simulation import measure_cycles
@@ -33,6 +34,9 @@ from dem.physics.measure import conveying_velocity
 from dem.pointmass.bounded import coulomb_bounded_velocity
 from dem.scene.case import load_case
 from dem.studies import calibrate
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -124,7 +128,7 @@ def _calibrated_row(case):
 def write_csv(rows, name):
     path = HERE / name
     with open(path, "w", newline="") as fh:
-        fh.write("\n".join(provenance.header_lines()) + "\n")
+        header.write_csv_header(fh)
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

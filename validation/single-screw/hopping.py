@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
+import sys
 import time
 from multiprocessing import Pool
 from pathlib import Path
@@ -35,13 +36,16 @@ from pathlib import Path
 import numpy as np
 import run as screw  # this folder's sliding study: the case, the pose, the time step
 
-from dem import pointmass, provenance
+from dem import pointmass
 from dem.engine.simulation import measure_cycles
 from dem.kernels.rigid import quat_to_matrix
 from dem.physics import measure
 from dem.pointmass.bounded import coulomb_bounded_velocity
 from dem.scene.case import load_case
 from dem.studies import calibrate
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -129,7 +133,7 @@ def point(spec) -> dict:
 def write_csv(rows, name):
     path = HERE / name
     with open(path, "w", newline="") as fh:
-        fh.write("\n".join(provenance.header_lines("validation/single-screw/hopping.py")) + "\n")
+        header.write_csv_header(fh, "validation/single-screw/hopping.py")
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

@@ -15,6 +15,7 @@ Writes fill_spread.csv (per-cycle velocities) and fill_spread.png (running means
 
 import csv
 import math
+import sys
 import tempfile
 from multiprocessing import Pool
 from pathlib import Path
@@ -22,8 +23,10 @@ from pathlib import Path
 import numpy as np
 from study import HERE, Point, load
 
-from dem import provenance
 from dem.physics import measure
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 SEEDS = (1, 2, 3, 4)
 CYCLES = 200
@@ -60,7 +63,7 @@ def main() -> int:
           f"expected if fluctuation only: {within / math.sqrt(CYCLES / BLOCK):.4f}")  # fmt: skip
     print(f"{CYCLES}-cycle correlated stderr of one run:     {np.mean(stderr):.4f}")
     with open(HERE / "fill_spread.csv", "w", newline="") as fh:
-        fh.write("\n".join(provenance.header_lines(__file__)) + "\n")
+        header.write_csv_header(fh, __file__)
         w = csv.writer(fh)
         w.writerow(["cycle"] + [f"seed_{s}" for s in SEEDS])
         for k in range(v.shape[1]):

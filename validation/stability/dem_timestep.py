@@ -32,19 +32,22 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import sys
 import time
 from multiprocessing import Pool
 from pathlib import Path
 
 import numpy as np
 
-from dem import provenance
 from dem.engine import setup
 from dem.engine.simulation import measure_cycles
 from dem.errors import SimulationError
 from dem.physics import measure
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -169,7 +172,7 @@ def main() -> int:
     classify(rows)
     path = HERE / "dem_timestep.csv"
     with open(path, "w", newline="") as fh:
-        fh.write("\n".join(provenance.header_lines("validation/stability/dem_timestep.py")) + "\n")
+        header.write_csv_header(fh, "validation/stability/dem_timestep.py")
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)

@@ -20,11 +20,15 @@ eps_t = 0.8 (the paper's Fig. 6) for eps_n = 0, 0.3 and 0.6, and draws
 from __future__ import annotations
 
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from dem import pointmass, provenance
+from dem import pointmass
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
+from validation._lib import header  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 GAMMAS = np.round(np.arange(0.1, 10.0001, 0.01), 4)
@@ -104,7 +108,7 @@ def main() -> int:
     path = HERE / "pointmass_bifurcation.csv"
     with open(path, "w", newline="") as fh:
         cmd = "validation/stability/pointmass_bifurcation.py"
-        fh.write("\n".join(provenance.header_lines(cmd)) + "\n")
+        header.write_csv_header(fh, cmd)
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
