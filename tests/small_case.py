@@ -71,7 +71,8 @@ def stop_mid_frame(case, out: Path, monkeypatch, check: int, timestep: float) ->
     import numpy as np
     import pytest
 
-    from dem.run.runner import RunInterrupted, run_case
+    from dem.run.interrupts import RunInterrupted
+    from dem.run.runner import run_case
 
     sigterm_at_check(monkeypatch, check)
     with pytest.raises(RunInterrupted) as info:

@@ -28,7 +28,8 @@ TEXT = SMALL_CASE.replace("cycles = 6", "cycles = 2").replace("settle_cycles = 2
 @pytest.fixture(scope="module")
 def interrupted(tmp_path_factory):
     """An interrupted run of a small case with its checkpoint (cycle 2 of 3, mid-run)."""
-    from dem.run.runner import RunInterrupted, run_case
+    from dem.run.interrupts import RunInterrupted
+    from dem.run.runner import run_case
 
     root = tmp_path_factory.mktemp("interrupted")
     case_dir = write_case(root / "case", TEXT)

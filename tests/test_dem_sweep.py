@@ -10,7 +10,7 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.run.runner import SUMMARY
+from dem.run.output import SUMMARY
 from dem.studies.sweep import folder_name, grid, parse_set, run_sweep
 
 pytest.importorskip("distributed")

@@ -21,7 +21,8 @@ from small_case import SMALL_CASE, sigterm_at_check, write_case
 
 from dem.cli import main
 from dem.io.hdf5 import read_results
-from dem.run.runner import LOCK_FILE, run_case
+from dem.run.output import LOCK_FILE
+from dem.run.runner import run_case
 from dem.scene.case import load_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,7 +58,7 @@ def _error_lines(stderr: str) -> list[str]:
 # --- item 3: a file size limit or a quota -------------------------------------------------------
 
 #: The room check switched off: a write fails inside HDF5, as under a quota no check foresees.
-NO_ROOM_CHECK = "import dem.io.hdf5 as h; h._check_room = lambda path, need: None"
+NO_ROOM_CHECK = "import dem.io.hdf5_guard as h; h.check_room = lambda path, need: None"
 
 
 #: (patch, file size limit): the limit results.h5 meets after a dozen cycles of the 60, with
@@ -90,9 +91,9 @@ def test_a_file_size_limit_ends_in_one_line_exit_1_and_no_crash(tmp_path, script
 def test_the_room_check_names_a_file_size_limit(tmp_path, monkeypatch):
     import errno
 
-    from dem.io import hdf5
+    from dem.io import hdf5, hdf5_guard
 
-    monkeypatch.setattr(hdf5.resource, "getrlimit", lambda which: (1000, -1))
+    monkeypatch.setattr(hdf5_guard.resource, "getrlimit", lambda which: (1000, -1))
     with pytest.raises(OSError) as info:
         hdf5.ResultsWriter(tmp_path / "results.h5", case={}, versions={}, seed=1, timestep=1.0)
     assert info.value.errno == errno.EFBIG and "ulimit -f" in str(info.value)
@@ -104,12 +105,12 @@ def test_the_room_check_names_a_file_size_limit(tmp_path, monkeypatch):
 #: The point-mass model of the summary compiles for seconds on a fresh machine: the signal then.
 SIGNAL_IN_SUMMARY = """
 import os, signal
-import dem.run.runner as runner
-_pointmass = runner._pointmass
+import dem.run.summary as summary
+pointmass_reference = summary.pointmass_reference
 def late(case):
     os.kill(os.getpid(), signal.{sig})
-    return _pointmass(case)
-runner._pointmass = late
+    return pointmass_reference(case)
+summary.pointmass_reference = late
 """
 
 

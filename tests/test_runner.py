@@ -131,9 +131,9 @@ def test_results_of_a_killed_run_are_readable(tmp_path):
     assert np.all(np.isfinite(last["positions"])) and last["positions"].shape == (120, 3)
     assert json.loads(json.dumps(r["case"]))["particles"]["count"] == 120
     # a killed run leaves no stale lock (the kernel drops it with the process)
-    from dem.run.runner import _lock_output
+    from dem.run.output import lock_output
 
-    _lock_output(out).close()
+    lock_output(out).close()
 
 
 @pytest.mark.parametrize("lab_frame", [False, True])

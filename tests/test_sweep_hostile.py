@@ -12,7 +12,7 @@ import pytest
 from small_case import SMALL_CASE, write_case
 from small_case import run_cli as run
 
-from dem.run.runner import SUMMARY
+from dem.run.output import SUMMARY
 
 pytest.importorskip("distributed")
 

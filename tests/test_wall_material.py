@@ -84,11 +84,11 @@ def test_an_incline_steeper_than_the_walls_friction_angle_is_refused_by_that_key
 
 def test_the_point_mass_and_the_deck_see_the_walls_values(tmp_path):
     from dem.io.liggghts import write_deck
-    from dem.run.runner import _pointmass_bounded
+    from dem.run.summary import pointmass_bounded
 
     case = _case(tmp_path, "friction = 0.6\n")
     plain = _case(tmp_path / "p")
-    assert _pointmass_bounded(case) != _pointmass_bounded(plain)
+    assert pointmass_bounded(case) != pointmass_bounded(plain)
     deck = write_deck(case, tmp_path / "deck", timestep=1e-6, steps=10).read_text()
     friction = next(line for line in deck.splitlines() if "coefficientFriction" in line)
     assert "0.35" in friction and "0.6" in friction

@@ -84,8 +84,8 @@ def cmd_optimum(args) -> int:
 
 def cmd_run(args) -> int:
     """``dem run``: one case, its summary printed and written."""
+    from dem.run.interrupts import RunInterrupted
     from dem.run.replicas import run_replicas
-    from dem.run.runner import RunInterrupted
     from dem.scene.case import load_case
     from dem.studies.answers import run_summary_lines
 

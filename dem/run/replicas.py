@@ -66,7 +66,8 @@ def _cores(threads: int | None) -> int:
 
 def _run_one(case, k: int, out_dir: str, kwargs: dict) -> dict:
     """Run replica ``k`` in a worker process; its summary, or how it was interrupted."""
-    from dem.run.runner import RunInterrupted, run_case
+    from dem.run.interrupts import RunInterrupted
+    from dem.run.runner import run_case
 
     try:
         return {"k": k, "summary": run_case(case, Path(out_dir), **kwargs)}
@@ -96,11 +97,12 @@ def run_replicas(
     written to ``out_dir/summary.json``. With one replica this is :func:`dem.run.runner.run_case`.
 
     Raises:
-        dem.run.runner.RunInterrupted: a signal stopped a replica; finished replicas are kept and
-            the interrupted ones left a checkpoint (``resume`` continues them).
+        dem.run.interrupts.RunInterrupted: a signal stopped a replica; finished replicas are
+            kept and the interrupted ones left a checkpoint (``resume`` continues them).
 
     """
-    from dem.run.runner import RunInterrupted, run_case
+    from dem.run.interrupts import RunInterrupted
+    from dem.run.runner import run_case
 
     n = case.run.replicas
     if n == 1:
@@ -188,7 +190,7 @@ def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:
     replicas leaves no stale ones behind).
     """
     from dem.errors import InputError
-    from dem.run.runner import RUN_OUTPUTS
+    from dem.run.output import RUN_OUTPUTS
 
     folder = out_dir / REPLICAS_DIR
     if folder.is_symlink():
@@ -213,7 +215,7 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def _has_checkpoint(run_dir: Path) -> bool:
-    from dem.run.runner import CHECKPOINT
+    from dem.run.output import CHECKPOINT
 
     return (Path(run_dir) / CHECKPOINT).is_file()
 
@@ -227,7 +229,8 @@ def _keep_own_summary(out_dir: Path, k: int, summary: dict) -> None:
 
 def _drop_run_files(run_dir: Path) -> None:
     """Remove a replica's results.h5 and frames (never written with frames off but the h5)."""
-    from dem.run.runner import FRAMES_DIR, PVD_NAME, RESULTS
+    from dem.io.vtk import FRAMES_DIR, PVD_NAME
+    from dem.run.output import RESULTS
 
     for name in (RESULTS, PVD_NAME):
         (run_dir / name).unlink(missing_ok=True)

@@ -13,7 +13,7 @@ A grid of more than :data:`MAX_POINTS` points is refused before a case is loaded
 is a whole ``dem run``. A rerun skips the points whose folder holds a summary.json and resumes
 the ones that hold a checkpoint. A finished point is reused only when its case and run options
 are this sweep's: each finished point's folder holds ``sweep_point.json``, the resolved case
-(:func:`dem.run.runner.fingerprint`, as a checkpoint records it) with the measured cycles and the
+(:func:`dem.run.summary.fingerprint`, as a checkpoint records it) with the measured cycles and the
 frames setting; a finished point without it, or of another case or other options, is refused
 before anything runs, naming the point and each key that differs, and left as it is. A point
 that fails (bad physics the guard stops, a lost worker) is reported with its error and leaves
@@ -164,7 +164,7 @@ def record(case, cycles: int | None, frames: bool) -> dict:
     The resolved case as a checkpoint records it (every key but the name and the folder), the
     measured cycles and whether frames were written.
     """
-    from dem.run.runner import fingerprint
+    from dem.run.summary import fingerprint
 
     measured = case.run.cycles if cycles is None else int(cycles)
     return fingerprint(case) | {"cycles": measured, "frames": bool(frames)}
@@ -178,7 +178,8 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
     point and each key that differs (or what is missing). Nothing is changed: the finished
     point stays for the user to keep or move away.
     """
-    from dem.run.runner import SUMMARY, fingerprint_changes
+    from dem.run.output import SUMMARY
+    from dem.run.summary import fingerprint_changes
     from dem.studies.report import read_summary
 
     differ: list[tuple[SweepPoint, str]] = []
@@ -212,7 +213,7 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
 
 def status(point: SweepPoint) -> str:
     """Whether a point is "done" (summary.json), "interrupted" (a checkpoint) or "new"."""
-    from dem.run.runner import CHECKPOINT, SUMMARY
+    from dem.run.output import CHECKPOINT, SUMMARY
 
     if (point.folder / SUMMARY).is_file():
         return "done"
@@ -345,7 +346,7 @@ def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
 
 def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     """One row per point: its overrides, its summary's values, and its status."""
-    from dem.run.runner import SUMMARY
+    from dem.run.output import SUMMARY
     from dem.studies.report import read_summary
 
     rows = []

@@ -1,0 +1,224 @@
+"""The summary of a run (summary.json, DESIGN.md section 6), and the case's fingerprint.
+
+:func:`summarize` gathers what a finished run reports: the conveying velocity over the measured
+cycles with its error bar (:func:`dem.physics.measure.conveying_velocity`), the mass flow, a
+finite feeder's discharge, the drive and materials used, the point-mass reference on the same
+drive (:func:`pointmass_reference`, and :func:`pointmass_bounded`, the DEM's own reference),
+cost figures and provenance. :func:`fingerprint` flattens the resolved case into the record a
+checkpoint keeps, so that ``--resume`` refuses a changed case (:func:`fingerprint_changes` names
+what).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from dem.engine.simulation import Simulation
+from dem.physics import measure
+from dem.provenance import record
+from dem.run.record import Progress
+
+
+def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads: int) -> dict:
+    """The summary of a finished run of ``case`` on ``n_threads``, less what the runner adds.
+
+    The runner adds the plan, the stiffness assessment, the deepest overlap, its warnings and
+    the thread guard's record. An undefined value (a one-cycle run's stderr) is NaN here.
+    """
+    per_cycle = np.array(progress.per_cycle)
+    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
+    d = case.drive
+    pm_norm, pm_method = pointmass_reference(case)
+    total_mass = sim.total_mass
+    flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
+    feeder = feeder_summary(case, sim, progress)
+    if feeder is not None:  # the mass changed: the mean mass in the trough over the cycles
+        flow = measure.mass_flow_rate(feeder["mean_mass_in_trough"], stat.mean, case.trough.length)
+    wall = progress.wall_time_s
+    provenance = record()  # versions, commit, date, host and load (the load bears on wall_time_s)
+    return {
+        "case": case.name,
+        "overrides": dict(case.overrides),
+        "mean_velocity": stat.mean,
+        "mean_velocity_stderr": stat.stderr,
+        "mean_velocity_norm": stat.norm,
+        "mean_velocity_norm_stderr": stat.norm_stderr,
+        "cycle_autocorrelation_time": stat.autocorrelation_time,
+        "mean_velocity_stderr_independent": stat.stderr_independent,
+        "replicas": 1,
+        "error_bar": "within this run (autocorrelated per-cycle means): it excludes the "
+        "fill-to-fill spread; pool fills with run.replicas",
+        "mass_flow_rate": flow,
+        "mass_flow_rate_per_width": flow / case.trough.width,
+        "amplitude": case.drive.amplitude,
+        "throw_number": d.effective_throw_number(case.trough.inclination),
+        "velocity_scale": d.velocity_scale,
+        "drive_components": components(case),
+        "ramp_cycles": d.ramp_cycles,
+        "frequency": case.drive.frequency,
+        "angle": case.drive.angle,
+        "inclination": case.trough.inclination,
+        "friction": case.material.friction,
+        "wall": wall_summary(case),
+        "contact_model": case.contact.model,
+        **sim.law.tangential_coefficients(),
+        "grains": sim.n_grains,
+        "spheres": sim.spheres.n,
+        "total_mass": total_mass,
+        "timestep": sim.dt,
+        "timestep_limit": sim.timestep_limit,
+        "steps": progress.steps,
+        "settle_cycles": progress.settle_cycles,
+        "settle_cycles_auto": case.run.settle_cycles is None,
+        "settle_transient_ended": progress.settle_detected,
+        "cycles": cycles,
+        "per_cycle_velocity": [float(u) for u in per_cycle],
+        "settle_time_s": progress.settle_time_s,
+        "settle_wall_time_s": progress.settle_wall_time_s,
+        # compile and fill of the process that filled the trough; frames of every process
+        "compile_wall_time_s": progress.compile_wall_time_s,
+        "fill_wall_time_s": progress.fill_wall_time_s,
+        "frames_wall_time_s": progress.frames_wall_time_s,
+        "frames_written": progress.h5_frames if progress.frames else 0,
+        "wall_time_s": wall,
+        "particle_steps_per_s": sim.spheres.n * progress.steps / wall if wall > 0 else None,
+        "neighbour_builds": sim.pairs.builds,
+        "threads": n_threads,
+        "seed": case.run.seed,
+        "feeder": feeder,
+        "pointmass_velocity_norm": pm_norm,
+        "pointmass_method": pm_method,
+        "pointmass_bounded_velocity_norm": pointmass_bounded(case),
+        "dem_version": provenance["versions"]["dem"],
+        "git_commit": provenance["git_commit"],
+        "provenance": provenance,
+    }
+
+
+def feeder_summary(case, sim: Simulation, progress: Progress) -> dict | None:
+    """A finite feeder's discharge: its rate per measured cycle, steady value and balance."""
+    f = sim.feeder
+    if f is None:
+        return None
+    rates = np.array(progress.discharge_per_cycle or [], dtype=np.float64)
+    hold = np.array(progress.hold_up_per_cycle or [], dtype=np.float64)
+    mean = stderr = math.nan
+    tau = 0.5
+    if rates.size:
+        mean = float(np.mean(rates))
+        if rates.size > 1:
+            stderr, tau = measure.correlated_stderr(rates)
+    return {
+        "length": f.discharge,
+        "feed_rate": f.feed_rate,
+        "feed_length": f.feed_length,
+        "discharge_rate": mean,
+        "discharge_rate_stderr": stderr,
+        "discharge_autocorrelation_time": tau,
+        "discharge_rate_per_cycle": [float(r) for r in rates],
+        "mean_mass_in_trough": float(np.mean(hold)) if hold.size else sim.total_mass,
+        "grains_inserted": f.inserted,
+        "grains_in_trough": sim.n_grains,
+        "grains_discharged": f.discharged,
+        "mass_inserted": f.inserted_mass,
+        "mass_discharged": f.discharged_mass,
+        "feed_backlog": f.backlog,
+        "domain_length": sim.trough.length,
+    }
+
+
+def pointmass_reference(case) -> tuple[float, str]:
+    """The point mass's v / (velocity scale) on the case's drive, and the method that gave it.
+
+    The paper's line drive: the event-driven model; two components: the point mass stepped in
+    time on the same motion (:mod:`dem.pointmass.elliptic`).
+    """
+    from dem import pointmass
+
+    m = case.wall_material  # the point mass touches the floor only
+    if case.drive.second_amplitude > 0.0:
+        from dem.pointmass import elliptic
+
+        r = elliptic.velocity(
+            case.drive.motion, m.friction, case.trough.inclination,
+            m.restitution_tangential, m.restitution_normal,
+        )  # fmt: skip
+        return r.velocity_norm, "stepped (two-component drive)"
+    return pointmass.velocity(
+        throw_number=case.drive.throw_number,
+        angle=case.drive.angle,
+        friction=case.wall_material.friction,
+        inclination=case.trough.inclination,
+        eps_t=case.wall_material.restitution_tangential,
+        eps_n=case.wall_material.restitution_normal,
+    ).velocity_norm, "event-driven (the paper's model)"
+
+
+def pointmass_bounded(case) -> float | None:
+    """The Coulomb-bounded point mass (the DEM's reference) on a line drive; None otherwise.
+
+    It differs from the paper's model where Eq. 12 asks a landing for more tangential impulse
+    than friction can give (:data:`dem.pointmass.model.IMPACT_LAWS`).
+    """
+    from dem import pointmass
+
+    if case.drive.second_amplitude > 0.0:
+        return None
+    m = case.wall_material  # the point mass touches the floor only
+    return pointmass.velocity(
+        case.drive.throw_number, case.drive.angle, m.friction, case.trough.inclination,
+        m.restitution_tangential, m.restitution_normal, impact="coulomb",
+    ).velocity_norm  # fmt: skip
+
+
+def components(case) -> list[dict]:
+    """The drive's components as the summary lists them (angles and phase in degrees)."""
+    d = case.drive
+    out = [{"amplitude": d.amplitude, "angle": d.angle, "phase": 0.0}]
+    if d.second_amplitude > 0.0:
+        out.append({"amplitude": d.second_amplitude, "angle": d.second_angle,
+                    "phase": d.second_phase})  # fmt: skip
+    return out
+
+
+def wall_summary(case) -> dict:
+    """The grain-wall values in use, and which ``[wall]`` gave (the rest are the material's)."""
+    w = case.wall_material
+    return {"friction": w.friction, "restitution_normal": w.restitution_normal,
+            "restitution_tangential": w.restitution_tangential,
+            "rolling_friction": w.rolling_friction,
+            "given": list(case.wall.given) if case.wall is not None else []}  # fmt: skip
+
+
+#: Case keys a resumed run may change: how long it runs and where its name comes from.
+RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
+
+
+def fingerprint(case) -> dict:
+    """The resolved case as flat JSON data, {"table.key": value}: what a checkpoint records."""
+    flat: dict = {}
+
+    def walk(prefix: str, value) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(f"{prefix}.{k}" if prefix else k, v)
+        else:
+            flat[prefix] = value
+
+    walk("", json.loads(json.dumps(case.as_dict(), default=str)))
+    for key in RESUMABLE_KEYS:
+        flat.pop(key, None)
+    return flat
+
+
+def fingerprint_changes(before: dict | None, now: dict) -> list[str]:
+    """Each key that differs, as "key = old (now new)"; none for a checkpoint without a record."""
+    if before is None:
+        return []
+    keys = sorted(set(before) | set(now))
+    return [
+        f"{k} = {before.get(k)!r} (now {now.get(k)!r})" for k in keys if before.get(k) != now.get(k)
+    ]
