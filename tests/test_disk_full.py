@@ -20,7 +20,7 @@ import pytest
 import pyvista as pv
 from small_case import SMALL_CASE, write_case
 
-from dem.io import hdf5
+from dem.io import hdf5_guard
 from dem.io.files import replace_text
 from dem.io.hdf5 import ResultsWriter, read_results
 from dem.io.vtk import save_vtp
@@ -78,8 +78,8 @@ def test_results_file_refuses_a_write_without_room_and_stays_readable(tmp_path, 
     w.append_cycle(cycle=0, time=0.1, mean_velocity=0.01, kinetic_energy=1.0, contacts=1,
                    measured=1)  # fmt: skip
     usage = shutil.disk_usage(tmp_path)
-    monkeypatch.setattr(hdf5.shutil, "disk_usage",
-                        lambda _: usage._replace(free=hdf5.HDF5_FREE_MARGIN - 1))  # fmt: skip
+    monkeypatch.setattr(hdf5_guard.shutil, "disk_usage",
+                        lambda _: usage._replace(free=hdf5_guard.HDF5_FREE_MARGIN - 1))  # fmt: skip
     with pytest.raises(OSError) as info:
         w.append_cycle(cycle=1, time=0.2, mean_velocity=0.02, kinetic_energy=1.0, contacts=1,
                        measured=1)  # fmt: skip

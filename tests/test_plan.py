@@ -12,7 +12,7 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.engine import setup
-from dem.run import plan, stiffness
+from dem.run import accuracy, cost, plan, stiffness
 from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
@@ -52,7 +52,7 @@ def study(monkeypatch):
     """The synthetic speed-accuracy study alone (the bed-compliance rule of dem.run.stiffness has
     its own data and tests/test_stiffness.py)."""
     data = synthetic_study()
-    monkeypatch.setattr(plan, "study_data", lambda: data)
+    monkeypatch.setattr(accuracy, "study_data", lambda: data)
     monkeypatch.setattr(stiffness, "study", lambda: None)
     return data
 
@@ -82,8 +82,8 @@ def test_plan_on_every_shipped_case(directory, capsys):
     per = 1400 if case.trough.mesh is None else 1700
     assert 0 < out["memory_bytes"] < per * out["spheres"] + 8000  # and 8 kB fixed
     assert out["wall_time_s"] > 0
-    if plan.unmeasured(case, plan.study_data()["cases"][plan.study_kind(case)],
-                       plan.study_kind(case)):  # fmt: skip
+    if accuracy.unmeasured(case, accuracy.study_data()["cases"][accuracy.study_kind(case)],
+                       accuracy.study_kind(case)):  # fmt: skip
         # the study ran the "coulomb" law at its own drives: nothing is claimed elsewhere
         # (NaN in Python, null in the strict JSON)
         assert out["expected_error"] is None and "not measured" in out["error_source"]
@@ -184,7 +184,7 @@ def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
     )
     after = plan.plan(case, threads=1)
     assert after.particle_steps_per_s == 1.0e6 and "last run" in after.rate_source
-    overhead = after.steps * plan.STEP_OVERHEAD_S + plan.STARTUP_S + after.compile_s
+    overhead = after.steps * cost.STEP_OVERHEAD_S + cost.STARTUP_S + after.compile_s
     overhead += after.fill_s + after.frames_s
     assert after.wall_time_s == pytest.approx(after.particle_steps / 1.0e6 + overhead)
 
@@ -197,10 +197,10 @@ def test_wall_time_adds_the_compile_only_where_the_cache_is_cold(tmp_path, monke
     warm = plan.plan(case, threads=1)
     monkeypatch.setattr(kernels, "compiled", lambda clumps=False, mesh=False: False)
     cold = plan.plan(case, threads=1)
-    assert warm.compile_s == 0.0 and cold.compile_s == plan.COMPILE_S["sphere"]
-    assert cold.wall_time_s - warm.wall_time_s == pytest.approx(plan.COMPILE_S["sphere"])
+    assert warm.compile_s == 0.0 and cold.compile_s == cost.COMPILE_S["sphere"]
+    assert cold.wall_time_s - warm.wall_time_s == pytest.approx(cost.COMPILE_S["sphere"])
     assert "no numba cache yet" in cold.text() and "no numba cache" not in warm.text()
-    fill = plan.FILL_S["sphere"] + 120 * plan.FILL_S_PER_GRAIN["sphere"]
+    fill = cost.FILL_S["sphere"] + 120 * cost.FILL_S_PER_GRAIN["sphere"]
     assert cold.fill_s == pytest.approx(fill)
     frames = 1 + (cold.settle_cycles + cold.cycles) * case.output.frames_per_cycle
     assert cold.frames == frames and plan.plan(case, threads=1, frames=False).frames == 0
@@ -248,7 +248,7 @@ def test_suggest_refuses_advice_that_moves_a_key_back_and_forth(tmp_path, monkey
     def flip(case, **kw):  # advice that alternates between two values
         value = [1e8, 2e8][next(calls) % 2]
         return dataclasses.replace(
-            real(case, **kw), advice=[plan.Advice("warn", "contact.youngs_modulus", "x", value)]
+            real(case, **kw), advice=[accuracy.Advice("warn", "contact.youngs_modulus", "x", value)]
         )
 
     real = plan.plan
@@ -266,7 +266,7 @@ def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
         summary = run_case(case, tmp_path / "out", progress=False, frames=False)
     assert len([w for w in record if w.category is plan.PlanWarning]) == 1
     p = summary["plan"]
-    driven = p["steps"] - plan.settle_steps(case, p["timestep"])
+    driven = p["steps"] - cost.settle_steps(case, p["timestep"])
     assert abs(summary["steps"] - driven) <= p["settle_cycles"] + p["cycles"]
     assert p["timestep"] == summary["timestep"]
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["plan"] == json.loads(
@@ -277,7 +277,7 @@ def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
 def test_plan_claims_only_what_was_measured(tmp_path):
     """The study's figures hold under its law and drive: elsewhere plan says "not measured"
     and names the command that measures it; at the study's own conditions it gives a number."""
-    data = plan.study_data()
+    data = accuracy.study_data()
     assert data is not None
     case = load_case(CASES_DIR / "screw-trough")
     assert case.contact.tangential == "impact"

@@ -7,6 +7,7 @@ import pytest
 
 from dem import config
 from dem.errors import InputError
+from dem.physics import mass
 from dem.scene import shapes
 
 RHO = 7800.0
@@ -101,7 +102,7 @@ def test_separate_spheres_parallel_axis(method):
     c = np.array([[0.0, 0.0, 0.0], [3.0, 0.5, 0.0], [0.0, 2.5, 1.0], [1.2, -1.0, 2.0]])
     r = np.array([1.0, 1.2, 0.6, 0.5])
     vol, com, inertia = _analytic_disjoint(c, r)
-    p = shapes.union_properties(c, r, method=method, rtol=FAST)
+    p = mass.union_properties(c, r, method=method, rtol=FAST)
     assert p.method == ("disjoint" if method == "auto" else "grid")
     if method == "auto":
         assert p.volume == pytest.approx(vol, rel=1e-13)
@@ -114,7 +115,7 @@ def test_separate_spheres_parallel_axis(method):
 
 
 def test_sphere_by_grid_within_bound():
-    p = shapes.union_properties([[0.3, -0.2, 0.1]], [1.0], method="grid", rtol=FAST)
+    p = mass.union_properties([[0.3, -0.2, 0.1]], [1.0], method="grid", rtol=FAST)
     v = 4.0 / 3.0 * math.pi
     assert abs(p.volume - v) <= p.volume_error <= FAST * v
     assert np.linalg.norm(p.inertia - 0.4 * v * np.eye(3)) <= p.inertia_error
@@ -124,11 +125,11 @@ def test_sphere_by_grid_within_bound():
 def test_two_overlapping_spheres_lens_volume(d):
     c = np.array([[0.0, 0.0, 0.0], [d, 0.0, 0.0]]) @ _rotation(1).T  # any direction
     exact = 2.0 * 4.0 / 3.0 * math.pi - _lens(1.0, d)
-    axial = shapes.union_properties(c, [1.0, 1.0])
+    axial = mass.union_properties(c, [1.0, 1.0])
     assert axial.method == "axial"
     assert axial.volume == pytest.approx(exact, rel=1e-13)
     assert np.allclose(axial.com, 0.5 * (c[0] + c[1]), atol=1e-14)
-    grid = shapes.union_properties(c, [1.0, 1.0], method="grid", rtol=FAST)
+    grid = mass.union_properties(c, [1.0, 1.0], method="grid", rtol=FAST)
     assert abs(grid.volume - exact) <= grid.volume_error
     assert np.linalg.norm(grid.inertia - axial.inertia) <= grid.inertia_error
 
@@ -138,7 +139,7 @@ def test_three_sphere_ring_pairwise_lenses():
     R): V = 3 V_sphere - 3 lens exactly; the grid method must agree within its bound."""
     d = 1.9
     c = np.array([[0, 0, 0], [d, 0, 0], [d / 2, d * math.sqrt(3) / 2, 0]]) @ _rotation(2).T
-    p = shapes.union_properties(c, np.ones(3), rtol=FAST)
+    p = mass.union_properties(c, np.ones(3), rtol=FAST)
     assert p.method == "grid"
     exact = 4.0 * math.pi - 3.0 * _lens(1.0, d)
     assert abs(p.volume - exact) <= p.volume_error
@@ -229,7 +230,7 @@ def test_principal_axes_orthonormal_and_diagonalise(seed):
     assert np.allclose(body, np.diag(t.moments), rtol=0, atol=1e-12 * scale)
     assert np.allclose(t.com_input, com, atol=1e-12)
     # the body-frame spheres have their centre at the origin and a diagonal inertia tensor
-    again = shapes.union_properties(t.centres, t.radii)
+    again = mass.union_properties(t.centres, t.radii)
     assert np.allclose(again.com, 0.0, atol=1e-12)
     assert np.allclose(RHO * again.inertia, np.diag(t.moments), rtol=0, atol=1e-12 * scale)
     assert np.allclose(t.input_centres(), c, atol=1e-12)
@@ -291,7 +292,7 @@ def test_clump_file_errors_name_the_line(tmp_path, text, where, value):
         (lambda: shapes.sphere(-1.0, RHO), "radius"),
         (lambda: shapes.sphere(1.0, 0.0), "density"),
         (lambda: shapes.clump(np.zeros((2, 3)), [1.0], density=RHO), "radii"),
-        (lambda: shapes.union_properties([[0, 0, 0], [1, 0, 0]], [1, 1], method="disjoint"),
+        (lambda: mass.union_properties([[0, 0, 0], [1, 0, 0]], [1, 1], method="disjoint"),
          "method"),
     ],
 )  # fmt: skip

@@ -30,12 +30,12 @@ every frame of results.h5.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from dem.engine.state import Bodies, Spheres
+from dem.physics.mass import sphere_mass
 
 #: Grains are exchanged at most every this fraction of a drive period.
 EXCHANGE_FRACTION = 1.0 / 16.0
@@ -269,5 +269,5 @@ def grain_mass(case) -> float:
     """Mass of one grain of the case, kg."""
     pt = case.particles
     if pt.shape == "sphere":
-        return case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
+        return sphere_mass(case.material.density, pt.radius)
     return float(pt.grain.mass)

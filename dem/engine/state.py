@@ -12,7 +12,6 @@ All arrays are float64 C-contiguous unless stated; n spheres, B bodies, ``cap`` 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,6 +21,7 @@ from dem.kernels.forces import N_WALLS
 from dem.kernels.layout import BodyArrays, PairArrays, SphereArrays
 from dem.kernels.neighbours import OVERFLOW_CELLS, OVERFLOW_PAIRS, OVERFLOW_SLOTS
 from dem.kernels.rigid import angular_velocity, update_members
+from dem.physics.mass import sphere_mass
 
 
 @dataclass
@@ -68,7 +68,7 @@ class Spheres:
         r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,)).copy()
         if np.any(r <= 0) or density <= 0:
             raise ValueError("radius and density must be positive")
-        mass = density * 4.0 / 3.0 * math.pi * r**3
+        mass = sphere_mass(density, r)
         inertia = 0.4 * mass * r**2
         return cls(
             x=x,

@@ -39,8 +39,9 @@ the back) writes format version 3, the frames ragged: one row per sphere and fra
                             body_start[k] .. body_start[k + 1] of /frames/orientation (Bsum, 4)
 
 Versions: 1 has no ``orientation`` and no ``git_commit``; 2 adds them; 3 is 2 with ragged
-frames. :func:`read_results` reads all three (``orientation`` is None for version 1 and for
-plain spheres) and refuses any other; :class:`Frames` gives every frame the same dict.
+frames. :func:`read_results` (:mod:`dem.io.hdf5_read`) reads all three (``orientation`` is None
+for version 1 and for plain spheres) and refuses any other; :class:`~dem.io.hdf5_read.Frames`
+gives every frame the same dict.
 
 Frame datasets are chunked one frame per chunk and gzip-compressed (with the shuffle filter);
 cycle datasets are chunked by 256 rows. Both grow along their first axis.
@@ -54,43 +55,29 @@ dataset holds it. A kill during an append (a few milliseconds of each cycle) is 
 without SWMR gives no guarantee for a file whose metadata was being written. Opening and closing
 costs a few milliseconds, negligible next to a cycle. The writer does not take HDF5's file lock,
 so a viewer that holds the file open (HDFView, h5py) cannot make an append fail and stop the run;
-such a viewer sees the file as it was when it opened it.
+such a viewer sees the file as it was when it opened it. The room checks and the guarded file
+are :mod:`dem.io.hdf5_guard`.
 """
 
 from __future__ import annotations
 
-import contextlib
 import datetime
-import errno
-import io
 import json
-import os
-import re
-import shutil
 from collections.abc import Mapping
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-try:
-    import resource
-except ImportError:  # not on Windows: no file size limit to check
-    resource = None
-
 from dem.errors import InputError
-from dem.provenance import git_commit, package_versions  # package_versions: re-exported too
+from dem.io.hdf5_guard import writing
+from dem.io.hdf5_read import FRAME_VECTORS, read_results  # noqa: F401  (re-exported: README)
+from dem.provenance import git_commit, package_versions  # noqa: F401  (re-exported)
 
 FORMAT_VERSION = 2
-#: Free bytes results.h5 keeps in reserve beyond a write's own data (HDF5's metadata and chunk
-#: allocation): below it a write is refused rather than risked (:func:`_writing`).
-HDF5_FREE_MARGIN = 1 << 20
 #: The layout of runs whose grain count changes (ragged frames).
 RAGGED_VERSION = 3
-#: Layout versions :func:`read_results` understands.
-READABLE_VERSIONS = (1, 2, 3)
 CYCLE_CHUNK = 256
-_FRAME_VECTORS = ("positions", "velocity")
 
 
 class ResultsWriter:
@@ -140,7 +127,7 @@ class ResultsWriter:
         if resume_at is not None:
             self._resume(*resume_at)
             return
-        with _writing(self.path, "w") as f:
+        with writing(self.path, "w") as f:
             f.attrs["format_version"] = int(format_version)
             f.attrs["seed"] = int(seed)
             f.attrs["timestep"] = float(timestep)
@@ -179,7 +166,7 @@ class ResultsWriter:
                 f"{sorted(self._cycle_keys)}"
             )
         row = self._n_cycles
-        with _writing(self.path, "a") as f:
+        with writing(self.path, "a") as f:
             g = f["cycles"]
             if self._cycle_keys is None:
                 for k, v in values.items():
@@ -253,7 +240,7 @@ class ResultsWriter:
             )
         k = self._n_frames
         need = pos.nbytes + vel.nbytes + cc.nbytes + (0 if q is None else q.nbytes)
-        with _writing(self.path, "a", need) as f:
+        with writing(self.path, "a", need) as f:
             g = f["frames"]
             if self._n_spheres is None:
                 if radius is None:
@@ -270,7 +257,7 @@ class ResultsWriter:
                 g.create_dataset("radius", data=r)
                 g.create_dataset("grain_id", data=gid.astype(np.int64))
                 opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
-                for name in _FRAME_VECTORS:
+                for name in FRAME_VECTORS:
                     g.create_dataset(
                         name, shape=(0, n, 3), maxshape=(None, n, 3), dtype=np.float64,
                         chunks=(1, max(n, 1), 3), **opts,
@@ -320,7 +307,7 @@ class ResultsWriter:
         k = self._n_frames
         opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
         need = sum(a.nbytes for a in rows.values()) + (0 if q is None else q.nbytes)
-        with _writing(self.path, "a", need) as f:
+        with writing(self.path, "a", need) as f:
             g = f["frames"]
             if "start" not in g:
                 for name, data in rows.items():
@@ -371,7 +358,7 @@ class ResultsWriter:
 
     def _resume(self, n_cycles: int, n_frames: int) -> None:
         """Reopen an interrupted file, trimmed back to its first n_cycles rows and n_frames."""
-        with _writing(self.path, "a") as f:
+        with writing(self.path, "a") as f:
             version = int(f.attrs.get("format_version", -1))
             expected = RAGGED_VERSION if self.ragged else FORMAT_VERSION
             if version != expected:
@@ -400,7 +387,7 @@ class ResultsWriter:
                     frames["orientation"].resize(bodies, axis=0)
                     frames["body_start"].resize((n_frames + 1,))
             elif "time" in frames:
-                for name in (*_FRAME_VECTORS, "contact_count", "time"):
+                for name in (*FRAME_VECTORS, "contact_count", "time"):
                     frames[name].resize(n_frames, axis=0)
                 self._n_spheres = int(frames["radius"].shape[0])
                 self._n_bodies = 0
@@ -418,7 +405,7 @@ class ResultsWriter:
     def close(self) -> Path:
         """Mark the file complete; further appends raise. Returns the path."""
         if not self._closed:
-            with _writing(self.path, "a") as f:
+            with writing(self.path, "a") as f:
                 f.attrs["complete"] = True
             self._closed = True
         return self.path
@@ -432,256 +419,6 @@ class ResultsWriter:
     def _check_open(self) -> None:
         if self._closed:
             raise ValueError(f"{self.path} is closed")
-
-
-class Frames:
-    """Lazy access to the frames of a ``results.h5``; each access opens the file read-only.
-
-    ``len(frames)`` is the number of complete frames; ``frames[i]`` (negative i allowed) returns
-    a dict with ``time`` (s), ``positions`` (N, 3) m, ``velocity`` (N, 3) m/s, ``contact_count``
-    (N,), ``radius`` (N,) m, ``grain_id`` (N,), ``grain_index`` (N,) and ``orientation`` (B, 4)
-    (unit quaternions w, x, y, z of the clumps, indexed by ``grain_index``; None for plain
-    spheres and version 1). N and B may change from frame to frame in a ragged file (version
-    3), where ``grain_id`` is the grain's lasting id; elsewhere the two are the same.
-    """
-
-    def __init__(self, path: Path, count: int, time: np.ndarray):
-        self.path = Path(path)
-        self.count = int(count)
-        self.time = time
-
-    def __len__(self) -> int:
-        return self.count
-
-    def __getitem__(self, i: int) -> dict:
-        i = int(i)
-        if i < 0:
-            i += self.count
-        if not 0 <= i < self.count:
-            raise IndexError(f"frame {i} out of range ({self.count} frames)")
-        with h5py.File(self.path, "r", locking=False) as f:
-            g = f["frames"]
-            if "start" in g:  # ragged (format version 3)
-                a, b = int(g["start"][i]), int(g["start"][i + 1])
-                orientation = None
-                if "orientation" in g:
-                    c, d = int(g["body_start"][i]), int(g["body_start"][i + 1])
-                    orientation = g["orientation"][c:d]
-                extra = {k: g[k][i] for k in json.loads(g.attrs.get("per_frame", "[]"))}
-                return {
-                    **extra,
-                    "time": float(g["time"][i]),
-                    "positions": g["positions"][a:b],
-                    "velocity": g["velocity"][a:b],
-                    "contact_count": g["contact_count"][a:b],
-                    "radius": g["radius"][a:b],
-                    "grain_id": g["grain_id"][a:b],
-                    "grain_index": g["grain_index"][a:b],
-                    "orientation": orientation,
-                }
-            return {
-                "time": float(g["time"][i]),
-                "positions": g["positions"][i],
-                "velocity": g["velocity"][i],
-                "contact_count": g["contact_count"][i],
-                "radius": g["radius"][()],
-                "grain_id": g["grain_id"][()],
-                "grain_index": g["grain_id"][()],
-                "orientation": g["orientation"][i] if "orientation" in g else None,
-            }
-
-
-#: errno values of a write refused for room: a full disk, a file-size limit, a full quota.
-NO_ROOM = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
-
-
-def _check_room(path: Path, need: int) -> None:
-    """Raise OSError (ENOSPC or EFBIG) when a write of ``need`` bytes to ``path`` may not fit.
-
-    Free space below ``need`` plus :data:`HDF5_FREE_MARGIN`, or a file size limit (``ulimit
-    -f``, RLIMIT_FSIZE) the file would pass by then: the write is refused before the file is
-    opened, so results.h5 stays as its last complete write left it.
-    """
-    free = shutil.disk_usage(path.parent).free
-    if free < need + HDF5_FREE_MARGIN:
-        raise OSError(
-            errno.ENOSPC,
-            f"{os.strerror(errno.ENOSPC)} ({free} bytes free; dem stops writing results.h5 "
-            f"below {need + HDF5_FREE_MARGIN} so that it stays readable)",
-            str(path),
-        )
-    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0] if resource else -1
-    if limit not in (-1, getattr(resource, "RLIM_INFINITY", -1)):
-        size = path.stat().st_size if path.exists() else 0
-        if size + need + HDF5_FREE_MARGIN > limit:
-            raise OSError(
-                errno.EFBIG,
-                f"{os.strerror(errno.EFBIG)} (the file size limit is {limit} bytes, ulimit -f; "
-                f"results.h5 holds {size}: dem stops writing it {need + HDF5_FREE_MARGIN} "
-                "bytes below the limit so that it stays readable)",
-                str(path),
-            )
-
-
-class _GuardedFile(io.RawIOBase):
-    """results.h5 as HDF5's file driver sees it: after the first failed write, writes go nowhere.
-
-    HDF5 cannot close a file whose write failed (a quota or a disk filled by another process,
-    which :func:`_check_room` cannot foresee): the dataset stays in HDF5's table of open objects,
-    h5py prints "Exception ignored" tracebacks, and HDF5's own exit handler segfaults closing it
-    again (exit 139 after dem's one-line error; h5py 3.16, HDF5 2.0). Here the failed write is
-    recorded in :attr:`failed` and reported to HDF5 as done, and every write after it is
-    dropped, so HDF5 closes the file and :func:`_writing` raises the recorded error.
-    """
-
-    def __init__(self, fd: int):
-        super().__init__()
-        self._raw = io.FileIO(fd, "r+", closefd=True)
-        self.failed: OSError | None = None
-
-    def readable(self) -> bool:  # noqa: D102
-        return True
-
-    def writable(self) -> bool:  # noqa: D102
-        return True
-
-    def seekable(self) -> bool:  # noqa: D102
-        return True
-
-    def seek(self, offset: int, whence: int = 0) -> int:  # noqa: D102
-        return self._raw.seek(offset, whence)
-
-    def tell(self) -> int:  # noqa: D102
-        return self._raw.tell()
-
-    def readinto(self, buffer) -> int:  # noqa: D102
-        return self._raw.readinto(buffer)
-
-    def write(self, data) -> int:  # noqa: D102
-        size = memoryview(data).nbytes
-        if self.failed is None:
-            try:
-                done = 0
-                while done < size:  # a short write (the disk filled mid-way) goes on or fails
-                    done += self._raw.write(memoryview(data).cast("B")[done:])
-            except OSError as err:
-                self.failed = err
-        return size
-
-    def truncate(self, size: int | None = None) -> int:  # noqa: D102
-        if self.failed is None:
-            try:
-                return self._raw.truncate(size)
-            except OSError as err:
-                self.failed = err
-        return self.tell() if size is None else size
-
-    def flush(self) -> None:  # noqa: D102
-        pass  # FileIO is unbuffered
-
-    def close(self) -> None:  # noqa: D102
-        if not self.closed:
-            self._raw.close()
-        super().close()
-
-
-@contextlib.contextmanager
-def _writing(path: Path, mode: str, need: int = 0):
-    """``h5py.File(path, mode)`` ("w" or "a") whose write failures raise OSError naming ``path``.
-
-    The room for the write is checked first (:func:`_check_room`: free space, the file size
-    limit). Should a write fail all the same (a quota, another process filling the disk), it
-    fails in :class:`_GuardedFile`, HDF5 still closes the file, and the system's error (ENOSPC,
-    EFBIG, EDQUOT) is raised as OSError naming ``path``. The file is opened without following a
-    link (``O_NOFOLLOW``): results.h5 planted as a link to another file is refused, not written
-    through.
-    """
-    path = Path(path)
-    _check_room(path, need)
-    flags = os.O_RDWR | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
-    flags |= os.O_CREAT | os.O_TRUNC if mode == "w" else 0
-    try:
-        raw = _GuardedFile(os.open(path, flags, 0o666))
-    except OSError as err:
-        raise OSError(err.errno, err.strerror, str(path)) from None
-    try:
-        try:
-            with h5py.File(raw, "w" if mode == "w" else "r+", locking=False) as f:
-                yield f
-        except (OSError, RuntimeError) as err:
-            if raw.failed is not None:
-                raise _as_os_error(raw.failed, path) from err
-            raise _as_os_error(err, path) from err
-        if raw.failed is not None:
-            raise _as_os_error(raw.failed, path)
-    finally:
-        raw.close()
-
-
-def _as_os_error(err: Exception, path: Path) -> OSError:
-    code = err.errno if isinstance(err, OSError) and err.errno else None
-    if code is None:
-        found = re.search(r"errno = (\d+)", str(err))
-        code = int(found.group(1)) if found else errno.EIO
-    message = os.strerror(code) if code != errno.EIO else str(err).splitlines()[0]
-    return OSError(code, message, str(path))
-
-
-def read_results(path: Path) -> dict:
-    """Read a ``results.h5`` (complete or from a killed run) of a version in READABLE_VERSIONS.
-
-    Returns:
-        dict with ``case`` (dict, from ``case_json``), ``versions`` (dict of str), ``seed``,
-        ``timestep`` (s), ``format_version``, ``git_commit`` (str, None where not recorded),
-        ``complete`` (bool), ``cycles`` (dict key -> (C,) array, truncated to the shortest
-        column), ``frame_count`` and ``frames`` (:class:`Frames`).
-
-    Raises:
-        InputError: The file's ``format_version`` is not one this dem reads (a newer dem wrote
-            it, or it is not a dem results file).
-
-    """
-    path = Path(path)
-    with h5py.File(path, "r", locking=False) as f:
-        a = f.attrs
-        version = a.get("format_version")
-        version = int(version) if version is not None else None
-        if version not in READABLE_VERSIONS:
-            readable = ", ".join(str(v) for v in READABLE_VERSIONS)
-            raise InputError(
-                "format_version",
-                version,
-                f"this dem ({package_versions()['dem']}) reads results.h5 format versions "
-                f"{readable} (a newer dem wrote the file, or it is no dem results.h5)",
-                source=str(path),
-            )
-        cycles = {k: d[()] for k, d in f["cycles"].items()}
-        if cycles:
-            rows = min(len(v) for v in cycles.values())
-            cycles = {k: v[:rows] for k, v in cycles.items()}
-        g = f["frames"]
-        if "start" in g:  # ragged: a frame counts once its start row is written
-            count = min(g["time"].shape[0], g["start"].shape[0] - 1)
-            time = g["time"][:count]
-        elif "time" in g:
-            names = ("time", "contact_count", *_FRAME_VECTORS)
-            names += ("orientation",) if "orientation" in g else ()
-            count = min(g[k].shape[0] for k in names)
-            time = g["time"][:count]
-        else:
-            count, time = 0, np.zeros(0)
-        return {
-            "case": json.loads(a["case_json"]),
-            "versions": {k: str(v) for k, v in f["versions"].attrs.items()},
-            "seed": int(a["seed"]),
-            "timestep": float(a["timestep"]),
-            "format_version": version,
-            "git_commit": str(a["git_commit"]) if "git_commit" in a else None,
-            "complete": bool(a["complete"]),
-            "cycles": cycles,
-            "frame_count": count,
-            "frames": Frames(path, count, time),
-        }
 
 
 def _write_attr_tree(group: h5py.Group, tree: Mapping) -> None:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from dem.config import GRAVITY
+from dem.physics.mass import sphere_volume
 
 #: Solid fraction of a resting bed assumed for its height.
 PACKING = 0.6
@@ -58,7 +59,7 @@ def bed_mode(scene, youngs_modulus: float | None = None, stiffness: float | None
     case = scene.case
     c, pt = case.contact, case.particles
     mass, radius = scene.grain_mass, scene.max_radius
-    volume = mass / scene.grain.density if pt.shape != "sphere" else 4.0 / 3.0 * math.pi * radius**3
+    volume = mass / scene.grain.density if pt.shape != "sphere" else sphere_volume(radius)
     area = case.trough.length * case.trough.width
     height = pt.count * volume / (PACKING * area)
     layers = max(1.0, height / (2.0 * radius))
@@ -98,11 +99,11 @@ def stiffness_for(scene, compliance: float) -> tuple[str, float]:
 
 
 def advice(scene):
-    """A "warn" :class:`dem.run.plan.Advice` where the bed is too compliant by the study, or None.
+    """A "warn" :class:`dem.run.accuracy.Advice` where the study finds the bed too compliant.
 
     One grain (no bed) gets none: validation/impact-law covers it.
     """
-    from dem.run.plan import Advice, round_up
+    from dem.run.accuracy import Advice, round_up
 
     data = study()
     if data is None or scene.case.particles.count < 2:
@@ -133,7 +134,7 @@ def assessment(scene) -> dict | None:
     data = study()
     if data is None or scene.case.particles.count < 2:
         return None
-    from dem.run.plan import round_up
+    from dem.run.accuracy import round_up
 
     limit = data["compliance_limit"]
     mode = bed_mode(scene)

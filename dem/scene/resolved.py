@@ -12,7 +12,6 @@ and the simulation each re-index it for their own reach), so every simulation lo
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -20,6 +19,7 @@ import numpy as np
 
 from dem.errors import InputError
 from dem.physics.laws import ContactLaw
+from dem.physics.mass import sphere_mass
 from dem.scene import shapes
 from dem.scene.timestep import Timestep, timestep_for
 from dem.scene.trough import Trough
@@ -57,13 +57,13 @@ class Scene:
     def grain_mass(self) -> float:
         """Mass of one grain, kg.
 
-        A sphere: rho 4/3 pi R^3 evaluated as :meth:`dem.engine.state.Spheres.create` gives each
-        sphere
-        (the one-sphere template's rho V equals it to rounding); a clump: its template's mass.
+        A sphere: rho 4/3 pi R^3 (:func:`dem.physics.mass.sphere_mass`, as
+        :meth:`dem.engine.state.Spheres.create` gives each sphere; the one-sphere template's
+        rho V equals it to rounding); a clump: its template's mass.
         """
         pt = self.case.particles
         if pt.shape == "sphere":
-            return self.case.material.density * 4.0 / 3.0 * math.pi * pt.radius**3
+            return sphere_mass(self.case.material.density, pt.radius)
         return float(self.grain.mass)
 
     @property

@@ -20,6 +20,7 @@ from dem import config
 from dem.errors import InputError
 from dem.kernels import contacts
 from dem.physics.laws import ContactLaw, wall_params
+from dem.physics.mass import sphere_mass
 from dem.scene import fill
 
 __all__ = ["ContactLaw", "Timestep", "impact_speed_for", "timestep_for", "timestep_limits"]
@@ -54,7 +55,7 @@ def timestep_limits(
     Hertz collision time at ``impact_speed``; never above the stability limit.
     """
     if mass is None:
-        mass = density * 4.0 / 3.0 * math.pi * radius**3
+        mass = sphere_mass(density, radius)
     tangential_factor = 3.5 if rotation else 1.0
     row = law.row
     wall = wall_params(law.params)  # the grain-wall law ([wall]); grain-grain is law.params

@@ -216,7 +216,7 @@ def _load_results(d: Path) -> dict | None:
     path = d / RESULTS
     if not path.is_file():
         return None
-    from dem.io.hdf5 import read_results
+    from dem.io.hdf5_read import read_results
 
     def refuse(what: str) -> InputError:
         return InputError("OUT", str(path), f"a results.h5 as dem run writes it: {what}; move "

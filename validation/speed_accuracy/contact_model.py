@@ -14,13 +14,13 @@ k_t / k_n = 2/7. The LIGGGHTS law with Hertz takes Mindlin's k_t, as a LIGGGHTS 
 
 from study import BASE_TIMESTEP_FRACTION, CASES, FILL_SEEDS, Point, default_points, load, main
 
-from dem.run import plan
+from dem.run import accuracy
 
 
 def linear_stiffness(case_name: str) -> float:
     """k_n, N/m (3 digits), with the contact time of a Hertz grain-floor impact at A omega."""
     case = load(Point("contact_model", case_name, "base", "base"))
-    return float(f"{plan.linear_equivalent_stiffness(case):.3g}")
+    return float(f"{accuracy.linear_equivalent_stiffness(case):.3g}")
 
 
 def points(case_name: str) -> list[Point]:

@@ -39,7 +39,7 @@ from study import (
 )
 
 from dem import provenance
-from dem.run import plan
+from dem.run import accuracy
 
 STUDIES = (reference, timestep, contact_model, skin, section, resolution)
 
@@ -60,7 +60,7 @@ def main() -> int:
     ladder.main()
     data = plan_data(rows)
     path = ROOT / "dem" / "data" / "speed_accuracy.json"
-    plan.write_study_data(path, data)
+    accuracy.write_study_data(path, data)
     for case, d in data["cases"].items():
         print(f"{case}: cheapest acceptable {d['cheapest']}")
     print(f"wrote {path.relative_to(ROOT)}")
@@ -136,7 +136,7 @@ def plan_data(rows: dict) -> dict:
                       "inclination": c.trough.inclination,
                       "restitution_tangential": m_.restitution_tangential,
                       "restitution_normal": m_.restitution_normal}  # fmt: skip
-        g_len = plan.grain_length(c)
+        g_len = accuracy.grain_length(c)
         v_ref = ref.velocity_norm
         stderr = float(np.mean([r["stderr"] for r in ship])) / v_ref
         d = {
