@@ -67,7 +67,7 @@ DEM_SKIN_FRACTION = 0.25
 DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 #: ``[contact] tangential = "impact"``: the enduring contact's stick is a spring-dashpot sized by
 #: the time step, not by the material: angular frequency DEM_STICK_RATE / dt on the contact's
-#: tangential mass, damping ratio DEM_STICK_DAMPING_RATIO (dem.kernels.contacts). Chosen by
+#: tangential mass, damping ratio DEM_STICK_DAMPING_RATIO (dem.kernels.contact). Chosen by
 #: measurement (validation/impact-law, ``run.py stick``): against the point mass on a floor as
 #: compliant as the contact, one sphere on 24 sliding drives at E = 5e7 Pa is within 0.91 %
 #: (worst) at (0.5, 0.5), against 2.9 % at the earlier (0.2, 0.7), whose softer stick let the
@@ -90,12 +90,11 @@ DEM_CHECK_INTERVAL = 500
 #: when 500 steps take longer (large scenes).
 DEM_STOP_LATENCY_S = 0.5
 #: Overlap guard (dem.engine.simulation.Simulation.check), as fractions of the smaller radius,
-# sampled
-#: at every check (every DEM_CHECK_INTERVAL steps). Accuracy bound: a run whose largest overlap
-#: exceeds it finishes, with a warning and the record (max_overlap_fraction: where, when, the
-#: stiffness that would bring it under) in summary.json. An overlap is set by the stiffness
-#: against the load and the impacts, not by the time step: a stable screw bed at LIGGGHTS parity
-#: (E 5e7 Pa, Gamma 2.5) peaks at 0.107 radii for one seed of three, and LIGGGHTS finishes it.
+#: sampled at every check (every DEM_CHECK_INTERVAL steps). Accuracy bound: a run whose largest
+#: overlap exceeds it finishes, with a warning and the record (max_overlap_fraction: where, when,
+#: the stiffness that would bring it under) in summary.json. An overlap is set by the stiffness
+#: against the load and the impacts, not by the time step: a stable screw bed at LIGGGHTS parity (E
+#: 5e7 Pa, Gamma 2.5) peaks at 0.107 radii for one seed of three, and LIGGGHTS finishes it.
 DEM_OVERLAP_WARN_FRACTION = 0.1
 #: Hard bound: an overlap beyond it stops the run. At half a radius the contact laws (small
 #: strains) say nothing and a grain is half way through its neighbour or the wall; five times
@@ -149,8 +148,7 @@ DEM_AUTO_SETTLE_TOLERANCE = 1e-4
 #: handles a shared machine (validation/performance/threads_shared.py).
 DEM_OMP_WAIT_POLICY: str | None = None
 #: Thread guard (dem.engine.threads): with more than one thread, try the other choice (one thread,
-# or
-#: back to N) after this many chunks of DEM_CHECK_INTERVAL steps, the wait doubling (up to 8x)
+#: or back to N) after this many chunks of DEM_CHECK_INTERVAL steps, the wait doubling (up to 8x)
 #: while the choice holds, and keep the faster; False leaves the thread count alone.
 DEM_THREAD_GUARD = True
 DEM_THREAD_GUARD_PERIOD = 8

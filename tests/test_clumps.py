@@ -12,8 +12,9 @@ from dem.engine import setup
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Bodies, Spheres
 from dem.io import checkpoint
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
+from dem.physics import drive
 from dem.run.runner import run_case
 from dem.scene import shapes
 from dem.scene.case import load_case
@@ -26,7 +27,7 @@ SCREW_MASS = 2.5e-3
 
 def _linear(kn=1.0e5, e=0.3, mu=0.35):
     return ContactLaw(
-        "linear", contacts.make_params(model="linear", stiffness=kn, restitution=e, friction=mu)
+        "linear", contact.make_params(model="linear", stiffness=kn, restitution=e, friction=mu)
     )
 
 
@@ -58,7 +59,7 @@ def test_one_sphere_clump_follows_the_sphere_path():
     """A clump of one sphere and the sphere integrator: same trajectory to rounding."""
     law = _linear(e=0.5)
     mass = DENSITY * 4 / 3 * math.pi * RADIUS**3
-    dt = contacts.linear_collision_time(1.0e5, mass, law.params[contacts.P_BETA]) / 50
+    dt = contact.linear_collision_time(1.0e5, mass, law.params[contact.P_BETA]) / 50
     x0 = np.array([[0.01, 0.0, 1.3 * RADIUS]])
     v0 = np.array([[0.2, 0.05, -0.1]])
     w0 = np.array([[3.0, -20.0, 1.0]])
@@ -88,8 +89,8 @@ def _screw_sim(law, dt, positions, quats, trough, rotation=True):
 
 def _dt(kn=1.0e5, e=0.3):
     t = _screw()
-    beta = _linear(kn, e).params[contacts.P_BETA]
-    return contacts.linear_collision_time(kn, t.mass / 4, beta) / 50
+    beta = _linear(kn, e).params[contact.P_BETA]
+    return contact.linear_collision_time(kn, t.mass / 4, beta) / 50
 
 
 def test_screw_at_rest_on_still_trough_stays_put():
@@ -291,7 +292,8 @@ def test_trough_shorter_than_a_clump_is_refused():
 def test_body_force_acts_at_the_centre_of_mass():
     """Free fall in the shaken frame: g + A w^2 sin(w t) e moves the screw but never turns it."""
     omega = 2 * math.pi * 60.0
-    trough = Trough(0.04, 0.03, amplitude=3e-4, omega=omega, angle=math.radians(25.0))
+    line = drive.Motion(omega, (drive.Component(3e-4, math.radians(25.0)),))
+    trough = Trough(0.04, 0.03, motion=line)
     q = np.random.default_rng(1).standard_normal((1, 4))
     sim = _screw_sim(_linear(), _dt(), [[0.02, 0.0, 0.05]], q, trough)
     sim.start_drive()
@@ -300,6 +302,6 @@ def test_body_force_acts_at_the_centre_of_mass():
     assert np.all(sim.bodies.ang_mom == 0.0) and np.all(sim.spheres.omega == 0.0)
     t = steps * sim.dt
     a = trough.amplitude * omega**2
-    drive = a * (1 - math.cos(omega * t)) / omega  # integral of A w^2 sin(w t) dt
-    expected = trough.gravity * t + drive * trough.direction
+    shaken = a * (1 - math.cos(omega * t)) / omega  # integral of A w^2 sin(w t) dt
+    expected = trough.gravity * t + shaken * trough.direction
     np.testing.assert_allclose(sim.bodies.v[0], expected, rtol=1e-5)  # trapezoid rule

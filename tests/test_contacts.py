@@ -8,7 +8,7 @@ from naive_dem import all_forces
 
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Spheres
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.scene.trough import Trough
 
 LENGTH, WIDTH = 0.012, 0.010
@@ -37,7 +37,7 @@ def _coefficients(model, e, mu, mu_roll, limit, tangential="liggghts", arm="surf
 def _law(model, c):
     return ContactLaw(
         model,
-        contacts.make_params(
+        contact.make_params(
             model=model, stiffness=c["kn"], tangential_stiffness_ratio=c["kt_ratio"],
             youngs_modulus=c["E"],
             poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
@@ -109,9 +109,9 @@ def test_internal_forces_conserve_momentum_and_angular_momentum():
 
 
 def test_beta_is_critical_at_zero_restitution():
-    assert contacts.damping_beta(0.0) == -1.0
-    assert contacts.damping_beta(1.0) == 0.0
-    b = contacts.damping_beta(0.5)
+    assert contact.damping_beta(0.0) == -1.0
+    assert contact.damping_beta(1.0) == 0.0
+    b = contact.damping_beta(0.5)
     assert math.isclose(math.exp(math.pi * b / math.sqrt(1 - b * b)), 0.5)
 
 
@@ -142,9 +142,9 @@ def _head_on(law, radius, density, speed, dt):
 def test_linear_head_on_restitution_and_contact_time_are_exact(e):
     """Linear law: e and t_c = pi / sqrt(k/m* - (gamma/2m*)^2) hold exactly (to O(dt))."""
     kn, radius, density = 1.0e4, 1.0e-3, 2500.0
-    law = ContactLaw("linear", contacts.make_params(model="linear", stiffness=kn, restitution=e))
+    law = ContactLaw("linear", contact.make_params(model="linear", stiffness=kn, restitution=e))
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
-    t_c = contacts.linear_collision_time(kn, m_eff, contacts.damping_beta(e))
+    t_c = contact.linear_collision_time(kn, m_eff, contact.damping_beta(e))
     e_sim, t_sim = _head_on(law, radius, density, 0.5, t_c / 2000)
     assert e_sim == pytest.approx(e, rel=1e-3)
     assert t_sim == pytest.approx(t_c, rel=1e-3)
@@ -155,17 +155,17 @@ def test_hertz_head_on_contact_time_is_hertzian():
     youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
     law = ContactLaw(
         "hertz_mindlin",
-        contacts.make_params(
+        contact.make_params(
             model="hertz_mindlin", youngs_modulus=youngs, poisson_ratio=nu, restitution=1.0
         ),
     )
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
     ystar = youngs / (2 * (1 - nu**2))
-    delta_max = contacts.hertz_max_overlap(ystar, radius / 2, m_eff, speed)
+    delta_max = contact.hertz_max_overlap(ystar, radius / 2, m_eff, speed)
     # t_c = 2 delta_max / v * int_0^1 dx / sqrt(1 - x^(5/2)) = (4/5) B(2/5, 1/2) delta_max / v
     t_exact = 0.8 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9) * delta_max / speed
     assert t_exact == pytest.approx(
-        contacts.hertz_collision_time(ystar, radius / 2, m_eff, speed), rel=2e-3
+        contact.hertz_collision_time(ystar, radius / 2, m_eff, speed), rel=2e-3
     )
     e_sim, t_sim = _head_on(law, radius, density, speed, t_exact / 2000)
     assert e_sim == pytest.approx(1.0, abs=1e-4)
@@ -178,12 +178,12 @@ def test_hertz_head_on_restitution_follows_liggghts_beta(e):
     youngs, nu, radius, density, speed = 1.0e7, 0.3, 1.0e-3, 2500.0, 0.5
     law = ContactLaw(
         "hertz_mindlin",
-        contacts.make_params(
+        contact.make_params(
             model="hertz_mindlin", youngs_modulus=youngs, poisson_ratio=nu, restitution=e
         ),
     )
     m_eff = 0.5 * density * 4 / 3 * math.pi * radius**3
-    t_h = contacts.hertz_collision_time(youngs / (2 * (1 - nu**2)), radius / 2, m_eff, speed)
+    t_h = contact.hertz_collision_time(youngs / (2 * (1 - nu**2)), radius / 2, m_eff, speed)
     e_sim, _ = _head_on(law, radius, density, speed, t_h / 2000)
     assert e_sim == pytest.approx(e, abs=5e-3)
 
@@ -203,8 +203,8 @@ def test_coulomb_convention_never_exceeds_the_friction_limit(model):
             n /= np.linalg.norm(n)
             hist = rng.normal(0, 2e-6, (1, 3))
             v = rng.normal(0, 0.05, 3)
-            f = contacts.contact_force(
-                contacts.MODELS[model], p, *n, rng.uniform(1e-6, 1e-4), *v, 0.0, 0.0, 0.0,
+            f = contact.contact_force(
+                contact.MODELS[model], p, *n, rng.uniform(1e-6, 1e-4), *v, 0.0, 0.0, 0.0,
                 0.0, 0.0, 0.0, 1e-3, 1e-3, 1e-4, 1e-3, hist, 0, 1e-6,
             )  # fmt: skip
             force = np.array(f[:3])

@@ -8,7 +8,7 @@ import pytest
 from dem import pointmass
 from dem.config import GRAVITY
 from dem.physics import drive, measure
-from dem.scene.case import resolve_drive
+from dem.scene.spec import resolve_drive
 from dem.scene.trough import Trough
 
 
@@ -42,12 +42,15 @@ def test_drive_velocity_from_throw_number_matches_gamma_g_cos_over_omega_tan():
     v = drive.drive_velocity_from_throw_number(gamma, f, phi, alpha)
     assert v.shape == (7, 9)
     np.testing.assert_allclose(v, direct, rtol=1e-14)
-    # the point-mass names are the same relations in their argument order
-    assert pointmass.drive_velocity(1.8, 25.0, alpha, f) == drive.drive_velocity_from_throw_number(
+    # the point-mass names are the same relations, with the same argument order
+    assert pointmass.drive_velocity(1.8, f, 25.0, alpha) == drive.drive_velocity_from_throw_number(
         1.8, f, 25.0, alpha
     )
-    assert pointmass.amplitude_from_throw_number(1.8, 25.0, alpha, f) == drive.amplitude(
+    assert pointmass.amplitude_from_throw_number(1.8, f, 25.0, alpha) == drive.amplitude(
         1.8, f, 25.0, alpha
+    )
+    assert pointmass.throw_number_from_amplitude(3e-4, f, 25.0, alpha) == drive.throw_number(
+        3e-4, f, 25.0, alpha
     )
 
 
@@ -66,7 +69,7 @@ def test_frequencies_for_held_amplitude_and_peak_speed_give_gamma_back(alpha):
 
 def test_trough_throw_number_is_the_case_value():
     d = resolve_drive(60.0, 25.0, 2.0, throw_number=1.8)
-    trough = Trough(0.1, 0.05, math.radians(2.0), d.amplitude, d.omega, math.radians(d.angle))
+    trough = Trough(0.1, 0.05, math.radians(2.0), d.motion)
     assert trough.throw_number == pytest.approx(1.8, rel=1e-14)
 
 

@@ -15,7 +15,7 @@ from dem import pointmass
 from dem.engine import setup
 from dem.engine.simulation import ContactLaw, Simulation, measure_cycles
 from dem.engine.state import Spheres
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics.measure import conveying_velocity
 from dem.pointmass.bounded import coulomb_bounded_velocity
 from dem.scene.case import load_case
@@ -95,7 +95,7 @@ def test_no_creep_below_the_friction_angle_and_coulomb_sliding_above(kn):
     g (sin a - mu cos a) down the slope, whatever the contact stiffness."""
     mu = 0.35
     case = _case(value=kn, mu=mu)
-    dt = contacts.linear_collision_time(kn, MASS, 0.0) / 50
+    dt = contact.linear_collision_time(kn, MASS, 0.0) / 50
     below = math.degrees(math.atan(mu)) - 3.0
     sim = _block_on_floor(case, below, dt)
     sim.run(int(0.05 / dt))
@@ -119,7 +119,7 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     that broke) is a new impact."""
     case = _case()
     p = ContactLaw.from_case(case).params
-    hist = np.zeros((1, contacts.HISTORY_WIDTH["impact"]))
+    hist = np.zeros((1, contact.HISTORY_WIDTH["impact"]))
     dt = 1.0e-6
     x, vz, vx = 0.0, -0.3, 0.2
     phases, switched = [], None
@@ -127,17 +127,17 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
         x += -vz * dt
         if x <= 0.0:
             break
-        f = contacts.contact_force(
+        f = contact.contact_force(
             0, p, 0.0, 0.0, 1.0, x, vx, 0.0, vz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
             RADIUS - x, 0.0, MASS, RADIUS, hist, 0, dt,
         )  # fmt: skip
         before = phases[-1] if phases else 0.0
         phases.append(hist[0, 3])
         if before > 0.0 and hist[0, 3] < 0.0:
-            m_t = p[contacts.P_MASS_T] * MASS
-            alpha = p[contacts.P_STICK_RATE]
+            m_t = p[contact.P_MASS_T] * MASS
+            alpha = p[contact.P_STICK_RATE]
             ks = m_t * (alpha / dt) ** 2
-            gs = 2.0 * p[contacts.P_STICK_ZETA] * alpha * m_t / dt
+            gs = 2.0 * p[contact.P_STICK_ZETA] * alpha * m_t / dt
             spring_force = -ks * hist[0, 0] - gs * vx
             switched = (f[0], spring_force)
         vz += f[2] / MASS * dt
@@ -146,7 +146,7 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     assert switched is not None, "the impact switched to the enduring stick"
     assert switched[1] == pytest.approx(switched[0], rel=1e-9, abs=1e-12)
     hist[:] = 0.0
-    contacts.contact_force(
+    contact.contact_force(
         0, p, 0.0, 0.0, 1.0, 1e-7, vx, 0.0, -0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
         RADIUS, 0.0, MASS, RADIUS, hist, 0, dt,
     )  # fmt: skip
@@ -196,8 +196,8 @@ def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
     off, 0.1 s after their fill came to rest (validation/impact-law stick_creep.csv is the
     200-screw version)."""
     if stick_rate is not None:
-        defaults = dict(contacts.make_params.__kwdefaults__, stick_rate=stick_rate)
-        monkeypatch.setattr(contacts.make_params, "__kwdefaults__", defaults)
+        defaults = dict(contact.make_params.__kwdefaults__, stick_rate=stick_rate)
+        monkeypatch.setattr(contact.make_params, "__kwdefaults__", defaults)
     incline = math.degrees(math.atan(0.9 * 0.35))
     case = load_case("cases/screw-trough", {
         "particles.count": 40, "trough.length": 0.05, "trough.width": 0.04,

@@ -12,7 +12,7 @@ from dem.engine import setup
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Spheres
 from dem.errors import InputError, SimulationError
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.trough import Trough
@@ -24,7 +24,7 @@ MASS = DENSITY * 4 / 3 * math.pi * RADIUS**3
 def _linear(kn=1.0e5, e=0.0, mu=0.35, ratio=2 / 7):
     return ContactLaw(
         "linear",
-        contacts.make_params(
+        contact.make_params(
             model="linear",
             stiffness=kn,
             restitution=e,
@@ -62,7 +62,7 @@ def test_energy_is_conserved_without_damping_and_friction():
         [0.0045 * (k % 6), rng.uniform(-0.007, 0.007, n), 0.0025 + 0.0045 * (k // 6)]
     )
     law = _linear(kn=kn, e=1.0, mu=0.0)
-    t_c = contacts.linear_collision_time(kn, 0.5 * MASS, 0.0)
+    t_c = contact.linear_collision_time(kn, 0.5 * MASS, 0.0)
     sim = Simulation(Spheres.create(x, RADIUS, DENSITY), Trough(0.03, 0.02), law, t_c / 50)
     sim.spheres.v[:] = rng.normal(0, 0.3, (n, 3))
     e0 = _energy(sim, kn)
@@ -100,7 +100,7 @@ def _block(inclination_deg, mu=0.35, rotation=False):
     kn = 1.0e5
     z0 = RADIUS - MASS * GRAVITY * math.cos(math.radians(inclination_deg)) / kn
     law = _linear(kn=kn, e=0.0, mu=mu)
-    dt = contacts.linear_collision_time(kn, MASS, -1.0) / 50
+    dt = contact.linear_collision_time(kn, MASS, -1.0) / 50
     trough = Trough(0.02, 0.02, inclination=math.radians(inclination_deg))
     spheres = Spheres.create(np.array([[0.01, 0.0, z0]]), RADIUS, DENSITY)
     return Simulation(spheres, trough, law, dt, rotation=rotation)

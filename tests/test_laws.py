@@ -1,4 +1,4 @@
-"""The contact-law registry (dem.physics.laws) and the scalar sub-models of dem.kernels.contacts."""
+"""The contact-law registry (dem.physics.laws) and the scalar sub-models of dem.kernels.contact."""
 
 import math
 from pathlib import Path
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dem.errors import InputError
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics import laws
 from dem.scene.case import load_case
 
@@ -15,8 +15,8 @@ SPHERE_BED = Path(__file__).resolve().parents[1] / "cases" / "sphere-bed"
 
 
 def test_every_kernel_law_has_one_row_and_back():
-    assert set(laws.TANGENTIAL_LAWS) == set(contacts.TANGENTIAL)
-    assert set(laws.NORMAL_LAWS) == set(contacts.MODELS)
+    assert set(laws.TANGENTIAL_LAWS) == set(contact.TANGENTIAL)
+    assert set(laws.NORMAL_LAWS) == set(contact.MODELS)
     for name, row in laws.TANGENTIAL_LAWS.items():
         assert row.name == name
         assert set(row.keys) == set(laws.NORMAL_LAWS)
@@ -32,7 +32,7 @@ def test_history_width_is_the_sum_over_the_sub_models(model, tangential):
     assert width == laws.NORMAL_LAWS[model].history_width + (
         laws.TANGENTIAL_LAWS[tangential].history_width
     )
-    assert width == contacts.HISTORY_WIDTH[tangential]
+    assert width == contact.HISTORY_WIDTH[tangential]
 
 
 @pytest.mark.parametrize("model", sorted(laws.NORMAL_LAWS))
@@ -91,17 +91,17 @@ def test_the_liggghts_dashpot_damps_the_rolling_tangential_oscillator(model):
     law = laws.ContactLaw.from_case(case)
     p = law.wall_params  # sphere-wall: m* = m, R* = r
     m = case.material.density * 4.0 / 3.0 * math.pi * case.particles.radius**3
-    beta = p[contacts.P_BETA]
+    beta = p[contact.P_BETA]
     if model == "linear":
-        k_n = p[contacts.P_KN]
-        k_t = p[contacts.P_KT_RATIO] * k_n
+        k_n = p[contact.P_KN]
+        k_t = p[contact.P_KT_RATIO] * k_n
         gamma_t = -2.0 * beta * math.sqrt(k_n * m)  # gamma_n
         s_n, a, zeta_n = k_n, 1.0, -beta
     else:
         delta = 1e-6
         a = math.sqrt(case.particles.radius * delta)
-        s_n = 2.0 * p[contacts.P_YSTAR] * a
-        k_t = 8.0 * p[contacts.P_GSTAR] * a
+        s_n = 2.0 * p[contact.P_YSTAR] * a
+        k_t = 8.0 * p[contact.P_GSTAR] * a
         gamma_t = -2.0 * math.sqrt(5.0 / 6.0) * beta * math.sqrt(k_t * m)
         zeta_n = -math.sqrt(5.0 / 6.0) * beta
     m_t = 2.0 / 7.0 * m
@@ -123,7 +123,7 @@ def _random_contact(rng):
 def test_coefficients_are_the_formulas_of_the_docstring(model, tangential):
     """law_coefficients against the textbook forms, written out here independently."""
     kn0, youngs, nu, e, kappa, zeta_t, f_t = 4.0e3, 5.0e7, 0.3, 0.4, 0.3, 0.6, 2.0 / 7.0
-    p = contacts.make_params(
+    p = contact.make_params(
         model=model, stiffness=kn0, youngs_modulus=youngs, poisson_ratio=nu, restitution=e,
         tangential=tangential, tangential_stiffness_ratio=kappa,
         tangential_damping_ratio=zeta_t, tangential_mass_factor=f_t, friction=0.3,
@@ -132,7 +132,7 @@ def test_coefficients_are_the_formulas_of_the_docstring(model, tangential):
     y_star = youngs / (2.0 * (1.0 - nu * nu))
     g_star = youngs / (4.0 * (2.0 - nu) * (1.0 + nu))
     for delta, m_eff, r_eff in [(1e-6, 1e-4, 1e-3), (3e-5, 2e-3, 2e-3)]:
-        kn, gn, kt, gt = contacts.law_coefficients(contacts.MODELS[model], delta, m_eff, r_eff, p)
+        kn, gn, kt, gt = contact.law_coefficients(contact.MODELS[model], delta, m_eff, r_eff, p)
         if model == "linear":
             want_kn, s_n = kn0, kn0
             want_gn = -2.0 * beta * math.sqrt(kn0 * m_eff)
@@ -157,20 +157,20 @@ def test_coefficients_are_the_formulas_of_the_docstring(model, tangential):
 def test_the_impact_core_is_a_function_of_scalars():
     """impact_tangential runs as plain Python on floats (as in numba's CUDA simulator) and gives
     the compiled result bit for bit over a random sequence of contact states."""
-    p = contacts.make_params(
+    p = contact.make_params(
         model="hertz_mindlin", youngs_modulus=5e7, restitution=0.0, friction=0.35,
         tangential="impact", tangential_mass_factor=1.0,
     )  # fmt: skip
-    args = (p[contacts.P_IMPACT_RATIO], p[contacts.P_IMPACT_CAP], p[contacts.P_MU],
-            p[contacts.P_MASS_T], p[contacts.P_STICK_RATE], p[contacts.P_STICK_ZETA])  # fmt: skip
+    args = (p[contact.P_IMPACT_RATIO], p[contact.P_IMPACT_CAP], p[contact.P_MU],
+            p[contact.P_MASS_T], p[contact.P_STICK_RATE], p[contact.P_STICK_ZETA])  # fmt: skip
     rng = np.random.default_rng(5)
     compiled = python = (0.0, 0.0, 0.0, 0.0, 0.0)
     for _ in range(200):
         n, vt = _random_contact(rng)
         vn, fn = rng.normal(0.0, 0.3), abs(rng.normal(0.0, 2.0))
         state = (*n, vn, fn, *vt, 3e5, 1e-4, 1e-6)
-        a = contacts.impact_tangential(*args, *state, *compiled)
-        b = contacts.impact_tangential.py_func(*args, *state, *python)
+        a = contact.impact_tangential(*args, *state, *compiled)
+        b = contact.impact_tangential.py_func(*args, *state, *python)
         assert a == b
         compiled, python = a[3:], b[3:]
         if rng.random() < 0.1:  # the contact breaks: its history is reset

@@ -21,7 +21,7 @@ from dem.io.liggghts import (
     strip_top,
     write_deck,
 )
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.scene import shapes
 from dem.scene.case import load_case
 from dem.scene.mesh import extrude, load_mesh
@@ -170,7 +170,7 @@ def test_linear_deck_damping_gives_the_restitution(tmp_path, e):
     assert fix(c, "integr")[2] == "nve"  # rotation = false
     kn = float(fix(c, "m_kn")[6])
     assert kn == case.contact.stiffness
-    kappa = ContactLaw.from_case(case).params[contacts.P_KT_RATIO]
+    kappa = ContactLaw.from_case(case).params[contact.P_KT_RATIO]
     assert float(fix(c, "m_kt")[6]) == pytest.approx(kn * kappa)
     gn = [float(x) for x in fix(c, "m_gn")[6:]]
     mass = case.material.density * 4 / 3 * math.pi * case.particles.radius**3

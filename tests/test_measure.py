@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dem.io.liggghts import damping_ratio
-from dem.kernels.contacts import damping_beta
+from dem.kernels.contact import damping_beta
 from dem.physics import measure
 
 

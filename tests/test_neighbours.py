@@ -5,7 +5,7 @@ import pytest
 
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import PairList, Spheres
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.scene.trough import Trough
 
 
@@ -16,7 +16,7 @@ def _sim(n, length, width, seed, capacity=None):
         [rng.uniform(0, length, n), rng.uniform(-width / 2, width / 2, n), rng.uniform(0, 0.02, n)]
     )
     law = ContactLaw(
-        "linear", contacts.make_params(model="linear", stiffness=1e3, restitution=0.5, friction=0.3)
+        "linear", contact.make_params(model="linear", stiffness=1e3, restitution=0.5, friction=0.3)
     )
     sim = Simulation(Spheres.create(x, r, 2500.0), Trough(length, width), law, 1e-6)
     if capacity is not None:

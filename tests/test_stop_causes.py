@@ -20,7 +20,7 @@ from dem.config import GRAVITY
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Spheres
 from dem.errors import SimulationError
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.mesh import extrude, load_mesh
@@ -34,7 +34,7 @@ LENGTH, WIDTH = 0.02, 0.02
 def _linear(kn=1.0e5, e=0.0, mu=0.35):
     return ContactLaw(
         "linear",
-        contacts.make_params(
+        contact.make_params(
             model="linear",
             stiffness=kn,
             restitution=e,
@@ -46,7 +46,7 @@ def _linear(kn=1.0e5, e=0.0, mu=0.35):
 
 def _sim(positions, *, kn=1.0e5, e=0.0, inclination=0.0, mesh=None, **kwargs):
     spheres = Spheres.create(np.asarray(positions, dtype=float), RADIUS, DENSITY)
-    dt = contacts.linear_collision_time(kn, MASS, -1.0 if e == 0.0 else 0.0) / 50
+    dt = contact.linear_collision_time(kn, MASS, -1.0 if e == 0.0 else 0.0) / 50
     trough = Trough(LENGTH, WIDTH, inclination=math.radians(inclination))
     return Simulation(spheres, trough, _linear(kn=kn, e=e), dt, mesh=mesh, **kwargs)
 
@@ -98,7 +98,7 @@ def test_no_warning_below_the_accuracy_bound():
 
 
 def test_hertz_suggests_a_youngs_modulus():
-    params = contacts.make_params(
+    params = contact.make_params(
         model="hertz_mindlin", youngs_modulus=5e7, poisson_ratio=0.3, restitution=0.0, friction=0.35
     )
     law = ContactLaw("hertz_mindlin", params)

@@ -1,6 +1,5 @@
 """Tangential restitution of the ``"coulomb"`` spring law: the mapping of dem.physics.tangential,
-virtual
-impacts, calibration. The impact-aware default law is tested in test_impact_law.py."""
+virtual impacts, calibration. The impact-aware default law is tested in test_impact_law.py."""
 
 import dataclasses
 import math
@@ -10,7 +9,7 @@ import pytest
 
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Spheres
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics import tangential
 from dem.scene.case import load_case
 from dem.scene.trough import Trough
@@ -35,7 +34,7 @@ def _sphere_case(
 
 
 KN, MASS = 1.6e7, 7800.0 * 4 / 3 * math.pi * 0.002**3
-T_UNDAMPED = contacts.linear_collision_time(KN, MASS, 0.0)
+T_UNDAMPED = contact.linear_collision_time(KN, MASS, 0.0)
 
 
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.6, 0.9])
@@ -48,7 +47,7 @@ def test_virtual_impact_restitution_matches_linear_formula(e):
         impact = calibrate.virtual_impact(case, 0.0, 0.5)
         errors.append(abs(impact.eps_n - e))
     assert errors[1] < 1.5e-3 and errors[1] < errors[0] / 4
-    t_c = contacts.linear_collision_time(KN, MASS, contacts.damping_beta(e))
+    t_c = contact.linear_collision_time(KN, MASS, contact.damping_beta(e))
     assert impact.duration == pytest.approx(t_c, rel=0.01)
 
 
@@ -56,11 +55,11 @@ def test_virtual_impact_restitution_matches_linear_formula(e):
 def test_no_rebound_at_and_beyond_critical_damping(beta):
     """eps_n = 0 maps to critical damping; over-critical damping does not rebound either."""
     radius, density, kn = 0.002, 7800.0, 4.0e6
-    params = contacts.make_params(model="linear", stiffness=kn, friction=0.35, beta=beta)
+    params = contact.make_params(model="linear", stiffness=kn, friction=0.35, beta=beta)
     spheres = Spheres.create(np.array([[0.01, 0.0, radius + 1e-9]]), radius, density)
     spheres.v[0] = [0.1, 0.0, -0.4]
     mass = spheres.mass[0]
-    dt = contacts.linear_collision_time(kn, mass, -1.0) / 100
+    dt = contact.linear_collision_time(kn, mass, -1.0) / 100
     sim = Simulation(spheres, Trough(0.02, 0.01), ContactLaw("linear", params), dt, rotation=False)
     impact = calibrate.measure_impact(sim)
     assert abs(impact.eps_n) < 3e-3

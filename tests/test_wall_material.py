@@ -14,7 +14,7 @@ from small_case import SMALL_CASE, write_case
 from dem.config import GRAVITY
 from dem.engine import setup
 from dem.errors import InputError
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics.laws import ContactLaw
 from dem.scene.case import load_case
 
@@ -28,13 +28,13 @@ def test_wall_values_default_to_the_materials_and_are_checked_by_key(tmp_path):
     case = _case(tmp_path)
     assert case.wall_material == case.material and case.wall.given == ()
     law = ContactLaw.from_case(case)
-    n = contacts.N_PARAMS
+    n = contact.N_PARAMS
     assert law.params.shape == (2 * n,)
     assert np.array_equal(law.params[:n], law.params[n:])  # one material: identical rows
     case = _case(tmp_path, "friction = 0.6\nrestitution_tangential = 0.5\n")
     assert case.wall_material.friction == 0.6 and case.material.friction == 0.35
     law = ContactLaw.from_case(case)
-    assert law.params[contacts.P_MU] == 0.35 and law.wall_params[contacts.P_MU] == 0.6
+    assert law.params[contact.P_MU] == 0.35 and law.wall_params[contact.P_MU] == 0.6
     with pytest.raises(InputError) as info:
         _case(tmp_path, "friction = -0.1\n")
     assert info.value.key == "wall.friction"

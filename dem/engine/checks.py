@@ -20,7 +20,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import SimulationError
-from dem.kernels.contacts import P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR
+from dem.kernels.contact import P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR
 from dem.scene.trough import WALLS
 
 

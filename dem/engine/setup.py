@@ -1,13 +1,10 @@
 """Building a :class:`~dem.engine.simulation.Simulation` from a case: grains, trough, law, step.
 
 :func:`from_case` fills the case's trough at random (:func:`dem.scene.fill.fill`);
-:func:`from_grains`
-places the case's grain at chosen poses and velocities (virtual impacts, validation studies).
-Both take a :class:`dem.scene.resolved.Scene` (the case resolved once: grain, law, step, trough) or
-a
-case, which they resolve at the door. The time step is :func:`dem.scene.timestep.timestep_for`'s,
-which
-depends on the case alone.
+:func:`from_grains` places the case's grain at chosen poses and velocities (virtual impacts,
+validation studies). Both take a :class:`dem.scene.resolved.Scene` (the case resolved once: grain,
+law, step, trough) or a case, which they resolve at the door. The time step is
+:func:`dem.scene.timestep.timestep_for`'s, which depends on the case alone.
 """
 
 from __future__ import annotations
@@ -36,8 +33,7 @@ def from_case(case, *, timestep: float | None = None, check_limit: bool = True) 
     template at random positions and orientations without member overlap
     (:func:`dem.scene.fill.random_fill_clumps`). The time step is the scene's
     (:func:`dem.scene.timestep.timestep_for`, impact from the top of the fill box; ``check_limit``
-    as
-    there); the instability check's speed scale takes the box as it was finally drawn.
+    as there); the instability check's speed scale takes the box as it was finally drawn.
     """
     scene = resolve(case, timestep=timestep, check_limit=check_limit)
     positions, quats, height = fill.fill(scene.case)
@@ -74,8 +70,7 @@ def from_grains(
             fall from the highest grain.
 
     The time step follows :func:`dem.scene.timestep.timestep_for` with these grains' count and
-    impact
-    speed; a given step above the stability limit raises InputError naming ``run.timestep``.
+    impact speed; a given step above the stability limit raises InputError naming ``run.timestep``.
 
     """
     # the scene's own step is the fill's, not these grains': theirs is taken (and checked) below

@@ -1,25 +1,19 @@
 """The DEM step loop: fill, settle, drive; :mod:`dem.run.runner` runs it behind ``dem run``.
 
-Order of operations in one step n -> n + 1 (t_n = n dt, drive time counted from the moment the
-drive was switched on), all inside :func:`dem.kernels.integrate.advance`:
-
-1. half kick and drift: v += dt/2 F_n/m, omega += dt/2 T_n/I (rotation on), x += dt v;
-2. neighbour list rebuilt if a sphere moved more than skin/2 since the last build (history kept
-   per pair key; overflowing capacities are regrown here in Python and the step resumed);
-3. pair forces at x_{n+1} with the half-step velocities (parallel over pairs);
-4. per sphere: gather its pairs, wall contacts, body force m (g + A omega^2 sin(omega t) e); second
-   half kick; x-momentum summed for the measurement (within one call of ``advance``, step n+1's
-   item 1 runs in this same parallel loop).
+The order of operations in one step n -> n + 1 (half kick and drift, neighbour rebuild, pair
+forces, gather with walls and body force and the second half kick, all inside
+:func:`dem.kernels.integrate.advance`) is written once, in ARCHITECTURE.md ("One DEM step").
 
 The trajectory does not depend on the number of threads, bit for bit: every force sum is taken
-in the same order whatever the threads (per-pair rows, then a per-sphere gather in CSR order);
-only the momentum sum of the measurement is a parallel reduction (last-bit differences).
+in the same order whatever the threads (per-pair rows, then a per-sphere gather in pair order),
+and the momentum sum of the measurement adds fixed chunks in order (tests/kernels/test_threads.py).
 
-Rigid clumps (screws, clumps from a file) replace items 1 and 4 by the rigid-body update of
-:func:`dem.kernels.integrate.advance_clumps`: bodies half kick, drift and free rotation, members
-placed; after the per-member gather (walls, no body force) the forces and torques are reduced to
-the bodies, M a_body is added at each centre of mass and the closing half kick places the members
-again. Members of one clump never contact each other. Plain spheres keep the sphere integrator.
+Rigid clumps (screws, clumps from a file) replace the sphere kicks (items 1 and 4 of the step) by
+the rigid-body update of :func:`dem.kernels.integrate.advance_clumps`: bodies half kick, drift and
+free rotation, members placed; after the per-member gather (walls, no body force) the forces and
+torques are reduced to the bodies, M a_body is added at each centre of mass and the closing half
+kick places the members again. Members of one clump never contact each other. Plain spheres keep the
+sphere integrator.
 
 Every ``DEM_CHECK_INTERVAL`` steps Python checks for instability (:mod:`dem.engine.checks`:
 non-finite values, grains far faster than drive and gravity can make them, overlaps beyond
@@ -41,7 +35,7 @@ from dem import config
 from dem.engine.checks import InstabilityChecks
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
-from dem.kernels.contacts import P_BETA
+from dem.kernels.contact import P_BETA
 from dem.kernels.integrate import (
     DONE,
     advance,
@@ -53,6 +47,7 @@ from dem.kernels.integrate import (
 from dem.kernels.layout import Geometry, MeshArrays
 from dem.kernels.neighbours import OK, OVERFLOW_PAIRS
 from dem.kernels.rigid import rotational_energy
+from dem.physics.drive import cycle_edge
 from dem.scene.mesh import TriangleMesh
 from dem.scene.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
 from dem.scene.trough import Trough, check_section_length
@@ -61,9 +56,8 @@ from dem.scene.trough import Trough, check_section_length
 class Simulation(InstabilityChecks):
     """Spheres in a periodic trough section: the state and the step loop.
 
-    Order of operations in one step (n -> n + 1, see the module docstring):
-    half kick + drift -> neighbour rebuild if needed -> pair forces -> gather + walls + body force
-    + half kick. Instability checks every ``DEM_CHECK_INTERVAL`` steps.
+    One step's order is in ARCHITECTURE.md ("One DEM step"); instability checks every
+    ``DEM_CHECK_INTERVAL`` steps.
 
     Args:
         spheres: Sphere state (modified in place).
@@ -154,7 +148,7 @@ class Simulation(InstabilityChecks):
         throw = config.DEM_MAX_SPEED_FACTOR * self.reference_speed
         self._ceiling = top + throw * throw / (2.0 * config.GRAVITY)
         #: A :class:`dem.engine.threads.ThreadGuard` (the runner sets one for runs on several
-        # threads).
+        #: threads).
         self.guard = None
         self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
@@ -247,8 +241,7 @@ class Simulation(InstabilityChecks):
         """Distance of points (n, 3) from each wall, (walls, n), m.
 
         The flat floor, side walls and back wall (:meth:`dem.scene.trough.Trough.wall_gaps`), or
-        with
-        a mesh two rows: the distance to the mesh and to the back wall (inf without one).
+        with a mesh two rows: the distance to the mesh and to the back wall (inf without one).
         """
         if self.mesh is None:
             return self.trough.wall_gaps(x)
@@ -496,7 +489,7 @@ def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> n
     first = int(round((sim.step_index - sim.drive_start_step) * sim.dt / period))
     out = np.empty(int(cycles))
     for c in range(first, first + settle_cycles + cycles):
-        end = sim.drive_start_step + int(round((c + 1) * period / sim.dt))
+        end = cycle_edge(sim.drive_start_step, c + 1, period, sim.dt)
         sim.stats[:] = 0.0
         sim.run(end - sim.step_index)
         if c >= first + settle_cycles:

@@ -100,7 +100,7 @@ class Spheres:
     def set_history_width(self, width: int) -> None:
         """Give the wall and mesh springs ``width`` floats per contact, at rest, if they differ.
 
-        ``width`` is the contact law's history width (:data:`dem.kernels.contacts.HISTORY_WIDTH`).
+        ``width`` is the contact law's history width (:data:`dem.kernels.contact.HISTORY_WIDTH`).
         """
         if self.wall_hist.shape[1] != width:
             self.wall_hist = np.zeros((self.wall_hist.shape[0], width))

@@ -33,9 +33,10 @@ from dem import config
 from dem.engine.state import PairList
 from dem.errors import SimulationError
 from dem.io.files import replace_file
-from dem.kernels.contacts import HISTORY_WIDTH
+from dem.kernels.contact import HISTORY_WIDTH
 from dem.kernels.forces import N_WALLS
 from dem.kernels.mesh import MESH_SLOTS
+from dem.physics.drive import cycle_edge
 
 LOOP_KEY = "loop.json"
 #: Pair-list arrays each step writes before reading them: not saved.
@@ -228,9 +229,8 @@ def _against(sim, state: dict[str, np.ndarray], n: int) -> None:
             f"loop.json: steps = {loop['steps']} disagrees with the {step - drive_start} driven "
             "steps of sim.counters"
         )
-    per_cycle = sim.trough.period / sim.dt
-    c = loop["cycle"]
-    lo, hi = int(round(c * per_cycle)), int(round((c + 1) * per_cycle))
+    period, c = sim.trough.period, loop["cycle"]
+    lo, hi = cycle_edge(0, c, period, sim.dt), cycle_edge(0, c + 1, period, sim.dt)
     if not lo <= step - drive_start <= hi:
         raise CheckpointError(
             f"loop.json: cycle = {c} is not where sim.counters stands ({step - drive_start} "

@@ -14,12 +14,10 @@ collection, t in seconds of simulated time; ParaView shows the three as named bl
 (``/Root/spheres``, ``/Root/trough``, ``/Root/grains``: Extract Block selects them by name).
 The trough's geometry is that of :class:`dem.scene.trough.Trough`
 (:meth:`~dem.scene.trough.Trough.wall_corners`, the kernel's walls), or the triangles of a mesh
-trough
-(``trough.mesh``), built once per writer: in the trough frame it is written once and every
-frame refers to it, in the lab frame each frame writes a shifted copy. The collection is
-rewritten (atomically, write-then-rename) after every frame, so a run killed half-way leaves a
-collection that opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a
-last time.
+trough (``trough.mesh``), built once per writer: in the trough frame it is written once and every
+frame refers to it, in the lab frame each frame writes a shifted copy. The collection is rewritten
+(atomically, write-then-rename) after every frame, so a run killed half-way leaves a collection that
+opens with every frame written so far; :meth:`VTKSeriesWriter.close` writes it a last time.
 
 Frames (coordinates in m):
 

@@ -33,7 +33,7 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 
 def _drop_stale_cache() -> None:
     here = Path(__file__).resolve().parent
-    sources = sorted(here.glob("*.py")) + [here.parent / "config.py"]
+    sources = sorted(here.rglob("*.py")) + [here.parent / "config.py"]
     digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
     cache = here / "__pycache__"
     stamp = cache / "dem-kernels-source.sha256"
@@ -44,7 +44,7 @@ def _drop_stale_cache() -> None:
         pass
     try:
         cache.mkdir(exist_ok=True)
-        for path in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
+        for path in list(here.rglob("*.nbi")) + list(here.rglob("*.nbc")):
             path.unlink(missing_ok=True)
         stamp.write_text(digest)
     except OSError:  # read-only install: numba then caches elsewhere or not at all

@@ -19,9 +19,9 @@ order both ways, so one thread and several give the same bits (tested).
 Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
 wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
 infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_w delta
-(``[contact] wall_lever_arm``: f_w = 1 or 1/2, :data:`dem.kernels.contacts.WALL_LEVER_ARMS`).
+(``[contact] wall_lever_arm``: f_w = 1 or 1/2, :data:`dem.kernels.contact.WALL_LEVER_ARMS`).
 
-Every contact law goes through :func:`dem.kernels.contacts.contact_force`.
+Every contact law goes through :func:`dem.kernels.contact.contact_force`.
 """
 
 import math
@@ -29,7 +29,7 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contacts import add_wall_contact, contact_force_inlined, wall_row
+from dem.kernels.contact import add_wall_contact, contact_force_inlined, wall_row
 from dem.kernels.mesh import mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
@@ -77,7 +77,7 @@ def pair_forces(
     """Contact force and torques of each pair of the list into its ends' slots (parallel).
 
     Args:
-        model, p: Contact law id and parameters (:mod:`dem.kernels.contacts`).
+        model, p: Contact law id and parameters (:mod:`dem.kernels.contact`).
         x, v, omega: Positions (m), velocities (m/s), spins (rad/s), shape (n, 3).
         radius, mass: Shape (n,), m and kg.
         pair_i, pair_j: Pairs i < j, shape (cap,); the first ``n_pairs`` are valid.

@@ -278,9 +278,8 @@ def advance(
 # --- rigid clumps ---------------------------------------------------------------------------------
 # Bodies travel as ``bod = (X, V, q, L, inv_mass, mass, moments, force, torque, omega, start,
 # members, offsets, body_of)`` (shapes in :class:`dem.engine.state.Bodies`). Member spheres carry
-# the
-# clump mass M in ``sph.mass`` (the contact law's effective mass, as LIGGGHTS multisphere); their
-# own kick and drift is replaced by the rigid-body update of :mod:`dem.kernels.rigid`.
+# the clump mass M in ``sph.mass`` (the contact law's effective mass, as LIGGGHTS multisphere);
+# their own kick and drift is replaced by the rigid-body update of :mod:`dem.kernels.rigid`.
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)

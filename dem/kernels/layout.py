@@ -2,9 +2,8 @@
 
 Each layout is a :class:`typing.NamedTuple`, which numba compiles as a tuple whose fields are read
 by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.engine.state` builds them from its
-dataclasses
-(``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap`` pair
-capacity.
+dataclasses (``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap``
+pair capacity.
 """
 
 import math

@@ -3,7 +3,7 @@
 A mesh trough (``trough.mesh``) is a set of triangles fixed in the trough frame. A sphere of
 radius r at x touches triangle t where the point q of t closest to x lies within r: the contact
 normal is n = (x - q) / |x - q|, the overlap delta = r - |x - q|, and the contact law is that of
-the flat walls (:func:`dem.kernels.contacts.contact_force` with the wall's infinite mass and
+the flat walls (:func:`dem.kernels.contact.contact_force` with the wall's infinite mass and
 radius: m* = m, R* = r, lever arm r - f_w delta, ``[contact] wall_lever_arm``).
 
 Closest points (:func:`closest_point`) follow the Voronoi regions of the triangle (Ericson,
@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS
-from dem.kernels.contacts import P_WALL_ARM, contact_force
+from dem.kernels.contact import P_WALL_ARM, contact_force
 from dem.kernels.periodic import wrap
 
 #: Contact slots (tangential springs) per sphere for mesh contacts.
@@ -149,8 +149,7 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
     ``mesh`` is a :class:`dem.kernels.layout.MeshArrays`; its slot rows ``MESH_SLOTS i + s``
     are sphere i's (module docstring), updated. The centre is taken in the section [0, length)
     along x (``mesh.grid[4]``; the mesh is periodic there, :mod:`dem.scene.mesh`). A sphere whose
-    cell
-    lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
+    cell lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
     not inlined: inlined into every step kernel it took two minutes to compile).
     """
     px = x[i, 0]

@@ -9,10 +9,9 @@ normal part of the peak trough acceleration over the normal part of gravity,
 and conveying velocities are reported over the drive velocity A omega cos(phi) (DESIGN.md,
 section 3). The inverse forms (the frequency at which a held amplitude or a held peak speed
 A omega gives Gamma) live here too. Every function takes angles in degrees and broadcasts over
-numpy arrays; with scalars it returns a float. :func:`dem.scene.case.resolve_drive`,
+numpy arrays; with scalars it returns a float. :func:`dem.scene.spec.resolve_drive`,
 :class:`dem.scene.trough.Trough`, :mod:`dem.physics.measure`, the point-mass model and its sweeps,
-and the
-validation scripts all call these.
+and the validation scripts all call these.
 """
 
 from __future__ import annotations
@@ -94,6 +93,22 @@ def drive_velocity_from_throw_number(throw_number, frequency, angle, inclination
     return drive_velocity(amplitude(throw_number, frequency, angle, inclination), frequency, angle)
 
 
+def steps_per_cycle(frequency: float, dt: float) -> float:
+    """Time steps in one drive cycle, 1 / (f dt); not a whole number in general."""
+    return 1.0 / frequency / dt
+
+
+def cycle_edge(start_step: int, cycles: float, period: float, dt: float) -> int:
+    """The step at which ``cycles`` drive periods after step ``start_step`` end.
+
+    start_step + round(cycles period / dt): every cycle and frame edge is counted from the
+    drive's start (``cycles`` may be a fraction for a frame), so no edge drifts from the
+    drive's phase however many cycles have run. The measurement, the frames, a checkpoint's
+    check and the validation studies all take their edges from here.
+    """
+    return start_step + int(round(cycles * period / dt))
+
+
 # --- the trough's motion: one or two sinusoidal components and a start-up ramp --------------
 
 
@@ -170,6 +185,11 @@ class Motion:
         x = sum(c.amplitude * math.cos(c.angle) * cmath.exp(1j * c.phase) for c in self.components)
         z = sum(c.amplitude * math.sin(c.angle) * cmath.exp(1j * c.phase) for c in self.components)
         return complex(x), complex(z)
+
+    @property
+    def is_single(self) -> bool:
+        """Whether the drive is the paper's: one straight-line component."""
+        return len(self.components) == 1
 
     @property
     def is_line(self) -> bool:

@@ -6,13 +6,13 @@ rolling_friction``), as LAMMPS's ``pair granular`` composes its sub-models. Each
 :data:`NORMAL_LAWS` and :data:`TANGENTIAL_LAWS` says everything the rest of dem asks of a law:
 
 - the case keys it reads (the keys of another law are refused at load, :mod:`dem.scene.case`);
-- its parameter builder (the keyword arguments of :func:`dem.kernels.contacts.make_params`);
+- its parameter builder (the keyword arguments of :func:`dem.kernels.contact.make_params`);
 - the floats of contact history it needs (the contact's width is the sum over its sub-models);
 - the stiffness the time step must resolve (:func:`dem.scene.timestep.timestep_limits`);
 - its LIGGGHTS mapping: the deck's law, or the nearest one with the note the deck carries;
 - whether ``dem calibrate`` applies, and what it fits.
 
-The kernels' side of the same sub-models (scalar functions) is :mod:`dem.kernels.contacts`.
+The kernels' side of the same sub-models (scalar functions) is :mod:`dem.kernels.contact`.
 A new tangential law is a function there and one row here.
 """
 
@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics import tangential as tangential_fit
 
 
@@ -55,7 +55,7 @@ class TangentialLaw:
         keys: ``[contact]`` keys it reads, by normal law.
         history_width: Floats of contact history it needs.
         coefficients: Its parameter builder: (case) -> keyword arguments of
-            :func:`dem.kernels.contacts.make_params` that it decides.
+            :func:`dem.kernels.contact.make_params` that it decides.
         step_spring: The tangential spring the time step must resolve: (params, normal law,
             tangent normal stiffness S_n, size factor a, normal damping ratio zeta_n, rotation
             factor) -> (effective k_t, N/m, its damping ratio); k_t = 0 when it has none.
@@ -121,8 +121,8 @@ def _impact_coefficients(case) -> dict:
 
 def _spring_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
     """k_t = kappa S_n (kappa k_n linear) times the rotation factor, damping ratio zeta_t."""
-    kt = p[contacts.P_KT_RATIO] * s_n
-    return rotation_factor * kt, float(p[contacts.P_ZETA_T])
+    kt = p[contact.P_KT_RATIO] * s_n
+    return rotation_factor * kt, float(p[contact.P_ZETA_T])
 
 
 def _liggghts_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
@@ -136,9 +136,9 @@ def _liggghts_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, fl
     explicit step is stable only below 0.28 / omega_t, where an undamped one allows 2 / omega_t.
     """
     if model == "linear":
-        kt = p[contacts.P_KT_RATIO] * s_n
+        kt = p[contact.P_KT_RATIO] * s_n
     else:
-        kt = 8.0 * p[contacts.P_GSTAR] * a
+        kt = 8.0 * p[contact.P_GSTAR] * a
     if kt <= 0:
         return 0.0, 0.0
     ratio = rotation_factor * (s_n / kt if model == "linear" else 1.0)
@@ -156,7 +156,7 @@ TANGENTIAL_LAWS = {
     "impact": TangentialLaw(
         "impact",
         keys={"hertz_mindlin": (), "linear": ()},
-        history_width=contacts.HISTORY_WIDTH["impact"],
+        history_width=contact.HISTORY_WIDTH["impact"],
         coefficients=_impact_coefficients,
         step_spring=_impact_step,
         liggghts_as="liggghts",
@@ -173,7 +173,7 @@ TANGENTIAL_LAWS = {
     "coulomb": TangentialLaw(
         "coulomb",
         keys={"hertz_mindlin": _SPRING_KEYS, "linear": _SPRING_KEYS},
-        history_width=contacts.HISTORY_WIDTH["coulomb"],
+        history_width=contact.HISTORY_WIDTH["coulomb"],
         coefficients=_coulomb_coefficients,
         step_spring=_spring_step,
         liggghts_as="liggghts",
@@ -187,7 +187,7 @@ TANGENTIAL_LAWS = {
     "liggghts": TangentialLaw(
         "liggghts",
         keys={"hertz_mindlin": (), "linear": ("tangential_stiffness_ratio",)},
-        history_width=contacts.HISTORY_WIDTH["liggghts"],
+        history_width=contact.HISTORY_WIDTH["liggghts"],
         coefficients=_liggghts_coefficients,
         step_spring=_liggghts_step,
         liggghts_as="liggghts",
@@ -219,7 +219,7 @@ def history_width(tangential: str, model: str = "hertz_mindlin") -> int:
 def _params(case) -> np.ndarray:
     """One row of kernel parameters: the case's contact law with ``case.material``."""
     c, m = case.contact, case.material
-    return contacts.make_params(
+    return contact.make_params(
         model=c.model,
         stiffness=c.stiffness or 0.0,
         youngs_modulus=c.youngs_modulus or 0.0,
@@ -237,7 +237,7 @@ def _params(case) -> np.ndarray:
 
 def wall_params(params: np.ndarray) -> np.ndarray:
     """The grain-wall row of a law's parameters: the second row, or the only one."""
-    n = contacts.N_PARAMS
+    n = contact.N_PARAMS
     return params[n : 2 * n] if params.shape[0] >= 2 * n else params
 
 
@@ -246,8 +246,8 @@ class ContactLaw:
     """A contact law selector with its kernel parameters.
 
     Attributes:
-        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contacts.MODELS`).
-        params: Kernel parameter array (:func:`dem.kernels.contacts.make_params`).
+        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contact.MODELS`).
+        params: Kernel parameter array (:func:`dem.kernels.contact.make_params`).
 
     """
 
@@ -258,7 +258,7 @@ class ContactLaw:
     def from_case(cls, case) -> ContactLaw:
         """Law of a :class:`dem.scene.case.Case`: grain-grain, then grain-wall (``[wall]``).
 
-        ``params`` holds two rows of :data:`dem.kernels.contacts.N_PARAMS` floats: the
+        ``params`` holds two rows of :data:`dem.kernels.contact.N_PARAMS` floats: the
         grain-grain law (the material) and the grain-wall law (the material with ``[wall]``'s
         friction and restitutions, :attr:`dem.scene.case.Case.wall_material`); the pair kernels read
         the first, the wall kernels the second (:func:`wall_params`). The tangential law's row
@@ -279,8 +279,8 @@ class ContactLaw:
     @property
     def tangential(self) -> str:
         """Tangential law, a key of :data:`TANGENTIAL_LAWS`."""
-        code = self.params[contacts.P_TANGENTIAL]
-        return next(k for k, v in contacts.TANGENTIAL.items() if v == code)
+        code = self.params[contact.P_TANGENTIAL]
+        return next(k for k, v in contact.TANGENTIAL.items() if v == code)
 
     @property
     def row(self) -> TangentialLaw:
@@ -292,17 +292,17 @@ class ContactLaw:
         p = self.params
         out = {"tangential": self.tangential}
         if self.tangential == "coulomb" or (self.model == "linear" and self.tangential != "impact"):
-            out["tangential_stiffness_ratio"] = float(p[contacts.P_KT_RATIO])
+            out["tangential_stiffness_ratio"] = float(p[contact.P_KT_RATIO])
         if self.tangential == "coulomb":
-            out["tangential_damping_ratio"] = float(p[contacts.P_ZETA_T])
-            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
+            out["tangential_damping_ratio"] = float(p[contact.P_ZETA_T])
+            out["tangential_mass_factor"] = float(p[contact.P_MASS_T])
         if self.tangential == "impact":
-            out["tangential_mass_factor"] = float(p[contacts.P_MASS_T])
-            out["stick_rate"] = float(p[contacts.P_STICK_RATE])
-            out["stick_damping_ratio"] = float(p[contacts.P_STICK_ZETA])
-            out["normal_law_restitution"] = float(p[contacts.P_NORMAL_E])
-        f_w = float(p[contacts.P_WALL_ARM])
-        out["wall_lever_arm"] = next(k for k, v in contacts.WALL_LEVER_ARMS.items() if v == f_w)
+            out["tangential_mass_factor"] = float(p[contact.P_MASS_T])
+            out["stick_rate"] = float(p[contact.P_STICK_RATE])
+            out["stick_damping_ratio"] = float(p[contact.P_STICK_ZETA])
+            out["normal_law_restitution"] = float(p[contact.P_NORMAL_E])
+        f_w = float(p[contact.P_WALL_ARM])
+        out["wall_lever_arm"] = next(k for k, v in contact.WALL_LEVER_ARMS.items() if v == f_w)
         return out
 
     @property
@@ -313,4 +313,4 @@ class ContactLaw:
     @property
     def model_id(self) -> int:
         """Integer id used by the kernels."""
-        return contacts.MODELS[self.model]
+        return contact.MODELS[self.model]

@@ -272,7 +272,7 @@ def conveying_velocity(
     The standard error accounts for the correlation of successive cycles
     (:func:`correlated_stderr`); the independent-cycle value is kept beside it. Velocities are
     normalised by A omega cos(phi) (``amplitude``, ``omega``, ``angle``) or by ``scale`` (m/s;
-    an elliptical drive's :attr:`dem.scene.case.DriveSpec.velocity_scale`).
+    an elliptical drive's :attr:`dem.scene.spec.DriveSpec.velocity_scale`).
     """
     if scale is None:
         scale = drive_velocity_scale(amplitude, omega, angle)

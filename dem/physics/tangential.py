@@ -165,7 +165,7 @@ def resolve(contact, material, particles) -> tuple[float, float, float]:
 
     """
     from dem.config import DEM_TANGENTIAL_DAMPING_RATIO
-    from dem.kernels.contacts import damping_beta
+    from dem.kernels.contact import damping_beta
 
     f_t = tangential_mass_factor(particles.shape, particles.rotation, particles.grain)
     zeta_t = contact.tangential_damping_ratio

@@ -43,7 +43,7 @@ def velocity_answer(r, frequency: float | None) -> tuple[dict, list[str]]:
         result["frequency"] = frequency
         result["velocity"] = r.velocity(frequency)
         result["amplitude"] = amplitude_from_throw_number(
-            r.throw_number, r.angle, r.inclination, frequency
+            r.throw_number, frequency, r.angle, r.inclination
         )
     lines = [f"velocity_norm  {r.velocity_norm:.6f}   (v / (A omega cos phi))"]
     if frequency is not None:

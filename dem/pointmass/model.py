@@ -78,7 +78,7 @@ class VelocityResult:
 
     def drive_velocity(self, frequency: float) -> float:
         """A omega cos(phi) in m/s at ``frequency`` (Hz), the amplitude following from Gamma."""
-        return drive_velocity(self.throw_number, self.angle, self.inclination, frequency)
+        return drive_velocity(self.throw_number, frequency, self.angle, self.inclination)
 
     def velocity(self, frequency: float) -> float:
         """Mean conveying velocity in m/s at ``frequency`` (Hz)."""
@@ -93,21 +93,20 @@ class VelocityResult:
 # physics is dem.physics.drive's.
 
 
-def amplitude_from_throw_number(
-    throw_number: float, angle: float, inclination: float, frequency: float
-) -> float:
-    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m (:func:`dem.physics.drive.amplitude`)."""
+def amplitude_from_throw_number(throw_number, frequency, angle, inclination=0.0):
+    """A = Gamma g cos(alpha) / (omega^2 sin(phi)), m (:func:`dem.physics.drive.amplitude`).
+
+    Arguments in :mod:`dem.physics.drive`'s order: Gamma, f (Hz), phi and alpha (degrees).
+    """
     return drive.amplitude(throw_number, frequency, angle, inclination)
 
 
-def throw_number_from_amplitude(
-    amplitude: float, angle: float, inclination: float, frequency: float
-) -> float:
+def throw_number_from_amplitude(amplitude, frequency, angle, inclination=0.0):
     """Gamma = A omega^2 sin(phi) / (g cos(alpha)) (Eq. 3; ``drive.throw_number``)."""
     return drive.throw_number(amplitude, frequency, angle, inclination)
 
 
-def drive_velocity(throw_number, angle, inclination, frequency):
+def drive_velocity(throw_number, frequency, angle, inclination=0.0):
     """A omega cos(phi), m/s, of a drive given by Gamma (:mod:`~dem.physics.drive`; broadcasts)."""
     return drive.drive_velocity_from_throw_number(throw_number, frequency, angle, inclination)
 

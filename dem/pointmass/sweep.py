@@ -33,6 +33,7 @@ import numpy as np
 from dem import config
 from dem.errors import InputError
 from dem.physics import drive
+from dem.physics.search import golden_section
 from dem.pointmass.model import REGIMES, velocities
 from dem.pointmass.validate import check_angle, check_positive, check_throw_number
 
@@ -308,8 +309,12 @@ def optimum(
     obj, r, gamma, phi, amp, f = _velocity_along(over, hold, x, fixed)
     best = int(np.argmax(obj))
     a, b = x[max(best - 1, 0)], x[min(best + 1, points - 1)]
-    x_best, o_best = _golden_max(
-        lambda t: _velocity_along(over, hold, np.array([t]), fixed)[0][0], a, b
+    x_best, o_best = golden_section(
+        lambda t: _velocity_along(over, hold, np.array([t]), fixed)[0][0],
+        a,
+        b,
+        iterations=40,
+        maximize=True,
     )
     if o_best < obj[best]:
         x_best, o_best = x[best], obj[best]
@@ -352,24 +357,6 @@ def _plateau(x, above, best):
     while j < len(x) - 1 and above[j + 1]:
         j += 1
     return (float(x[i]), float(x[j]))
-
-
-def _golden_max(func, a, b, iterations=40):
-    """Golden-section search for a maximum of func on [a, b]; returns (x, func(x))."""
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    c = b - ratio * (b - a)
-    d = a + ratio * (b - a)
-    fc, fd = func(c), func(d)
-    for _ in range(iterations):
-        if fc >= fd:
-            b, d, fd = d, c, fc
-            c = b - ratio * (b - a)
-            fc = func(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + ratio * (b - a)
-            fd = func(d)
-    return (c, fc) if fc >= fd else (d, fd)
 
 
 def parse_values(text: str, key: str) -> list[float]:

@@ -147,7 +147,7 @@ def linear_equivalent_stiffness(case) -> float:
     The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2. ``case``: a
     :class:`dem.scene.resolved.Scene`, or a case resolved here.
     """
-    from dem.kernels import contacts
+    from dem.kernels import contact
 
     scene = resolve(case)
     case = scene.case
@@ -155,7 +155,7 @@ def linear_equivalent_stiffness(case) -> float:
     c = case.contact
     y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
     speed = case.drive.peak_speed
-    t_c = contacts.hertz_collision_time(y_star, radius, mass, speed)
+    t_c = contact.hertz_collision_time(y_star, radius, mass, speed)
     return mass * (math.pi / t_c) ** 2
 
 
@@ -174,7 +174,7 @@ def equivalent_youngs_modulus(case) -> float:
         return float(c.youngs_modulus)
     t_c = math.pi * math.sqrt(mass / c.stiffness)
     speed = case.drive.peak_speed
-    # dem.kernels.contacts.hertz_collision_time inverted:
+    # dem.kernels.contact.hertz_collision_time inverted:
     # t_c = 2.87 (m^2 / (R Y*^2 v))^(1/5)  ->  Y* = sqrt(m^2 / (R v (t_c / 2.87)^5))
     y_star = math.sqrt(mass**2 / (radius * speed * (t_c / 2.87) ** 5))
     return y_star * 2.0 * (1.0 - c.poisson_ratio**2)

@@ -20,7 +20,7 @@ from dem.engine import setup
 from dem.errors import InputError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.vtk import TROUGH_FILE
-from dem.run import plan
+from dem.run import cost, plan
 from dem.run.record import Progress
 from dem.run.summary import fingerprint_changes
 
@@ -116,12 +116,12 @@ def compile_first(case, progress: bool) -> None:
 
 def check_memory(case, estimate) -> None:
     """Refuse a case whose state (the estimate ``dem plan`` prints) exceeds this machine."""
-    total = plan.physical_memory()
+    total = cost.physical_memory()
     if total and estimate.memory_bytes > total:
         raise InputError(
             "particles.count", case.particles.count, f"a count whose state fits this machine: "
-            f"it needs {plan.format_size(estimate.memory_bytes)}, the machine has "
-            f"{plan.format_size(total)} (dem plan {case.name} says more)",
+            f"it needs {cost.format_size(estimate.memory_bytes)}, the machine has "
+            f"{cost.format_size(total)} (dem plan {case.name} says more)",
             source=str(case.source),
         )  # fmt: skip
 
@@ -138,7 +138,7 @@ def check_duration(case, estimate) -> None:
             f"a run this machine finishes within a year: {estimate.steps:.3g} steps "
             f"(dt = {estimate.timestep:.3g} s, {estimate.steps_per_cycle:.3g} a cycle) of "
             f"{estimate.spheres} spheres would take about "
-            f"{plan.format_duration(estimate.wall_time_s)}; fewer cycles or grains, or a longer "
+            f"{cost.format_duration(estimate.wall_time_s)}; fewer cycles or grains, or a longer "
             f"step (a softer contact, larger grains) shorten it (dem plan {case.name} says more)",
             source=str(case.source),
         )  # fmt: skip

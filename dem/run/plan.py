@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from dem import config
+from dem.physics import drive
 from dem.run import accuracy, cost, stiffness
 from dem.run.accuracy import Advice
 from dem.run.cost import format_duration, format_size, physical_memory
@@ -125,7 +126,7 @@ def plan(
     grains = pt.count
     spheres = grains * per_grain
     step = scene.step
-    per_cycle = 1.0 / case.drive.frequency / step.dt
+    per_cycle = drive.steps_per_cycle(case.drive.frequency, step.dt)
     auto_settle = case.run.settle_cycles is None
     if not auto_settle:
         settle = case.run.settle_cycles

@@ -2,13 +2,11 @@
 
 One run's standard error comes from its own per-cycle means (autocorrelation-aware,
 :func:`dem.physics.measure.correlated_stderr`); it cannot see how much the answer depends on the
-fill.
-Refilled with another seed, a bed conveys a few per cent differently, several times that error.
-``[run] replicas = N`` (or ``dem run --replicas N``) runs the case N times, replica k seeded
-``run.seed + k``, on the cores available (up to one process per core, the cores shared out as
-numba threads), and pools the N values by a random-effects model
-(:func:`dem.physics.measure.pooled`),
-so the error bar includes the fill-to-fill spread.
+fill. Refilled with another seed, a bed conveys a few per cent differently, several times that
+error. ``[run] replicas = N`` (or ``dem run --replicas N``) runs the case N times, replica k seeded
+``run.seed + k``, on the cores available (up to one process per core, the cores shared out as numba
+threads), and pools the N values by a random-effects model (:func:`dem.physics.measure.pooled`), so
+the error bar includes the fill-to-fill spread.
 
 Output: replica 0 writes its frames, results.h5 and checkpoint in the output folder itself, as a
 single run does; replica k >= 1 writes into ``replicas/k/`` its summary.json (and its frames and
@@ -248,9 +246,9 @@ def pool_summaries(
     :func:`dem.physics.measure.pooled` and gets a ``_ci95`` half-width; the mass flow rates are
     the pooled velocity times each replica's mass over length, pooled likewise; ``per_replica``
     lists every replica's values; ``replica_spread`` is the fill-to-fill standard deviation of v
-    beyond the runs' own errors.
-    ``wall_time_s`` sums the replicas' step loops and ``particle_steps_per_s`` is their mean
-    rate times the ``processes`` that ran at once; ``elapsed_s`` is the whole wait.
+    beyond the runs' own errors. ``wall_time_s`` sums the replicas' step loops and
+    ``particle_steps_per_s`` is their mean rate times the ``processes`` that ran at once;
+    ``elapsed_s`` is the whole wait.
     """
     first = summaries[0]
     out = dict(first)

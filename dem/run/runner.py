@@ -44,6 +44,7 @@ from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
 from dem.io.tables import write_cycles_csv
+from dem.physics.drive import cycle_edge
 from dem.run import plan, stiffness
 from dem.run.checks import (
     check_duration,
@@ -198,7 +199,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
             while not progress.finished:
                 c = progress.cycle
                 k = progress.chunk
-                end = sim.drive_start_step + int(round((c + (k + 1) / per_frame) * period / sim.dt))
+                end = cycle_edge(sim.drive_start_step, c + (k + 1) / per_frame, period, sim.dt)
                 n = end - sim.step_index
                 t1 = time.perf_counter()
                 # a signal is honoured within DEM_CHECK_INTERVAL steps or DEM_STOP_LATENCY_S,

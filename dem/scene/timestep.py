@@ -18,7 +18,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import InputError
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.physics.laws import ContactLaw, wall_params
 from dem.physics.mass import sphere_mass
 from dem.scene import fill
@@ -65,25 +65,22 @@ def timestep_limits(
     limit = math.inf
     auto = math.inf
     for m_eff, r_eff, p in contacts_list:
-        beta = p[contacts.P_BETA]
+        beta = p[contact.P_BETA]
+        zeta = contact.damping_ratio(law.model, beta)
         if law.model == "linear":
-            kn = p[contacts.P_KN]
-            root = 1.0
-            zeta = -beta
-            auto = min(auto, contacts.linear_collision_time(kn, m_eff, beta))
+            kn, root = contact.tangent_stiffness(law.model, p, r_eff, 0.0)
+            auto = min(auto, contact.linear_collision_time(kn, m_eff, beta))
         else:
-            delta = contacts.hertz_max_overlap(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed)
-            root = math.sqrt(r_eff * delta)
-            kn = 2.0 * p[contacts.P_YSTAR] * root
-            zeta = -math.sqrt(5.0 / 6.0) * beta
+            delta = contact.hertz_max_overlap(p[contact.P_YSTAR], r_eff, m_eff, impact_speed)
+            kn, root = contact.tangent_stiffness(law.model, p, r_eff, delta)
             auto = min(
                 auto,
-                contacts.hertz_collision_time(p[contacts.P_YSTAR], r_eff, m_eff, impact_speed),
+                contact.hertz_collision_time(p[contact.P_YSTAR], r_eff, m_eff, impact_speed),
             )
         kt_eff, zeta_t = row.step_spring(p, law.model, kn, root, zeta, tangential_factor)
-        limit = min(limit, contacts.critical_timestep(kn, m_eff, zeta))
+        limit = min(limit, contact.critical_timestep(kn, m_eff, zeta))
         if kt_eff > 0:
-            limit = min(limit, contacts.critical_timestep(kt_eff, m_eff, zeta_t))
+            limit = min(limit, contact.critical_timestep(kt_eff, m_eff, zeta_t))
     limit *= config.DEM_DT_STABILITY_FRACTION
     if law.model == "linear":
         auto *= config.DEM_DT_COLLISION_FRACTION
@@ -91,7 +88,7 @@ def timestep_limits(
         auto = min(
             auto * config.DEM_DT_HERTZ_FRACTION,
             config.DEM_DT_RAYLEIGH_FRACTION
-            * contacts.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
+            * contact.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
         )
     return min(auto, limit), limit
 

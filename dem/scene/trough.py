@@ -56,21 +56,17 @@ WALLS = (
 class Trough:
     """Straight periodic trough section and its drive.
 
-    The drive is the paper's straight line A sin(omega t) (cos phi, 0, sin phi), optionally a
-    second component A_2 sin(omega t + psi_2) (cos phi_2, 0, sin phi_2) (an elliptical drive) and
-    a start-up ramp (:class:`dem.physics.drive.Motion`).
+    The drive is one :class:`dem.physics.drive.Motion`, built once from the case
+    (:attr:`dem.scene.case.DriveSpec.motion`): the paper's straight line A sin(omega t)
+    (cos phi, 0, sin phi), optionally a second component A_2 sin(omega t + psi_2)
+    (cos phi_2, 0, sin phi_2) (an elliptical drive) and a start-up ramp. The trough reads every
+    drive quantity from it (SI units: rad/s, rad).
 
     Attributes:
         length: Period along x, m.
         width: Distance between the side walls, m.
         inclination: alpha, rad.
-        amplitude: A, m.
-        omega: Angular frequency omega = 2 pi f, rad/s.
-        angle: Vibration angle phi, rad.
-        second_amplitude: A_2, m (0: a straight-line drive).
-        second_angle: phi_2, rad.
-        second_phase: psi_2, rad.
-        ramp_time: Start-up ramp of the drive, s (0: none).
+        motion: The drive, or None for a trough that does not move.
         discharge: x of a finite feeder's discharge edge, m (inf: a periodic section). A finite
             feeder has a back wall at x = 0 and ``length`` is then the period of the domain the
             kernels wrap, longer than the trough by an empty gap (:mod:`dem.engine.feeder`).
@@ -80,13 +76,7 @@ class Trough:
     length: float
     width: float
     inclination: float = 0.0
-    amplitude: float = 0.0
-    omega: float = 0.0
-    angle: float = 0.0
-    second_amplitude: float = 0.0
-    second_angle: float = 0.0
-    second_phase: float = 0.0
-    ramp_time: float = 0.0
+    motion: drive.Motion | None = None
     discharge: float = math.inf
 
     @property
@@ -106,30 +96,33 @@ class Trough:
 
     @classmethod
     def from_case(cls, case) -> Trough:
-        """Trough of a :class:`dem.scene.case.Case` (angles converted from degrees)."""
-        d = case.drive
+        """Trough of a :class:`dem.scene.case.Case`: its geometry and the case's drive object."""
         return cls(
             length=case.trough.length,
             width=case.trough.width,
             inclination=math.radians(case.trough.inclination),
-            amplitude=d.amplitude,
-            omega=d.omega,
-            angle=math.radians(d.angle),
-            second_amplitude=d.second_amplitude,
-            second_angle=math.radians(d.second_angle),
-            second_phase=math.radians(d.second_phase),
-            ramp_time=d.ramp_cycles / d.frequency,
+            motion=case.drive.motion,
         )
 
     @property
-    def motion(self) -> drive.Motion:
-        """The trough's laboratory motion s(t) (:class:`dem.physics.drive.Motion`)."""
-        components = [drive.Component(self.amplitude, self.angle)]
-        if self.second_amplitude > 0.0:
-            components.append(
-                drive.Component(self.second_amplitude, self.second_angle, self.second_phase)
-            )
-        return drive.Motion(self.omega, tuple(components), self.ramp_time)
+    def first(self) -> drive.Component:
+        """The drive's first component (the paper's line); a still one without a drive."""
+        return self.motion.components[0] if self.motion is not None else drive.Component(0.0, 0.0)
+
+    @property
+    def amplitude(self) -> float:
+        """A of the first drive component, m (0 without a drive)."""
+        return self.first.amplitude
+
+    @property
+    def angle(self) -> float:
+        """Vibration angle phi of the first drive component, rad."""
+        return self.first.angle
+
+    @property
+    def omega(self) -> float:
+        """Angular frequency omega = 2 pi f, rad/s (0 without a drive)."""
+        return self.motion.omega if self.motion is not None else 0.0
 
     @property
     def gravity(self) -> np.ndarray:
@@ -150,7 +143,7 @@ class Trough:
     @property
     def drive_speed(self) -> float:
         """Peak trough speed, m/s: A omega for a line (``Motion.peak_speed``)."""
-        if self.second_amplitude == 0.0:
+        if self.motion is None or self.motion.is_single:
             return self.amplitude * self.omega
         return self.motion.peak_speed
 
@@ -159,10 +152,9 @@ class Trough:
         """Peak normal trough acceleration over g cos(alpha): the paper's Gamma for a line drive.
 
         (:func:`dem.physics.drive.throw_number`; :meth:`dem.physics.drive.Motion.throw_number` with
-        two
-        components.)
+        two components.)
         """
-        if self.second_amplitude > 0.0:
+        if self.motion is not None and not self.motion.is_single:
             return self.motion.throw_number(math.degrees(self.inclination))
         return drive.throw_number(
             self.amplitude,
@@ -173,20 +165,26 @@ class Trough:
 
     def drive_array(self, on: bool = True) -> np.ndarray:
         """Kernel form of the drive (``Motion.kernel_array``); zeros if off."""
-        if not on:
+        if not on or self.motion is None:
             return np.zeros(drive.KERNEL_DRIVE_SIZE)
         return self.motion.kernel_array()
 
     def frame_acceleration(self, t: float) -> np.ndarray:
         """Frame acceleration -s''(t) at drive time t, shape (3,), m/s^2."""
+        if self.motion is None:
+            return np.zeros(3)
         return self.motion.frame_acceleration(t)
 
     def displacement(self, t: float) -> np.ndarray:
         """Laboratory trough displacement s(t), shape (3,), m."""
+        if self.motion is None:
+            return np.zeros(3)
         return self.motion.displacement(t)
 
     def velocity(self, t: float) -> np.ndarray:
         """Laboratory trough velocity s'(t), shape (3,), m/s."""
+        if self.motion is None:
+            return np.zeros(3)
         return self.motion.velocity(t)
 
     def wrap(self, x: np.ndarray) -> np.ndarray:

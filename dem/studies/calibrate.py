@@ -33,10 +33,12 @@ import numpy as np
 from dem.errors import InputError
 from dem.io.files import replace_file, replace_text
 from dem.physics.laws import TANGENTIAL_LAWS
+from dem.physics.search import golden_evaluations, golden_section
 from dem.pointmass import elliptic
 from dem.pointmass.stepped import step_motion, step_point_mass
-from dem.scene.case import CASE_FILE, load_case, set_contact_keys
+from dem.scene.case import CASE_FILE, load_case
 from dem.scene.resolved import resolve
+from dem.scene.tomledit import set_contact_keys
 
 #: Steps per drive cycle of the landing sampler (first order in the step).
 LANDING_STEPS = 4000
@@ -194,31 +196,9 @@ MIN_INCIDENCE = 5.0
 LOG_KAPPA_RANGE = (math.log(1e-4), math.log(10.0))
 
 
-#: Width in ln(k_t / k_n) the golden-section refinement of the fit stops at.
+#: Width in ln(k_t / k_n) the golden-section refinement of the fit stops at
+#: (:func:`dem.physics.search.golden_section`).
 GOLDEN_TOLERANCE = 1e-3
-
-
-def _golden_evaluations(width: float, tol: float) -> int:
-    """Most evaluations :func:`_golden` makes on an interval ``width`` wide.
-
-    Two, then one per narrowing by the golden ratio (the other point is cached).
-    """
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    return 2 + max(0, math.ceil(math.log(tol / width) / math.log(ratio)))
-
-
-def _golden(f, a, b, tol):
-    """Golden-section minimum of f on [a, b], to ``tol``."""
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - ratio * (b - a), a + ratio * (b - a)
-    while b - a > tol:
-        if f(c) < f(d):
-            b, d = d, c
-            c = b - ratio * (b - a)
-        else:
-            a, c = c, d
-            d = a + ratio * (b - a)
-    return 0.5 * (a + b)
 
 
 @dataclass(frozen=True)
@@ -304,9 +284,8 @@ def _with_tangential(case, kappa: float, zeta_t: float):
 def _measure(case, impacts, quats, strict=True) -> tuple[np.ndarray, np.ndarray]:
     """Return eps_t per impact and orientation, (L, Q), and eps_n, (L Q,).
 
-    ``case``: a :class:`dem.scene.resolved.Scene`, or a case resolved here once for all its
-    impacts. An
-    impact that never ends is left out (nan) rather than stopping the fit, unless every
+    ``case``: a :class:`dem.scene.resolved.Scene`, or a case resolved here once for all its impacts.
+    An impact that never ends is left out (nan) rather than stopping the fit, unless every
     orientation of one impact fails and ``strict``.
     """
     scene = resolve(case, check_limit=False)
@@ -364,8 +343,7 @@ def calibrate(
 
     What a law leaves to fit, and whether it may be calibrated, is its registry row's
     (:data:`dem.physics.laws.TANGENTIAL_LAWS`). ``progress(kappa, mean_eps_t, done, total)`` is
-    called
-    after each evaluation (``total`` is the most the search can make: the grid, the start and
+    called after each evaluation (``total`` is the most the search can make: the grid, the start and
     the golden section's bound).
 
     Raises:
@@ -384,7 +362,7 @@ def calibrate(
             f"one of {allowed} ({row.calibration})",
             source=str(case.source),
         )
-    from dem.kernels import contacts
+    from dem.kernels import contact
 
     target = case.wall_material.restitution_tangential  # impacts on the floor
     impacts = landings(case)
@@ -432,7 +410,7 @@ def calibrate(
             fan=fan, fan_before=fan_values, fan_after=fan_values, targets=targets,
             bounded=bounded, fitted=False,
         )  # fmt: skip
-    zeta_t = float(scene.law.params[contacts.P_ZETA_T])
+    zeta_t = float(scene.law.params[contact.P_ZETA_T])
     # a landing matters by the tangential momentum at stake: weight (v_t / V)^2 = sin^2(theta)
     weights = np.sin(np.radians(impacts[:, 0])) ** 2
     weights /= weights.sum()
@@ -456,14 +434,14 @@ def calibrate(
     grid = np.linspace(*LOG_KAPPA_RANGE, 16)
     step = float(grid[1] - grid[0])
     # evaluations: the grid, the start, and the golden section on two grid steps to 1e-3
-    total = len(grid) + 1 + _golden_evaluations(2.0 * step, GOLDEN_TOLERANCE)
+    total = len(grid) + 1 + golden_evaluations(2.0 * step, GOLDEN_TOLERANCE)
     for x in grid:
         evaluate(float(x))
-    x = math.log(start if start is not None else float(scene.law.params[contacts.P_KT_RATIO]))
+    x = math.log(start if start is not None else float(scene.law.params[contact.P_KT_RATIO]))
     evaluate(x)
     x = min(cache, key=lambda k: cache[k][0])
     lo, hi = max(x - step, LOG_KAPPA_RANGE[0]), min(x + step, LOG_KAPPA_RANGE[1])
-    _golden(evaluate, lo, hi, GOLDEN_TOLERANCE)
+    golden_section(evaluate, lo, hi, tol=GOLDEN_TOLERANCE)
     best_log = min(cache, key=lambda k: cache[k][0])  # the best point evaluated
     best = math.exp(best_log)
     _, e_t, e_n = cache[best_log]
@@ -533,7 +511,7 @@ def write_calibration(
 ) -> Path:
     """Write the fitted k_t / k_n and zeta_t into the case's case.toml and return its path.
 
-    The two ``[contact]`` keys are set in place (:func:`dem.scene.case.set_contact_keys`), k_t /
+    The two ``[contact]`` keys are set in place (:func:`dem.scene.tomledit.set_contact_keys`), k_t /
     k_n to 6 digits, with a comment naming the day and the drive they fit (eps_t reached, Gamma,
     phi, mu, alpha); the rest of the file, comments included, is kept. The first calibration
     keeps the file as it was in ``case.toml.orig`` and calls ``on_keep`` with that path. The new

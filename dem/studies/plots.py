@@ -388,8 +388,7 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
     """eps_t of the virtual impacts against incidence, before and after ``dem calibrate``.
 
     ``cal`` is a :class:`dem.studies.calibrate.Calibration`; the Coulomb bound 1 - mu cot(theta) of
-    a
-    sliding impact (eps_n = 0) is drawn for reference.
+    a sliding impact (eps_n = 0) is drawn for reference.
     """
     import numpy as np
 

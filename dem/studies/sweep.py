@@ -3,9 +3,8 @@
 ``dem sweep CASE_DIR --set drive.angle=10:60:5 --set material.friction=0.25,0.35`` runs the
 Cartesian product of the ``--set`` values. Each point is the case with those keys overridden
 (:func:`dem.scene.case.load_case` ``overrides``: checked as if written in the file, all of them
-before
-anything runs) and runs ``dem run`` into its own folder under ``--out``. Points run as tasks on
-Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thread workers, one per
+before anything runs) and runs ``dem run`` into its own folder under ``--out``. Points run as tasks
+on Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thread workers, one per
 core, by default; a running ``dask scheduler`` when ``--scheduler ADDRESS`` is given (the point
 folders must then be on storage that every worker sees).
 

@@ -308,10 +308,10 @@ AS_MEASURED = {"sphere-bed": {"contact.youngs_modulus": 5.0e7, "run.timestep": "
 def _set_stick(rate, zeta):
     """Every law built after this call uses the stick (``rate``, ``zeta``) (a study knob, not
     a case key: the stick is a numerical device sized by the step)."""
-    from dem.kernels import contacts
+    from dem.kernels import contact
 
-    contacts.make_params.__kwdefaults__["stick_rate"] = rate
-    contacts.make_params.__kwdefaults__["stick_damping_ratio"] = zeta
+    contact.make_params.__kwdefaults__["stick_rate"] = rate
+    contact.make_params.__kwdefaults__["stick_damping_ratio"] = zeta
 
 
 def stick_bed_row(job):

@@ -20,11 +20,10 @@ same number of settle and measured drive cycles. The vibration angle phi is swep
 amplitude, so Gamma = A omega^2 sin(phi) / g changes with phi.
 
 dem: dem.run.runner.run_case (no frames), per-cycle mass-weighted mean x-velocities from its
-summary.
-LIGGGHTS: the deck of dem.io.liggghts.write_deck with ``sample_steps = 1``, so vx_mean.txt holds
-the mean x-velocity of every step and is binned here into exactly the drive cycles dem uses
-(cycle c = driven steps round(c P / dt) + 1 ... round((c + 1) P / dt)). Equal sphere masses, so
-the plain mean is the mass-weighted mean. Skipped with a message if ``liggghts`` is not on PATH.
+summary. LIGGGHTS: the deck of dem.io.liggghts.write_deck with ``sample_steps = 1``, so vx_mean.txt
+holds the mean x-velocity of every step and is binned here into exactly the drive cycles dem uses
+(cycle c = driven steps round(c P / dt) + 1 ... round((c + 1) P / dt)). Equal sphere masses, so the
+plain mean is the mass-weighted mean. Skipped with a message if ``liggghts`` is not on PATH.
 
 Both: v = mean of the per-cycle means, standard error = the correlated standard error of the
 per-cycle means (``dem.physics.measure.correlated_stderr``; std(ddof=1) / sqrt(cycles) would

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from impact_setup import SPHERE_MASS, SPHERE_RADIUS
 
-from dem.kernels import contacts
+from dem.kernels import contact
 from dem.scene.timestep import ContactLaw
 
 
@@ -17,7 +17,7 @@ def replica_sphere(start: np.ndarray, times: np.ndarray, case, dt: float, lever:
     """The plain sphere on the floor once more, in Python, with a chosen wall lever arm.
 
     Velocity Verlet (half kick, drift, forces, half kick) as both codes integrate a sphere;
-    gravity plus the floor contact through :func:`dem.kernels.contacts.contact_force` (the law
+    gravity plus the floor contact through :func:`dem.kernels.contact.contact_force` (the law
     dem uses and documents as LIGGGHTS's); ``lever`` = "dem" passes c = r - delta, "liggghts"
     c = r - delta/2 (surface_model_default.h: radi - deltan/2 for a wall). Only the floor: the
     sphere never reaches the side walls.
@@ -42,7 +42,7 @@ def replica_sphere(start: np.ndarray, times: np.ndarray, case, dt: float, lever:
         )  # fmt: skip
         return np.array([f[0], f[1], f[2] + m * g]), np.array(f[3:6])
 
-    contact_force = contacts.contact_force.py_func
+    contact_force = contact.contact_force.py_func
     f, tq = forces()
     rows, n = [], 0
     for t in times:

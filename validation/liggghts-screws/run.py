@@ -33,7 +33,7 @@ then compared at the same times. Bodies: the screw of the case; a sphere r = 3.6
 two-sphere clump (a 1 mm sphere inside it: LIGGGHTS multisphere needs >= 2 spheres); the same
 sphere as a plain LIGGGHTS sphere (``nve/sphere``) against dem's plain sphere and dem's
 one-sphere clump. Time steps 5e-7 s and 2e-6 s. ``replica_sphere`` integrates the plain
-sphere once more in Python with the contact law of dem.kernels.contacts and either lever arm of
+sphere once more in Python with the contact law of dem.kernels.contact and either lever arm of
 a wall contact (dem: r - delta, LIGGGHTS: r - delta/2) to show where the plain-sphere
 difference comes from.
 

@@ -7,11 +7,10 @@ and side walls) and with ``trough.mesh`` a box of the same floor and walls (60 m
 triangles (``dem.scene.mesh.extrude``, 8 segments along x, so grains cross triangle edges and
 vertices all the time), one run per seed on one thread, twice: filled by the mesh fill
 (``dem.scene.fill.fill_mesh``, what a mesh case gets) and from the very fill the flat case gets
-(same
-seed, same grains: only the walls differ). The means over the seeds are compared with their
+(same seed, same grains: only the walls differ). The means over the seeds are compared with their
 combined standard error (fill-to-fill scatter included). The shipped U and V troughs
-(cases/u-trough, cases/v-trough, 150 screws) run once each beside them for the record.
-Writes flat_vs_mesh.json (with provenance) and prints the table.
+(cases/u-trough, cases/v-trough, 150 screws) run once each beside them for the record. Writes
+flat_vs_mesh.json (with provenance) and prints the table.
 """
 
 from __future__ import annotations

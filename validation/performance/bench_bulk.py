@@ -156,8 +156,7 @@ run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
 
 
 def dem_once(args, threads: int) -> dict:
-    """One dem.run.runner.run_case in its own process (numba's thread count is fixed per
-    process)."""
+    """One dem.run.runner.run_case in its own process (numba's thread count is per process)."""
     out = HERE / "scratch" / "dem" / f"threads{threads}"
     code = DEM_CHILD.format(
         case=str(Path(args.case).resolve()),

@@ -2,9 +2,8 @@
 
 Each trial runs one small job in a fresh process for each checkout, alternating which goes
 first: the job builds a case (``dem.engine.setup.from_case`` or, for old checkouts, the
-classmethod),
-settles it for a few hundred steps, switches the drive on and times ``--steps`` steps after a
-warm-up. Per process it reports
+classmethod), settles it for a few hundred steps, switches the drive on and times ``--steps`` steps
+after a warm-up. Per process it reports
 
 - compile: wall time of the first ``run`` call with an empty numba cache (``NUMBA_CACHE_DIR``
   a fresh folder per process), which compiles every kernel the run needs;

@@ -11,8 +11,7 @@ Regenerates the CSV files and figures of this folder (README.md says what each s
 Base case: cases/single-sphere as shipped (r = 2 mm, rho = 7800, linear k_n = 4e6 N/m,
 eps_n = 0, eps_t = 0.8, tangential = "coulomb" with k_t / k_n from eps_t, rotation locked).
 The block is placed at rest on the floor (dem.engine.setup.from_grains) and measured over whole
-drive
-cycles (measure_cycles): the public library, no private copy of the run loop.
+drive cycles (measure_cycles): the public library, no private copy of the run loop.
 """
 
 import argparse

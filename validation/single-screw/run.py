@@ -14,8 +14,7 @@ sum_i mu N_i = mu N, so its centre of mass must follow the point mass. Swept ove
 {15, 25, 45} deg, mu in {0.25, 0.35, 0.6} and Gamma in [0.2, 0.95], flat trough, 60 Hz, linear
 contact k_n = 4e7 N/m per member. ``--tangential``: "coulomb" (default; eps_n = 0 as the paper,
 k_t / k_n derived from eps_t = 0.8, dem.physics.tangential) or "liggghts" (k_t = 2/7 k_n, eps_n =
-0.5:
-the law and contact the recorded results.csv were made with; README.md says why).
+0.5: the law and contact the recorded results.csv were made with; README.md says why).
 
 Each point is run again with rotation free from the same lying start (column
 dem_velocity_norm_free_rotation; not part of the criterion, which is the locked block's).

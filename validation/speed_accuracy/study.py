@@ -2,10 +2,9 @@
 
 A point is one ``dem run`` of a shipped case (``cases/sphere-bed`` or ``cases/screw-trough``)
 with some keys overridden (:func:`dem.scene.case.load_case` ``overrides``), through the same runner
-a
-user calls (:func:`dem.run.runner.run_case`: fill, settle, "auto" settle cycles, 20 measured
-cycles), without frames, on one thread. Two points run at a time (one per core), so every wall
-time is a one-thread time beside one other busy process, the same for every point.
+a user calls (:func:`dem.run.runner.run_case`: fill, settle, "auto" settle cycles, 20 measured
+cycles), without frames, on one thread. Two points run at a time (one per core), so every wall time
+is a one-thread time beside one other busy process, the same for every point.
 
 Finished points are appended to ``runs.jsonl`` in this folder, keyed by their settings, so a
 study reruns only what is missing (``--fresh`` reruns everything it needs). Each study script

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 from dem.io.liggghts.text import fmt
-from dem.kernels.contacts import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
+from dem.kernels.contact import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
 from dem.physics.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
 from dem.scene.resolved import Scene
 from dem.scene.timestep import ContactLaw
@@ -40,7 +40,7 @@ MIN_HERTZ_RESTITUTION = 0.06
 def damping_ratio(restitution: float) -> float:
     """Return the damping ratio zeta of a linear spring-dashpot with restitution e in [0, 1].
 
-    zeta = -beta = -ln(e) / sqrt(ln(e)^2 + pi^2) (:func:`dem.kernels.contacts.damping_beta`, the
+    zeta = -beta = -ln(e) / sqrt(ln(e)^2 + pi^2) (:func:`dem.kernels.contact.damping_beta`, the
     kernels' value), from e = exp(-zeta pi / sqrt(1 - zeta^2)); e = 0 gives critical damping,
     zeta = 1.
     """

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "dem"
+PACKAGE = Path(__file__).resolve().parents[2] / "dem"
 
 #: Bottom to top. The ground is dem's top-level modules other than the command line.
 LAYERS = [
@@ -156,3 +156,11 @@ def test_the_layer_check_fails_on_a_planted_upward_import(tmp_path, where, sourc
     (root / where).write_text(source)
     found = sorted(set(violations(root)) - before)
     assert len(found) == 1 and expected in found[0], found
+
+
+def test_architecture_md_draws_the_package_as_it_is():
+    import tree
+
+    assert tree.drawn() == tree.render(), (
+        "ARCHITECTURE.md's tree differs from the package: python tests/package/tree.py --write"
+    )

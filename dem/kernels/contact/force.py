@@ -1,0 +1,144 @@
+"""One contact's forces: the routine that reads the law's row and history, and the wall rows.
+
+:func:`contact_force` reads the parameter row and the contact's history, calls the sub-models
+(:mod:`dem.kernels.contact.laws`) and writes the history back.
+"""
+
+import numba
+
+from dem.config import (
+    NUMBA_OPTIONS,
+)
+from dem.kernels.contact.laws import (
+    coulomb_tangential,
+    impact_tangential,
+    law_coefficients,
+    liggghts_tangential,
+    rolling_cdt,
+    spring_step,
+)
+from dem.kernels.contact.params import (
+    IMPACT,
+    N_PARAMS,
+    P_IMPACT_CAP,
+    P_IMPACT_RATIO,
+    P_LIMIT_FORCE,
+    P_MASS_T,
+    P_MU,
+    P_MU_ROLL,
+    P_STICK_RATE,
+    P_STICK_ZETA,
+    P_TANGENTIAL,
+    P_WALL_ARM,
+)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def contact_force(
+    model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
+    ci, cj, m_eff, r_eff, hist, k, dt,
+):  # fmt: skip
+    """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
+
+    The array-facing wrapper of the sub-models: it reads the parameters and the contact's
+    history row, calls the scalar sub-models (normal, damping, tangential, rolling) and writes
+    the history back.
+
+    Args:
+        model: Normal law id (:data:`MODELS`).
+        p: Contact parameters, shape (N_PARAMS,).
+        nx, ny, nz: Unit normal from j to i.
+        delta: Overlap > 0, m.
+        vrx, vry, vrz: v_i - v_j, m/s.
+        wix, wiy, wiz, wjx, wjy, wjz: Spins of i and j, rad/s.
+        ci, cj: Lever arms from the centres to the contact point, m.
+        m_eff, r_eff: m*, kg, and R*, m.
+        hist: Contact history, shape (n, width) (:data:`HISTORY_WIDTH`); row k is this contact.
+        k: Row of ``hist``.
+        dt: Time step, s.
+
+    Returns:
+        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, fn): force on i (N), torques on i and j
+        (N m) and the normal force F_n (N).
+
+    """
+    kn, gn, kt, gt = law_coefficients(model, delta, m_eff, r_eff, p)
+    vn = vrx * nx + vry * ny + vrz * nz
+    fn = kn * delta - gn * vn
+    if p[P_LIMIT_FORCE] != 0.0 and fn < 0.0:
+        fn = 0.0
+    # slip velocity at the contact point: tangential part minus (c_i w_i + c_j w_j) x n
+    wx = ci * wix + cj * wjx
+    wy = ci * wiy + cj * wjy
+    wz = ci * wiz + cj * wjz
+    vtx = vrx - vn * nx - (wy * nz - wz * ny)
+    vty = vry - vn * ny - (wz * nx - wx * nz)
+    vtz = vrz - vn * nz - (wx * ny - wy * nx)
+    tangential = p[P_TANGENTIAL]
+    if tangential == IMPACT:
+        ftx, fty, ftz, h0, h1, h2, h3, h4 = impact_tangential(
+            p[P_IMPACT_RATIO], p[P_IMPACT_CAP], p[P_MU], p[P_MASS_T], p[P_STICK_RATE],
+            p[P_STICK_ZETA], nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt,
+            hist[k, 0], hist[k, 1], hist[k, 2], hist[k, 3], hist[k, 4],
+        )  # fmt: skip
+        hist[k, 3] = h3
+        hist[k, 4] = h4
+    else:
+        # tangential spring: increment, then project onto the current tangent plane
+        sx, sy, sz = spring_step(hist[k, 0], hist[k, 1], hist[k, 2], vtx, vty, vtz, nx, ny, nz, dt)
+        f_max = p[P_MU] * abs(fn)
+        if tangential != 0.0:
+            ftx, fty, ftz, h0, h1, h2 = liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
+                                                            vtz)  # fmt: skip
+        else:
+            ftx, fty, ftz, h0, h1, h2 = coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
+                                                           vtz)  # fmt: skip
+    hist[k, 0] = h0
+    hist[k, 1] = h1
+    hist[k, 2] = h2
+    # torques -c n x F_t, plus rolling resistance
+    cx = ny * ftz - nz * fty
+    cy = nz * ftx - nx * ftz
+    cz = nx * fty - ny * ftx
+    ti, tj = rolling_cdt(
+        p[P_MU_ROLL], fn, r_eff, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz,
+        (-ci * cx, -ci * cy, -ci * cz), (-cj * cx, -cj * cy, -cj * cz),
+    )  # fmt: skip
+    return fn * nx + ftx, fn * ny + fty, fn * nz + ftz, ti[0], ti[1], ti[2], tj[0], tj[1], tj[2], fn
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def wall_row(p):
+    """The grain-wall law's parameters: the second row of ``p``, or ``p`` if it holds one law.
+
+    :class:`dem.physics.laws.ContactLaw` packs the grain-grain row, then the grain-wall row.
+    """
+    if p.shape[0] >= 2 * N_PARAMS:
+        return p[N_PARAMS : 2 * N_PARAMS]
+    return p
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def add_wall_contact(
+    model, p, nx, ny, nz, delta, v, omega, i, m, r, hist, row, dt, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """(fx, ..., tz) plus the force and torque of sphere i's contact with a wall or triangle.
+
+    The wall is fixed in the trough frame, of infinite mass and radius: normal n (wall to
+    sphere), overlap delta, m* = m, R* = r, lever arm r - f_w delta (``p[P_WALL_ARM]``),
+    spring in ``hist[row]``.
+    """
+    f = contact_force(
+        model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
+        omega[i, 2], 0.0, 0.0, 0.0, r - p[P_WALL_ARM] * delta, 0.0, m, r, hist, row, dt,
+    )  # fmt: skip
+    return fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
+
+
+#: :func:`contact_force` inlined at numba's IR level, for the pair loop, where a call per pair
+#: (two arrays and twenty scalars) cost about a sixth of the loop; the walls, which call it only
+#: on contact, keep the call (inlining it everywhere doubled the compile time).
+contact_force_inlined = numba.njit(inline="always", **NUMBA_OPTIONS)(contact_force.py_func)
+
+
+# --- time scales of the laws (Python; used to choose and to check the time step) ----------------

@@ -1,0 +1,220 @@
+"""The contact sub-models as numba functions of scalars.
+
+The normal size factor and the four coefficients, the "coulomb", "liggghts" and "impact"
+tangential laws, rolling resistance.
+
+Scalars in, scalars out, so the same functions can run inside GPU kernels; their constants come
+from the parameter array laid out by :mod:`dem.kernels.contact.params`.
+"""
+
+import math
+
+import numba
+
+from dem.config import (
+    NUMBA_OPTIONS,
+)
+from dem.kernels.contact.params import (
+    HERTZ,
+    IMPACT_MAX_PHASE,
+    P_DAMP_N,
+    P_DAMP_N_SCALE,
+    P_DAMP_T,
+    P_DAMP_T_SCALE,
+    P_KN_COEF,
+    P_KT_COEF,
+)
+
+# --- sub-models: scalars in, scalars out (the same functions can run in GPU kernels) -------------
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def normal_scale(normal, delta, r_eff):
+    """Normal sub-model: the contact-size factor a that every coefficient scales with.
+
+    Linear: a = 1 (k_n constant). Hertz: a = sqrt(R* delta), the radius of the contact patch
+    over sqrt(R*), so that k_n = 4/3 Y* a and the tangent stiffness S_n = 2 Y* a.
+    """
+    if normal == HERTZ:
+        return math.sqrt(r_eff * delta)
+    return 1.0
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def law_coefficients(model, delta, m_eff, r_eff, p):
+    """(k_n, gamma_n, k_t, gamma_t) of normal law ``model`` at overlap delta.
+
+    Every coefficient is a constant of the sub-models (:func:`make_params`) times the normal
+    sub-model's size factor a (:func:`normal_scale`):
+
+        k_n = C_kn a,  gamma_n = C_dn sqrt(B_n a m*),  k_t = C_kt a,  gamma_t = C_dt sqrt(B_t a m*)
+
+    linear: C_kn = k_n, C_dn = -2 beta, B_n = k_n, C_kt = kappa k_n; "liggghts" C_dt = C_dn,
+    B_t = B_n (gamma_t = gamma_n); "coulomb" C_dt = 2 zeta_t, B_t = k_t f_t. Hertz: C_kn = 4/3 Y*,
+    C_dn = -2 sqrt(5/6) beta sqrt(2 Y*), B_n = 1 (gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*));
+    "liggghts" C_kt = 8 G*, C_dt = -2 sqrt(5/6) beta sqrt(8 G*); "coulomb" C_kt = 2 kappa Y*,
+    C_dt = 2 zeta_t sqrt(2 kappa Y* f_t); B_t = 1. The tangential dashpot shares the normal
+    one's square root where B_t = B_n: two square roots per contact.
+    """
+    a = normal_scale(model, delta, r_eff)
+    kn = p[P_KN_COEF] * a
+    qn = math.sqrt(p[P_DAMP_N_SCALE] * a * m_eff)
+    gn = p[P_DAMP_N] * qn
+    kt = p[P_KT_COEF] * a
+    if p[P_DAMP_T_SCALE] == p[P_DAMP_N_SCALE]:
+        return kn, gn, kt, p[P_DAMP_T] * qn
+    return kn, gn, kt, p[P_DAMP_T] * math.sqrt(p[P_DAMP_T_SCALE] * a * m_eff)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Tangential sub-model "coulomb": total force capped at f_max = mu |F_n|, spring reset.
+
+    Returns (F_t, s) as six floats.
+    """
+    ftx = -kt * sx - gt * vtx
+    fty = -kt * sy - gt * vty
+    ftz = -kt * sz - gt * vtz
+    f_mag = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    if f_mag > f_max:
+        ratio = f_max / f_mag
+        ftx *= ratio
+        fty *= ratio
+        ftz *= ratio
+        if kt > 0.0:
+            sx = -(ftx + gt * vtx) / kt
+            sy = -(fty + gt * vty) / kt
+            sz = -(ftz + gt * vtz) / kt
+    return ftx, fty, ftz, sx, sy, sz
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty, vtz):
+    """Tangential sub-model "liggghts": spring capped at f_max, dashpot only while sticking.
+
+    Returns (F_t, s) as six floats.
+    """
+    ftx = -kt * sx
+    fty = -kt * sy
+    ftz = -kt * sz
+    s_mag = math.sqrt(sx * sx + sy * sy + sz * sz)
+    f_shear = kt * s_mag
+    if f_shear > f_max:
+        if s_mag > 0.0:
+            ratio = f_max / f_shear
+            ftx *= ratio
+            fty *= ratio
+            ftz *= ratio
+            sx = -ftx / kt
+            sy = -fty / kt
+            sz = -ftz / kt
+        else:
+            ftx = 0.0
+            fty = 0.0
+            ftz = 0.0
+    else:
+        ftx -= gt * vtx
+        fty -= gt * vty
+        ftz -= gt * vtz
+    return ftx, fty, ftz, sx, sy, sz
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def spring_step(s0, s1, s2, vtx, vty, vtz, nx, ny, nz, dt):
+    """Spring s plus v_t dt, projected onto the tangent plane of n: (s_x, s_y, s_z)."""
+    sx = s0 + vtx * dt
+    sy = s1 + vty * dt
+    sz = s2 + vtz * dt
+    sn = sx * nx + sy * ny + sz * nz
+    return sx - sn * nx, sy - sn * ny, sz - sn * nz
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def impact_tangential(
+    impact_ratio, impact_cap, mu, mass_t, stick_rate, stick_zeta,
+    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4,
+):  # fmt: skip
+    """Tangential sub-model "impact" (module docstring): force and the contact's new history.
+
+    History (5 floats): h3 is the phase (0 a new contact, 1 + theta an impact, theta the radians
+    of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring), h4 the
+    normal velocity v_n = v_r . n of the previous step, (h0, h1, h2) the impact's force ratio
+    vector c (impact) or the stick's spring s (enduring). Parameters: ``impact_ratio``
+    (1 - eps_t) / (1 + e_n), ``impact_cap`` the largest c, ``mu``, ``mass_t`` f_t,
+    ``stick_rate`` alpha and ``stick_zeta`` of the stick.
+
+    Returns (F_t, h) as eight floats.
+    """
+    fnp = fn if fn > 0.0 else 0.0
+    f_max = mu * fnp
+    phase = h3
+    if phase == 0.0:
+        # first touch: an approach makes an impact that takes (1 - eps_t) of the slip velocity
+        # through a tangential force c F_n, c = (1 - eps_t) |v_t| / ((1 + e_n) |v_n|), capped
+        # where the rigid impact's Coulomb bound mu (1 + eps_n) m |v_n| is reached
+        vt = math.sqrt(vtx * vtx + vty * vty + vtz * vtz)
+        h0 = 0.0
+        h1 = 0.0
+        h2 = 0.0
+        if vn < 0.0:
+            phase = 1.0
+            if vt > 0.0:
+                ratio = impact_ratio * vt / -vn
+                if ratio > impact_cap:
+                    ratio = impact_cap
+                h0 = ratio * vtx / vt
+                h1 = ratio * vty / vt
+                h2 = ratio * vtz / vt
+        else:
+            phase = -1.0
+    m_t = mass_t * m_eff
+    ks = m_t * stick_rate * stick_rate / (dt * dt)
+    gs = 2.0 * stick_zeta * stick_rate * m_t / dt
+    if phase > 0.0:
+        # impact: F_t = -F_n c, c projected onto the tangent plane; ends when the separating
+        # speed stops growing (the contact force is back to the external load), when the slip
+        # along c has stopped, or after IMPACT_MAX_PHASE
+        cn = h0 * nx + h1 * ny + h2 * nz
+        cx = h0 - cn * nx
+        cy = h1 - cn * ny
+        cz = h2 - cn * nz
+        ftx = -fnp * cx
+        fty = -fnp * cy
+        ftz = -fnp * cz
+        theta = phase - 1.0 + dt * math.sqrt(kn / m_eff)
+        slip = vtx * cx + vty * cy + vtz * cz
+        over = vn > 0.0 and vn <= h4
+        stuck = slip <= 0.0 and cx * cx + cy * cy + cz * cz > 0.0
+        if not (over or stuck or theta > IMPACT_MAX_PHASE):
+            return ftx, fty, ftz, cx, cy, cz, 1.0 + theta, vn
+        # switch to the enduring stick, its spring set so that the force is continuous
+        return (ftx, fty, ftz, -(ftx + gs * vtx) / ks, -(fty + gs * vty) / ks,
+                -(ftz + gs * vtz) / ks, -1.0, vn)  # fmt: skip
+    # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
+    sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)
+    ftx, fty, ftz, sx, sy, sz = coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
+    return ftx, fty, ftz, sx, sy, sz, -1.0, vn
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def rolling_cdt(mu_roll, fn, r_eff, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz, ti, tj):
+    """Rolling sub-model (LIGGGHTS ``cdt``): the torques ``ti`` on i and ``tj`` on j plus its own.
+
+    tau_i -= mu_r |F_n| R* w_r / |w_r|, tau_j += the same, with w_r = omega_i - omega_j
+    without its normal part; nothing when mu_r = 0 or w_r = 0. ``ti`` and ``tj`` are 3-tuples;
+    returns the two updated 3-tuples.
+    """
+    if mu_roll > 0.0:
+        rx = wix - wjx
+        ry = wiy - wjy
+        rz = wiz - wjz
+        rn = rx * nx + ry * ny + rz * nz
+        rx -= rn * nx
+        ry -= rn * ny
+        rz -= rn * nz
+        r_mag = math.sqrt(rx * rx + ry * ry + rz * rz)
+        if r_mag > 0.0:
+            scale = mu_roll * abs(fn) * r_eff / r_mag
+            ti = (ti[0] - scale * rx, ti[1] - scale * ry, ti[2] - scale * rz)
+            tj = (tj[0] + scale * rx, tj[1] + scale * ry, tj[2] + scale * rz)
+    return ti, tj
