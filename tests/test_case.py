@@ -7,7 +7,6 @@ from pathlib import Path
 
 import pytest
 
-import dem.scene.case
 from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.scene.case import Case, load_case
@@ -194,7 +193,7 @@ def test_tangential_keys(tmp_path):
 
 
 def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_path):
-    from dem.kernels.contacts import P_WALL_ARM
+    from dem.kernels.contact import P_WALL_ARM
     from dem.scene.timestep import ContactLaw
 
     case = load_case(write_case(tmp_path, with_changes({})))
@@ -246,22 +245,42 @@ def test_periodic_length_must_hold_a_grain_and_its_skin_twice(tmp_path):
         load_case(write_case(tmp_path, tables))
 
 
-def test_unsupported_shape_is_easy_to_lift(tmp_path, monkeypatch):
-    tables = with_changes(
-        {
-            "particles.radius": None,
-            "particles.shape": "screw",
-            "particles.length": 0.02,
-            "particles.shank_radius": 0.0015,
-            "particles.head_radius": 0.003,
-        }
-    )
-    path = write_case(tmp_path, tables)
-    monkeypatch.setattr(dem.scene.case, "SUPPORTED_SHAPES", ("sphere",))
-    with pytest.raises(InputError, match="not supported yet"):
-        load_case(path)
-    monkeypatch.setattr(dem.scene.case, "SUPPORTED_SHAPES", ("sphere", "screw"))
-    assert load_case(path).particles.head_radius == 0.003
+def test_the_schema_is_consistent_with_the_quantities_and_the_law_registry():
+    """Every number has its range in dem.quantities, every default is one of its choices, the
+    owners are shapes or laws, and the contact owners refuse exactly the registry's foreign keys."""
+    from dem.physics import laws
+    from dem.quantities import QUANTITIES
+    from dem.scene.schema import CONTACT, CONTACT_MODELS, SCHEMA, SHAPES, TANGENTIAL_CONVENTIONS
+    from dem.scene.tomltable import ALL
+
+    selectors = {ALL, *SHAPES, *CONTACT_MODELS, *TANGENTIAL_CONVENTIONS}
+    for table, keys in SCHEMA.items():
+        assert len({k.name for k in keys}) == len(keys), table
+        for k in keys:
+            assert (k.quantity in QUANTITIES) == k.numeric, f"{table}.{k.name}"
+            if k.kind == "choice":
+                assert k.default in k.choices, f"{table}.{k.name}"
+            if k.numeric and isinstance(k.default, int | float):
+                assert QUANTITIES[k.quantity].accepts(k.default), f"{table}.{k.name}"
+            for owner in k.owners:
+                assert set(owner.split("+")) <= selectors, f"{table}.{k.name}: {owner}"
+    for model in CONTACT_MODELS:
+        for tangential in TANGENTIAL_CONVENTIONS:
+            foreign = tuple(k.name for k in CONTACT if not k.owned((model, tangential)))
+            assert foreign == laws.foreign_keys(model, tangential), (model, tangential)
+
+
+@pytest.mark.parametrize(
+    "shape, key, owner",
+    [("sphere", "length", "screw"), ("screw", "template", "clump"), ("clump", "radius", "sphere"),
+     ("sphere", "mass", "screw")],
+)  # fmt: skip
+def test_a_key_of_another_shape_is_refused_naming_its_shape(tmp_path, shape, key, owner):
+    changes = {"particles.shape": shape, "particles.radius": None, f"particles.{key}": 0.01}
+    tables = with_changes(changes)
+    with pytest.raises(InputError, match=f"a key of shape = '{owner}', not of '{shape}'") as info:
+        load_case(write_case(tmp_path, tables))
+    assert info.value.key == f"particles.{key}"
 
 
 def test_screw_and_clump_build_their_template(tmp_path):

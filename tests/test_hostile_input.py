@@ -1,10 +1,13 @@
 """The door's contract as data: hostile values for every key end in exit 2, one line, nothing.
 
-Every numeric key of every case table gets the values a hostile but realistic user types:
-non-finite numbers, 1e300 and -1e300 (which used to pass the range checks and overflow deep in
-a run), a string, a boolean and a table. ``dem run`` must exit 2 with one line on stderr that
-names the key, print no traceback, and write nothing (no output folder). A new key is covered
-by adding it to :data:`KEYS`.
+Every numeric key of every case table (each numeric row of the schema,
+:data:`dem.scene.schema.SCHEMA`) gets the values a hostile but realistic user types: non-finite
+numbers, 1e300 and -1e300 (which used to pass the range checks and overflow deep in a run), a
+string, a boolean and a table. ``dem run`` must exit 2 with one line on stderr that names the
+key, print no traceback, and write nothing (no output folder). Each key is set in a valid case
+of a shape and law that read it (:data:`BASES`, by the row's first owner), so the value meets
+the key's own checks, not the refusal of a foreign key. A new key is covered by its row in the
+schema.
 
 A link planted in the output folder under a name dem writes (the lock, ``frames``, results.h5,
 ...) is hostile input too: refused the same way, and nothing written, truncated or deleted
@@ -15,27 +18,9 @@ import pytest
 from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
+from dem.scene.schema import SCHEMA
+from dem.scene.tomltable import ALL
 
-#: (table.key, a valid case text it is set in): numeric keys of the case file.
-SPHERE_KEYS = [
-    "trough.length", "trough.width", "trough.inclination",
-    "drive.frequency", "drive.angle", "drive.amplitude", "drive.second_amplitude",
-    "drive.second_angle", "drive.second_phase", "drive.ramp_cycles",
-    "material.density", "material.friction", "material.restitution_normal",
-    "material.restitution_tangential", "material.rolling_friction",
-    "wall.friction", "wall.restitution_normal", "wall.restitution_tangential",
-    "wall.rolling_friction",
-    "contact.youngs_modulus", "contact.poisson_ratio", "contact.tangential_stiffness_ratio",
-    "contact.tangential_damping_ratio",
-    "particles.count", "particles.radius",
-    "run.cycles", "run.settle_cycles", "run.timestep", "run.seed",
-    "output.frames_per_cycle",
-    "feeder.feed_rate", "feeder.feed_length",
-]  # fmt: skip
-SCREW_KEYS = [
-    "particles.length", "particles.shank_radius", "particles.head_radius", "particles.mass",
-    "particles.max_bumpiness",
-]  # fmt: skip
 SCREW_CASE = (
     SMALL_CASE.replace("density = 7800.0\n", "")
     .replace(
@@ -45,6 +30,37 @@ SCREW_CASE = (
     )
     .replace("length = 0.03", "length = 0.08")
 )
+#: A clump of two spheres (its template file, :data:`TEMPLATE`, written beside the case).
+CLUMP_CASE = (
+    SMALL_CASE.replace("density = 7800.0\n", "")
+    .replace(
+        'shape = "sphere"\ncount = 120\nradius = 0.002',
+        'shape = "clump"\ncount = 10\ntemplate = "grain.txt"\nmass = 0.0005',
+    )
+    .replace("length = 0.03", "length = 0.06")
+)
+TEMPLATE = "0.0 0.0 0.0 0.002\n0.002 0.0 0.0 0.002\n"
+LINEAR_CASE = SMALL_CASE.replace(
+    'model = "hertz_mindlin"\nyoungs_modulus = 5.0e7', 'model = "linear"\nstiffness = 2000.0'
+)
+#: A valid case in which each owner's keys are read ("all": every case).
+BASES = {
+    ALL: SMALL_CASE,
+    "sphere": SMALL_CASE,
+    "screw": SCREW_CASE,
+    "clump": CLUMP_CASE,
+    "hertz_mindlin": SMALL_CASE,
+    "linear": LINEAR_CASE,
+    "coulomb": SMALL_CASE.replace("[contact]", '[contact]\ntangential = "coulomb"'),
+    "liggghts+linear": LINEAR_CASE.replace("[contact]", '[contact]\ntangential = "liggghts"'),
+}
+#: Keys read only beside others: the keys set with them (drive.amplitude removed: exactly one
+#: of it and throw_number; the second component's angle and phase need its amplitude).
+BESIDE = {
+    "drive.throw_number": {"drive.amplitude": None},
+    "drive.second_angle": {"drive.second_amplitude": "0.0002"},
+    "drive.second_phase": {"drive.second_amplitude": "0.0002", "drive.second_angle": "60.0"},
+}
 HOSTILE = {
     "nan": "nan",
     "inf": "inf",
@@ -55,13 +71,17 @@ HOSTILE = {
     "bool": "true",
     "table": "{ a = 1 }",
 }
-KEYS = [(k, SMALL_CASE) for k in SPHERE_KEYS] + [(k, SCREW_CASE) for k in SCREW_KEYS]
+#: (table.key, the owner whose base case it is set in): every numeric key of the case file.
+KEYS = [
+    (f"{table}.{k.name}", k.owners[0]) for table, keys in SCHEMA.items() for k in keys if k.numeric
+]
 
 
-def _set(text: str, key: str, value: str) -> str:
-    """The case text with ``table.key = value`` (the key replaced, or added to its table)."""
+def _set(text: str, key: str, value: str | None) -> str:
+    """The case text with ``table.key = value`` (the key replaced, or added to its table; None:
+    the key removed)."""
     table, name = key.split(".")
-    lines, out, in_table, done = text.splitlines(), [], False, False
+    lines, out, in_table, done = text.splitlines(), [], False, value is None
     for line in lines:
         stripped = line.strip()
         if stripped.startswith("["):
@@ -70,7 +90,8 @@ def _set(text: str, key: str, value: str) -> str:
                 done = True
             in_table = stripped == f"[{table}]"
         if in_table and stripped.split("=")[0].strip() == name:
-            out.append(f"{name} = {value}")
+            if value is not None:
+                out.append(f"{name} = {value}")
             done = True
             continue
         out.append(line)
@@ -79,23 +100,45 @@ def _set(text: str, key: str, value: str) -> str:
     return "\n".join(out) + "\n"
 
 
-def test_the_screw_case_of_the_table_is_valid_and_set_replaces_keys(tmp_path, capsys):
-    """The table's base cases load, and _set writes the hostile value where the key lives."""
+def _case(directory, key: str, value: str, owner: str):
+    """Write the base case of ``owner`` with ``key = value`` (and its :data:`BESIDE` keys)."""
+    text = BASES[owner]
+    for other, other_value in BESIDE.get(key, {}).items():
+        text = _set(text, other, other_value)
+    write_case(directory, _set(text, key, value))
+    if owner == "clump":
+        (directory / "grain.txt").write_text(TEMPLATE)
+    return directory
+
+
+def test_every_owner_has_a_base_case_that_loads_and_reads_its_keys(tmp_path):
+    """Each base case loads and chooses its owner's shape and laws; _set replaces, adds and
+    removes keys where they live."""
     from dem.scene.case import load_case
 
-    assert load_case(write_case(tmp_path / "s", SCREW_CASE)).particles.shape == "screw"
+    owners = {o for keys in SCHEMA.values() for k in keys for o in k.owners}
+    assert owners <= set(BASES), owners - set(BASES)
+    for owner in BASES:
+        case = load_case(_case(tmp_path / owner, "run.seed", "3", owner))
+        chosen = {case.particles.shape, case.contact.model, case.contact.tangential}
+        assert owner == ALL or set(owner.split("+")) <= chosen, owner
+    drive = load_case(_case(tmp_path / "second", "drive.second_phase", "30.0", ALL)).drive
+    assert (drive.second_amplitude, drive.second_angle, drive.second_phase) == (2e-4, 60.0, 30.0)
+    drive = load_case(_case(tmp_path / "gamma", "drive.throw_number", "2.0", ALL)).drive
+    assert drive.given == "throw_number"
     text = _set(SMALL_CASE, "material.friction", "nan")
     assert "friction = nan" in text and "friction = 0.35" not in text
+    assert "friction" not in _set(SMALL_CASE, "material.friction", None)
     case = load_case(write_case(tmp_path / "f", _set(SMALL_CASE, "feeder.feed_rate", "0.01")))
     assert case.feeder.feed_rate == 0.01
 
 
 @pytest.mark.parametrize("label", list(HOSTILE))
-@pytest.mark.parametrize("key, base", KEYS, ids=[k for k, _ in KEYS])
+@pytest.mark.parametrize("key, owner", KEYS, ids=[k for k, _ in KEYS])
 def test_hostile_value_is_refused_with_one_line_and_nothing_written(
-    tmp_path, capsys, key, base, label
+    tmp_path, capsys, key, owner, label
 ):
-    case_dir = write_case(tmp_path / "case", _set(base, key, HOSTILE[label]))
+    case_dir = _case(tmp_path / "case", key, HOSTILE[label], owner)
     out = tmp_path / "out"
     try:
         code = main(["run", str(case_dir), "--out", str(out)])

@@ -2,7 +2,10 @@
 
 Each getter reads one key, checks its type and range, and raises
 :class:`dem.errors.InputError` naming the dotted key (``drive.angle``), the value as written,
-what is allowed and the file; an unknown key is refused with the closest known name.
+what is allowed and the file; an unknown key is refused with the closest known name. A table
+read with its rows (:class:`Key`, the schema of :mod:`dem.scene.schema`) reads each key by name
+(:meth:`Table.read`: type, range, default) and refuses the keys of a shape or law not chosen
+(:meth:`Table.refuse_foreign`).
 """
 
 from __future__ import annotations
@@ -10,6 +13,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +22,55 @@ from dem.quantities import QUANTITIES
 
 #: Default meaning "the key must be given".
 REQUIRED = object()
+#: Owner of a key that every shape and law reads.
+ALL = "all"
+_ROW = object()  # Table.read's default: the row's
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A default the reader computes from other values (``how`` says from which)."""
+
+    how: str
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a table: how it is read, its range, its default and who reads it.
+
+    Attributes:
+        name: Key name within its table (``angle``).
+        kind: ``"number"`` (a float; an int is accepted), ``"whole"`` (an int), ``"boolean"``,
+            ``"choice"`` (a string of ``choices``) or ``"path"`` (a file relative to the case
+            directory, read as optional: a reader that needs one says why it is missing).
+        quantity: Row of :data:`dem.quantities.QUANTITIES` giving the range of a number or
+            whole number (None for the other kinds).
+        default: The value when the key is absent: :data:`REQUIRED`, a value (None: unset), or
+            a :class:`Derived` default, which the reader passes to :meth:`Table.read`.
+        owners: :data:`ALL`, or the selector values under which the key is read: a shape
+            (``"screw"``), a law (``"coulomb"``), or several that must all be chosen joined by
+            ``+`` (``"liggghts+linear"``). Under any other choice the key is refused.
+        choices: The strings a choice accepts, in the order errors list them.
+        auto: True: the string ``"auto"`` is accepted too and read as None.
+
+    """
+
+    name: str
+    kind: str
+    quantity: str | None = None
+    default: Any = REQUIRED
+    owners: tuple[str, ...] = (ALL,)
+    choices: tuple[str, ...] = ()
+    auto: bool = False
+
+    @property
+    def numeric(self) -> bool:
+        """Whether the key holds a number or a whole number."""
+        return self.kind in ("number", "whole")
+
+    def owned(self, chosen: tuple[str, ...]) -> bool:
+        """Whether the key is read when the table's selectors have the values ``chosen``."""
+        return any(o == ALL or set(o.split("+")) <= set(chosen) for o in self.owners)
 
 
 def suggest(name: str, known: list[str] | tuple[str, ...]) -> str:
@@ -30,18 +83,30 @@ def suggest(name: str, known: list[str] | tuple[str, ...]) -> str:
 class Table:
     """One TOML table being read: typed getters that raise InputError with the dotted key."""
 
-    def __init__(self, name: str, data: dict[str, Any], source: str, directory: Path):
+    def __init__(
+        self,
+        name: str,
+        data: dict[str, Any],
+        source: str,
+        directory: Path,
+        keys: tuple[Key, ...] = (),
+    ):
         self.name = name
         self.data = data
         self.source = source
         self.directory = directory
+        self.keys = {k.name: k for k in keys}
 
     def error(self, key: str, value: object, allowed: str) -> InputError:
         """An InputError for ``key`` of this table (not raised: the caller raises it)."""
         return InputError(f"{self.name}.{key}", value, allowed, source=self.source)
 
-    def check_known(self, known: tuple[str, ...]) -> None:
-        """Refuse keys that the table does not define (typos would otherwise be ignored)."""
+    def check_known(self, known: tuple[str, ...] | None = None) -> None:
+        """Refuse keys that the table does not define (typos would otherwise be ignored).
+
+        ``known``: the key names; None: those of the table's rows.
+        """
+        known = tuple(self.keys) if known is None else known
         for key, value in self.data.items():
             if key not in known:
                 raise self.error(
@@ -130,3 +195,40 @@ class Table:
         if not resolved.is_file():
             raise self.error(key, value, f"an existing file (no file at {resolved})")
         return resolved
+
+    def read(self, name: str, default: Any = _ROW) -> Any:
+        """Read the key ``name`` as its row says (kind, range, choices, ``"auto"``).
+
+        ``default``: the value when the key is absent; left out, the row's (a :class:`Derived`
+        default must be given here).
+        """
+        key = self.keys[name]
+        if default is _ROW:
+            default = key.default
+            if isinstance(default, Derived):
+                raise TypeError(f"{self.name}.{name}: its default is derived ({default.how})")
+        if key.auto and self.data.get(name) == "auto":
+            return None
+        if key.kind == "number":
+            q = QUANTITIES[key.quantity]
+            return self.number(name, default, q.accepts, q.allowed)
+        if key.kind == "whole":
+            q = QUANTITIES[key.quantity]
+            return self.integer(name, default, q.accepts, q.allowed)
+        if key.kind == "boolean":
+            return self.boolean(name, default)
+        if key.kind == "choice":
+            return self.choice(name, key.choices, default)
+        return self.path(name)
+
+    def refuse_foreign(self, chosen: tuple[str, ...], why: Callable[[str], str]) -> None:
+        """Refuse a key given here that no owner among ``chosen`` reads.
+
+        Owners are taken in the order the rows first name them, and each owner's keys in row
+        order; ``why(owner)`` is the allowed text of the error for a key of ``owner``.
+        """
+        owners = dict.fromkeys(o for k in self.keys.values() for o in k.owners if o != ALL)
+        for owner in owners:
+            for key in self.keys.values():
+                if owner in key.owners and key.name in self.data and not key.owned(chosen):
+                    raise self.error(key.name, self.data[key.name], why(owner))
