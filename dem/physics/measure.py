@@ -152,7 +152,7 @@ def pooled(means, stderrs) -> Pooled:
     (IntHout, Ioannidis and Borm 2014, BMC Med. Res. Methodol. 14: 25; Roever, Knapp and Friede
     2015, ibid. 15: 99). ``stderr`` is its half-width over 1.96. On synthetic replicas (2-10
     runs, spread 0-4 times the runs' errors) it covers the true mean in 94.5-99.3 % of sets
-    (tests/test_measure.py). One run: its own error, 1.96 s_1,
+    (tests/physics/test_measure.py). One run: its own error, 1.96 s_1,
     which excludes the fill-to-fill spread. Runs without a finite error (one cycle) count with
     the spread of the others alone (s_i = 0).
     """

@@ -10,8 +10,8 @@ trough's motion along x and along z are sinusoids of different phase,
 and the point mass is stepped in time instead (Moreau-Jean,
 :func:`dem.pointmass.stepped.step_motion`), with the same phases (rest, sliding, flight) and the
 same landing law (the paper's Eq. 12: u <- eps_t u, w <- -eps_n w). For a line drive the two
-methods agree to the stepping error (tests/test_drive.py). The start-up ramp is a transient and
-does not enter the steady state this returns.
+methods agree to the stepping error (tests/physics/test_drive.py). The start-up ramp is a
+transient and does not enter the steady state this returns.
 """
 
 from __future__ import annotations

@@ -397,7 +397,7 @@ def advise_ladder(case, data, kind, advice) -> None:
                f"--inclination {case.trough.inclination:g} "
                f"--eps-t {m.restitution_tangential:g} "
                f"--eps-n {m.restitution_normal:g}")  # fmt: skip
-    if d.second_amplitude > 0.0:  # the event-driven command knows the line drive only
+    if not d.is_single:  # the event-driven command knows the line drive only
         command = ("dem.pointmass.elliptic.velocity on the case's drive; its summary.json "
                    "gives it as pointmass_velocity_norm")  # fmt: skip
     pm = data["ladder"]["point mass"]

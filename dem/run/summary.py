@@ -139,7 +139,7 @@ def pointmass_reference(case) -> tuple[float, str]:
     from dem import pointmass
 
     m = case.wall_material  # the point mass touches the floor only
-    if case.drive.second_amplitude > 0.0:
+    if not case.drive.is_single:
         from dem.pointmass import elliptic
 
         r = elliptic.velocity(
@@ -165,7 +165,7 @@ def pointmass_bounded(case) -> float | None:
     """
     from dem import pointmass
 
-    if case.drive.second_amplitude > 0.0:
+    if not case.drive.is_single:
         return None
     m = case.wall_material  # the point mass touches the floor only
     return pointmass.velocity(
@@ -178,7 +178,7 @@ def components(case) -> list[dict]:
     """The drive's components as the summary lists them (angles and phase in degrees)."""
     d = case.drive
     out = [{"amplitude": d.amplitude, "angle": d.angle, "phase": 0.0}]
-    if d.second_amplitude > 0.0:
+    if not d.is_single:
         out.append({"amplitude": d.second_amplitude, "angle": d.second_angle,
                     "phase": d.second_phase})  # fmt: skip
     return out

@@ -4,7 +4,7 @@ Each row (:class:`dem.scene.tomltable.Key`) names a key, how it is read, the qua
 :data:`dem.quantities.QUANTITIES` that sets its range, its default, and who reads it: every case
 (``"all"``), or the grain shapes or contact laws that do. The readers of :mod:`dem.scene.case`
 read every key through its row, a key of a shape or law not chosen is refused by walking the rows
-(:meth:`dem.scene.tomltable.Table.refuse_foreign`), and ``tests/test_hostile_input.py`` sends
+(:meth:`dem.scene.tomltable.Table.refuse_foreign`), and ``tests/scene/test_hostile_input.py`` sends
 hostile values to every numeric row: a new key is one row here, its range one row in
 :mod:`dem.quantities`, and a field of its spec in :mod:`dem.scene.spec`. The owners of the
 ``[contact]`` coefficients are taken from the contact-law registry (:mod:`dem.physics.laws`),

@@ -12,6 +12,7 @@ degrees (as in the file) and are converted to radians by the code that uses them
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
@@ -78,10 +79,15 @@ class DriveSpec:
         return drive.omega(self.frequency)
 
     @property
+    def is_single(self) -> bool:
+        """Whether this is the paper's drive: one straight-line component (no second one)."""
+        return self.second_amplitude == 0.0
+
+    @functools.cached_property
     def motion(self) -> drive.Motion:
         """The trough's motion s(t) (:class:`dem.physics.drive.Motion`)."""
         components = [drive.Component(self.amplitude, math.radians(self.angle))]
-        if self.second_amplitude > 0.0:
+        if not self.is_single:
             components.append(
                 drive.Component(
                     self.second_amplitude,
@@ -94,7 +100,7 @@ class DriveSpec:
     @property
     def elliptical(self) -> bool:
         """Whether the trough moves on an ellipse (two components out of phase), not a line."""
-        return self.second_amplitude > 0.0 and not self.motion.is_line
+        return not self.is_single and not self.motion.is_line
 
     @property
     def velocity_scale(self) -> float:
@@ -103,14 +109,14 @@ class DriveSpec:
         |X| omega is the peak trough speed along the trough
         (:attr:`dem.physics.drive.Motion.velocity_scale`).
         """
-        if self.second_amplitude == 0.0:
+        if self.is_single:
             return drive.drive_velocity_from_omega(self.amplitude, self.omega, self.angle)
         return self.motion.velocity_scale
 
     @property
     def peak_speed(self) -> float:
         """Largest trough speed over a cycle, m/s (A omega for the paper's drive)."""
-        if self.second_amplitude == 0.0:
+        if self.is_single:
             return self.amplitude * self.omega
         return self.motion.peak_speed
 
@@ -119,7 +125,7 @@ class DriveSpec:
 
         ``inclination`` alpha in degrees (:meth:`dem.physics.drive.Motion.throw_number`).
         """
-        if self.second_amplitude == 0.0:
+        if self.is_single:
             return self.throw_number
         return self.motion.throw_number(inclination)
 

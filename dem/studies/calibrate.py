@@ -167,7 +167,7 @@ def landings(case, cycles: int = 40, transient: int = 60) -> np.ndarray:
     """
     d, m = case.drive, case.wall_material  # the point mass's landings: the floor's
     out = np.zeros((cycles * 8, 2))
-    if d.second_amplitude > 0.0:  # two components: the point mass on the same motion
+    if not d.is_single:  # two components: the point mass on the same motion
         args, length = elliptic.stepping_args(d.motion, case.trough.inclination)
         k, _ = step_motion(
             *args, m.friction, m.restitution_tangential, m.restitution_normal, LANDING_STEPS,

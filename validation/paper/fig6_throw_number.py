@@ -18,7 +18,7 @@ from csv_output import write_csv  # noqa: E402
 from dem.pointmass import velocities  # noqa: E402
 from dem.pointmass.sweep import sweep  # noqa: E402
 
-TESTS = Path(__file__).resolve().parents[2] / "tests"
+TESTS = Path(__file__).resolve().parents[2] / "tests" / "oracles"
 
 FIG6 = {"angle": 25.0, "friction": 0.35, "eps_t": (0.2, 0.5, 0.8), "eps_n": 0.0}
 
@@ -27,7 +27,7 @@ GAMMA_DOUBLING = math.sqrt(4.0 + math.pi**2)  # ... up to the period doubling
 
 
 def brute(params, **kwargs):
-    """The tests' independent time-stepping twin (tests/naive_pointmass.py, loaded by path)."""
+    """The tests' time-stepping twin (tests/oracles/naive_pointmass.py, loaded by path)."""
     name = "naive_pointmass"
     if name not in sys.modules:
         spec = importlib.util.spec_from_file_location(name, TESTS / f"{name}.py")

@@ -43,7 +43,7 @@ from dem import provenance
 from dem.config import GRAVITY
 
 HERE = Path(__file__).resolve().parent
-# the figures' inputs and the tests' oracles, re-exported for tests/test_validation_paper.py
+# the figures' inputs and the tests' oracles, for tests/pointmass/test_validation_paper.py
 __all__ = ["FIG2", "FIG6", "FIG7", "FIG8", "backward_upper_branch", "normal_landings", "run"]
 
 

@@ -7,15 +7,15 @@ Run from the repository root (about 1-2 minutes on 2 cores; nothing is asserted)
 1. The paper's Fig. 7 sweep (Gamma = 1.8, mu in {0.25, 0.35, 0.60}, 161 angles from 1 to
    89 deg: 483 points) through :func:`dem.pointmass.sweep.sweep`, timed after a warm-up call
    that compiles the kernels: best and median of ``--repeats`` runs.
-2. The brute-force twin of the tests (``tests/naive_pointmass.py``: fixed-step Moreau time
+2. The brute-force twin of the tests (``tests/oracles/naive_pointmass.py``: fixed-step Moreau time
    stepping, first order in the step) on the same 483 points, against the event-driven result
    (exact to about 1e-9). Step counts per cycle run up a geometric ladder; the coarsest count
    from which on the maximum absolute error in v / (A omega cos phi) stays within ``--target``
    is timed (warm, best of 3), and the speed-up is its time over the event-driven time.
    Each brute-force run skips 1.5 times the cycles the model needed to close its orbit plus
-   100, then averages 48 cycles (as in tests/test_pointmass.py).
+   100, then averages 48 cycles (as in tests/pointmass/test_pointmass.py).
 3. The brute force's error at the tests' 8000 steps per cycle, on the Fig. 7 sweep and on the
-   tests' own grid (``tests/test_pointmass.py::_grid``, periodic points).
+   tests' own grid (``tests/pointmass/test_pointmass.py::_grid``, periodic points).
 
 Prints a table and writes ``validation/performance/pointmass.json``.
 """
@@ -43,9 +43,10 @@ TESTS = HERE.parent.parent / "tests"
 
 
 def from_tests(name: str):
-    """The module tests/NAME.py, loaded by its path (tests/ is not a package)."""
+    """The module tests/FOLDER/NAME.py, loaded by its path (tests/ is not a package)."""
     if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, TESTS / f"{name}.py")
+        path = next(TESTS.rglob(f"{name}.py"))
+        spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         spec.loader.exec_module(module)

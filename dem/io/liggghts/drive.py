@@ -62,7 +62,7 @@ def drive_variables(d, gx0: float, gz0: float) -> list[str]:
     """
     w = d.omega
     phi = math.radians(d.angle)
-    if d.second_amplitude == 0.0 and d.ramp_cycles == 0.0:
+    if d.is_single and d.ramp_cycles == 0.0:
         peak = d.amplitude * w**2
         return [
             f"variable drive equal {fmt(peak)}*sin({fmt(w)}*v_tau)",
@@ -84,7 +84,7 @@ def drive_variables(d, gx0: float, gz0: float) -> list[str]:
     else:
         cs, cc = "1.0", "0.0"
     comps = [(d.amplitude, phi, 0.0)]
-    if d.second_amplitude > 0.0:
+    if not d.is_single:
         comps.append(
             (d.second_amplitude, math.radians(d.second_angle), math.radians(d.second_phase))
         )

@@ -12,10 +12,10 @@ from dem.kernels.rigid import quat_to_matrix
 from dem.physics import measure
 from dem.scene.case import load_case
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # the repository root
 from validation._lib import cycles, replicas  # noqa: E402
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 def test_replica_and_series_errors():

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "validation" / "paper"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation" / "paper"))
 import make_figures as mf  # noqa: E402
 
 

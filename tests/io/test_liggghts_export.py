@@ -26,7 +26,7 @@ from dem.scene import shapes
 from dem.scene.case import load_case
 from dem.scene.mesh import extrude, load_mesh
 
-CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+CASES_DIR = Path(__file__).resolve().parents[2] / "cases"
 
 
 def parse(deck: Path) -> dict[str, list[list[str]]]:

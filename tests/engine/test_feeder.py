@@ -248,7 +248,7 @@ def test_a_feeder_in_a_u_pan_keeps_every_grain_inside_the_mesh(tmp_path):
     from dem.scene.fill import inside_mesh
     from dem.scene.mesh import load_mesh
 
-    stl = Path(__file__).resolve().parents[1] / "cases" / "geometry" / "u_trough.stl"
+    stl = Path(__file__).resolve().parents[2] / "cases" / "geometry" / "u_trough.stl"
     text = FEEDER.replace(
         "length = 0.06\nwidth = 0.02", f'length = 0.12\nwidth = 0.06\nmesh = "{stl}"'
     )

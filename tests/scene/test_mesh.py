@@ -236,7 +236,7 @@ def test_dems_stl_reader_gives_meshios_triangles_bit_for_bit(tmp_path, name):
     the shipped mesh troughs are unchanged, in ASCII and in binary."""
     from pathlib import Path
 
-    shipped = Path(__file__).parents[1] / "cases" / "geometry" / name
+    shipped = Path(__file__).parents[2] / "cases" / "geometry" / name
     for path in (shipped, tmp_path / name):
         mesh = meshio.read(shipped)
         if path != shipped:

@@ -4,7 +4,7 @@ A file size limit (``ulimit -f``, EFBIG) or a quota (EDQUOT) ends a run like a f
 line, exit 1, results.h5 readable, no crash at exit. A signal after the last cycle, while the
 summary is computed, no longer kills the run without a summary. The resume hint repeats every
 option the resume needs, and a resume with another frames setting is refused. summary.json is
-strict JSON. The planted links of item 1 and 2 are door cases: tests/test_hostile_input.py.
+strict JSON. The planted links of item 1 and 2 are door cases: tests/scene/test_hostile_input.py.
 """
 
 import json
@@ -25,7 +25,7 @@ from dem.run.output import LOCK_FILE
 from dem.run.runner import run_case
 from dem.scene.case import load_case
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:

@@ -11,7 +11,7 @@ from dem.kernels import contact
 from dem.physics import laws
 from dem.scene.case import load_case
 
-SPHERE_BED = Path(__file__).resolve().parents[1] / "cases" / "sphere-bed"
+SPHERE_BED = Path(__file__).resolve().parents[2] / "cases" / "sphere-bed"
 
 
 def test_every_kernel_law_has_one_row_and_back():

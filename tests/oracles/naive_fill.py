@@ -1,6 +1,6 @@
 """The fill as it was before its grid: every try tested against every grain placed (O(N^2)).
 
-The oracle of tests/test_fill.py: the grid fill must place the same grains, bit for bit.
+The oracle of tests/scene/test_fill.py: the grid fill must place the same grains, bit for bit.
 """
 
 import numpy as np

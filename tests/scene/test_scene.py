@@ -16,7 +16,7 @@ from dem.scene.resolved import Scene, resolve
 from dem.scene.timestep import ContactLaw, timestep_for
 from dem.scene.trough import Trough
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 @pytest.fixture

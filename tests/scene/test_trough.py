@@ -19,7 +19,7 @@ def test_wall_gaps_are_the_distances_along_the_inward_normals():
     gaps = Trough(L, W).wall_gaps(x)
     assert gaps.shape == (4, len(x))
     assert np.all(np.isinf(gaps[3]))  # no back wall in a periodic section
-    # the naive twin's walls (tests/naive_dem.py): floor, y = -W/2 (+y), y = +W/2 (-y)
+    # the naive twin's walls (tests/oracles/naive_dem.py): floor, y = -W/2 (+y), y = +W/2 (-y)
     np.testing.assert_array_equal(gaps[0], x[:, 2])
     np.testing.assert_array_equal(gaps[1], x[:, 1] + W / 2)
     np.testing.assert_array_equal(gaps[2], W / 2 - x[:, 1])

@@ -11,7 +11,7 @@ from dem.config import GRAVITY
 from dem.errors import InputError
 from dem.scene.case import Case, load_case
 
-CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+CASES_DIR = Path(__file__).resolve().parents[2] / "cases"
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
 
 BASE = {
@@ -549,7 +549,7 @@ def test_missing_case(tmp_path):
 def test_with_drive_keeps_the_given_quantity_and_recomputes_the_other():
     """A throw-number case keeps Gamma at a new angle (A follows); an amplitude case keeps A
     (Gamma follows); giving one of them sets it. Checked against Gamma = A w^2 sin(phi) / g."""
-    case = load_case(Path(__file__).resolve().parents[1] / "cases" / "screw-trough")
+    case = load_case(Path(__file__).resolve().parents[2] / "cases" / "screw-trough")
     assert case.drive.given == "throw_number"
     w2 = (2 * math.pi * case.drive.frequency) ** 2
 

@@ -17,7 +17,7 @@ from dem.run.runner import run_case
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
 
-CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+CASES_DIR = Path(__file__).resolve().parents[2] / "cases"
 PARITY = CASES_DIR.parent / "validation" / "liggghts-bulk" / "sphere-bed-5e7"  # 5e7 Pa
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
 TABLES = ("trough", "drive", "material", "contact", "particles", "run", "output", "feeder")
@@ -50,7 +50,7 @@ def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
 @pytest.fixture
 def study(monkeypatch):
     """The synthetic speed-accuracy study alone (the bed-compliance rule of dem.run.stiffness has
-    its own data and tests/test_stiffness.py)."""
+    its own data and tests/run/test_stiffness.py)."""
     data = synthetic_study()
     monkeypatch.setattr(accuracy, "study_data", lambda: data)
     monkeypatch.setattr(stiffness, "study", lambda: None)

@@ -21,7 +21,7 @@ from dem.scene.case import load_case
 
 pytestmark = pytest.mark.integration
 
-CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+CASES_DIR = Path(__file__).resolve().parents[2] / "cases"
 SHIPPED = sorted(p.parent for p in CASES_DIR.glob("*/case.toml"))
 GRAINS = 20
 

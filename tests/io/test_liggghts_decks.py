@@ -18,7 +18,7 @@ from dem.io.liggghts import LIGGGHTS_INSTALL, find_liggghts, run_liggghts, write
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
 
-CASES_DIR = Path(__file__).resolve().parents[1] / "cases"
+CASES_DIR = Path(__file__).resolve().parents[2] / "cases"
 SHIPPED = sorted(p.parent.name for p in CASES_DIR.glob("*/case.toml"))
 #: LIGGGHTS's running total after an insertion, e.g. "a total of 20 particle templates (mass
 #: 5.000000e-02) inserted so far".

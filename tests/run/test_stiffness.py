@@ -11,9 +11,9 @@ from dem.run.plan import plan
 from dem.scene.case import load_case
 from dem.scene.resolved import resolve
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 #: The LIGGGHTS-parity sphere bed: cases/sphere-bed at 5e7 Pa, as shipped until 2026-11-26.
-PARITY = Path(__file__).resolve().parents[1] / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
+PARITY = Path(__file__).resolve().parents[2] / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
 
 
 def test_one_grain_is_the_resting_contact_of_the_single_grain_study():

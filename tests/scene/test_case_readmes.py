@@ -13,7 +13,7 @@ import pytest
 
 from dem.scene.case import load_case
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 READMES = sorted(p for p in CASES.glob("*/README.md") if (p.parent / "case.toml").is_file())
 NUMBER = r"([0-9]+(?:\.[0-9]+)?(?:e[+-]?[0-9]+)?)"
 

@@ -178,7 +178,7 @@ def test_resolved_case_from_case_file(tmp_path):
 
     from dem.scene.case import load_case
 
-    case = load_case(Path(__file__).parents[1] / "cases" / "sphere-bed").as_dict()
+    case = load_case(Path(__file__).parents[2] / "cases" / "sphere-bed").as_dict()
     path = tmp_path / "results.h5"
     ResultsWriter(path, case=case, versions={}, seed=1, timestep=1e-5).close()
     assert read_results(path)["case"] == json.loads(json.dumps(case))

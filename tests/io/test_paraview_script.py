@@ -11,7 +11,7 @@ import pytest
 
 from dem.io.vtk import VTKSeriesWriter, paraview_script
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _module():
