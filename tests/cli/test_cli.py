@@ -139,6 +139,7 @@ def test_bad_input_one_line_exit_2(capsys, argv, needle):
     assert "Traceback" not in err and out == ""
 
 
+@pytest.mark.integration
 def test_console_script_exit_status():
     proc = subprocess.run(
         [
@@ -192,6 +193,7 @@ def test_bad_case_file_one_line_exit_2(capsys, tmp_path, old, new, needles):
     assert not (tmp_path / "out").exists()  # nothing written before the case is valid
 
 
+@pytest.mark.integration
 def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
     case_dir = tmp_path / "case"
     case_dir.mkdir()
@@ -216,6 +218,7 @@ def test_export_liggghts_writes_a_deck_with_dems_timestep(capsys, tmp_path):
     assert not (tmp_path / "d3").exists()
 
 
+@pytest.mark.integration
 def test_export_refuses_to_replace_a_deck_without_overwrite(capsys, tmp_path):
     """A user's edited deck is not lost: a second export into the folder exits 2 and leaves it;
     --overwrite replaces it; a file as OUT_DIR is refused by name."""
@@ -252,6 +255,7 @@ def _single_sphere_copy(tmp_path, throw_number=None, tangential=None):
     return case_dir, toml
 
 
+@pytest.mark.integration
 def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
     from dem.scene.case import load_case
 
@@ -306,6 +310,7 @@ def test_calibrate_refuses_the_liggghts_convention(tmp_path, capsys):
     assert "contact.tangential" in capsys.readouterr().err
 
 
+@pytest.mark.integration
 def test_calibrate_of_the_impact_law_measures_and_changes_nothing(tmp_path, capsys):
     case_dir, toml = _single_sphere_copy(tmp_path, 1.8)
     before = toml.read_text()
@@ -314,6 +319,7 @@ def test_calibrate_of_the_impact_law_measures_and_changes_nothing(tmp_path, caps
     assert not (case_dir / "case.toml.orig").exists()
 
 
+@pytest.mark.integration
 def test_calibrate_writes_the_closest_fit_and_fails_only_when_strict(tmp_path, capsys):
     """Gamma 4.2, a period-2 orbit: its landings at 21 and 42 deg take different eps_t from one
     Coulomb spring (0.756 and 0.819 at best), yet calibrate answers (exit 0) unless --strict."""
@@ -324,6 +330,7 @@ def test_calibrate_writes_the_closest_fit_and_fails_only_when_strict(tmp_path, c
     assert run(capsys, "calibrate", str(case_dir), "--dry-run", "--strict", "--plot", plot)[0] == 1
 
 
+@pytest.mark.integration
 def test_export_of_an_auto_settle_case_takes_an_earlier_runs_count_or_a_stated_default(
     capsys, tmp_path
 ):

@@ -75,6 +75,7 @@ def test_pointmass_optimum_plot_into_a_folder_writes_the_file_it_names(capsys, t
     assert f"wrote {figure}" in err
 
 
+@pytest.mark.integration
 def test_calibrate_plot_into_a_folder_writes_the_file_it_names(capsys, tmp_path):
     """``dem calibrate --plot DIR`` wrote DIR.png beside the folder and said it wrote DIR."""
     case = tmp_path / "one"

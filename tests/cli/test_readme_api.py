@@ -14,6 +14,7 @@ def _example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
+@pytest.mark.integration
 def test_the_readme_python_example_runs_and_agrees_with_the_point_mass(tmp_path, monkeypatch,
                                                                        capsys):  # fmt: skip
     monkeypatch.chdir(tmp_path)

@@ -55,6 +55,7 @@ def _lying_orientation(template):
     return q, z
 
 
+@pytest.mark.validation
 def test_one_sphere_clump_follows_the_sphere_path():
     """A clump of one sphere and the sphere integrator: same trajectory to rounding."""
     law = _linear(e=0.5)
@@ -93,6 +94,7 @@ def _dt(kn=1.0e5, e=0.3):
     return contact.linear_collision_time(kn, t.mass / 4, beta) / 50
 
 
+@pytest.mark.validation
 def test_screw_at_rest_on_still_trough_stays_put():
     q, z = _lying_orientation(_screw())
     sim = _screw_sim(_linear(), _dt(), [[0.02, 0.0, z]], [q], Trough(0.04, 0.03))
@@ -136,6 +138,7 @@ def test_clump_collision_conserves_momentum():
     np.testing.assert_allclose(sim.bodies.mass @ sim.bodies.v, p0, atol=1e-15)
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("seed", [4, 5])
 def test_elastic_clump_collision_keeps_angular_momentum_and_energy(seed):
     """Frictionless, undamped collision of two tumbling screws off-centre: the total angular
@@ -200,6 +203,7 @@ frames_per_cycle = 2
 """
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("gamma", [0.4, 0.9])
 def test_sliding_screw_matches_point_mass(tmp_path, gamma):
     """A single screw, rotation locked, in the sliding regime: within 3 % of the point mass.
@@ -220,6 +224,7 @@ def test_sliding_screw_matches_point_mass(tmp_path, gamma):
     assert summary["mean_velocity_norm"] == pytest.approx(reference, rel=0.03)
 
 
+@pytest.mark.validation
 def test_run_case_screws_writes_summary(tmp_path):
     text = SCREW_CASE.format(
         length=0.04, width=0.03, gamma=1.8, eps_n=0.3, model="hertz_mindlin",
@@ -251,6 +256,7 @@ def _small_screw_case(tmp_path, count, rotation):
     return load_case(write_case(tmp_path / "case", text))
 
 
+@pytest.mark.validation
 def test_clump_checkpoint_continues_bit_for_bit(tmp_path):
     case = _small_screw_case(tmp_path, 10, "true")
     straight = setup.from_case(case)
@@ -271,6 +277,7 @@ def test_clump_checkpoint_continues_bit_for_bit(tmp_path):
     assert np.max(np.abs(straight.bodies.ang_mom)) > 0.0
 
 
+@pytest.mark.validation
 def test_rotation_false_locks_the_orientation(tmp_path):
     case = _small_screw_case(tmp_path, 6, "false")
     sim = setup.from_case(case)

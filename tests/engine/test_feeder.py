@@ -69,6 +69,7 @@ def _case(tmp_path, text=FEEDER, **overrides):
     return load_case(write_case(tmp_path / "case", text), overrides=overrides or None)
 
 
+@pytest.mark.validation
 def test_feeder_keys_are_read_and_checked(tmp_path):
     case = _case(tmp_path)
     assert case.feeder.feed_rate == 0.01 and case.feeder.feed_length == 0.015
@@ -88,6 +89,7 @@ def test_feeder_keys_are_read_and_checked(tmp_path):
     assert _case(tmp_path, FEEDER.split("[feeder]")[0]).feeder is None
 
 
+@pytest.mark.validation
 def test_back_wall_is_the_floor_turned_upright(tmp_path):
     """Without gravity a grain sent at 1 m/s at the back wall rebounds exactly as one sent at the
     floor (the same contact law, normal +x instead of +z), and never gets behind it."""
@@ -112,6 +114,7 @@ def test_back_wall_is_the_floor_turned_upright(tmp_path):
     assert at_wall.spheres.x[0, 0] == pytest.approx(at_floor.spheres.x[0, 2], rel=1e-12)
 
 
+@pytest.mark.validation
 def test_a_grain_over_the_edge_is_removed_and_counted(tmp_path):
     case = _case(tmp_path, **{"feeder.feed_rate": 0.0})
     r = case.particles.radius
@@ -130,6 +133,7 @@ def test_a_grain_over_the_edge_is_removed_and_counted(tmp_path):
     assert sim.spheres.x[0, 0] < length
 
 
+@pytest.mark.validation
 def test_mass_balance_holds_in_every_frame_and_the_feed_rate_is_met(tmp_path):
     case = _case(tmp_path)
     summary = run_case(case, tmp_path / "out", progress=False)
@@ -171,6 +175,7 @@ def _grain_mass(case):
     return case.material.density * 4 / 3 * math.pi * case.particles.radius**3
 
 
+@pytest.mark.validation
 def test_removing_a_grain_that_touches_nothing_changes_nothing_else(tmp_path):
     """replace_grains keeps the others' state and contact history: a bed with one extra grain
     far from it, removed after a while, moves bit for bit as the bed without it."""
@@ -193,6 +198,7 @@ def test_removing_a_grain_that_touches_nothing_changes_nothing_else(tmp_path):
     np.testing.assert_array_equal(b.spheres.v, c.spheres.v)
 
 
+@pytest.mark.validation
 def test_a_checkpoint_of_a_feeder_resumes_bit_for_bit(tmp_path):
     case = _case(tmp_path)
     a = setup.from_case(case)
@@ -212,6 +218,7 @@ def test_a_checkpoint_of_a_feeder_resumes_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(a.grain_id, b.grain_id)
 
 
+@pytest.mark.validation
 def test_screws_are_fed_and_discharged_as_rigid_bodies(tmp_path):
     text = (
         FEEDER.split("[particles]")[0].replace("density = 7800.0\n", "")
@@ -240,6 +247,7 @@ def test_screws_are_fed_and_discharged_as_rigid_bodies(tmp_path):
         assert np.max(np.linalg.norm(pts - pts.mean(axis=0), axis=1)) < 0.02
 
 
+@pytest.mark.validation
 def test_a_feeder_in_a_u_pan_keeps_every_grain_inside_the_mesh(tmp_path):
     """Mesh pan, back wall and feed together: every sphere of every frame lies on the grains'
     side of the U mesh, clear of it, in front of the back wall, and the balance holds."""
@@ -271,6 +279,7 @@ def test_a_feeder_in_a_u_pan_keeps_every_grain_inside_the_mesh(tmp_path):
     assert summary["feeder"]["grains_inserted"] > r["frames"][0]["grains_inserted"]
 
 
+@pytest.mark.validation
 def test_a_feeder_run_stopped_by_sigterm_resumes_bit_for_bit(tmp_path):
     """dem run on a feeder, SIGTERM mid-run, --resume: the same per-cycle velocities and
     discharge, the same grains inserted, the same last frame (ragged results.h5 trimmed)."""
@@ -298,6 +307,7 @@ def test_a_feeder_run_stopped_by_sigterm_resumes_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(a["frames"][-1]["grain_id"], b["frames"][-1]["grain_id"])
 
 
+@pytest.mark.validation
 def test_a_signal_mid_frame_stops_a_feeder_there_and_it_resumes_bit_for_bit(tmp_path, monkeypatch):
     """A feeder honours SIGTERM after any exchange chunk, not only at a frame's end: the
     checkpoint lies inside a frame, and the resumed run feeds, discharges and conveys exactly

@@ -51,6 +51,7 @@ def _energy(sim, kn):
     return e
 
 
+@pytest.mark.validation
 def test_energy_is_conserved_without_damping_and_friction():
     """Elastic, frictionless grains bouncing in the trough for 40,000 steps (dt = t_c / 50):
     |E - E0| / E0 < 2e-4 (measured 4.3e-5; 1.3e-5 at t_c / 100: a bounded O(dt^2) error of
@@ -106,6 +107,7 @@ def _block(inclination_deg, mu=0.35, rotation=False):
     return Simulation(spheres, trough, law, dt, rotation=rotation)
 
 
+@pytest.mark.validation
 def test_sphere_on_still_trough_stays_put():
     sim = _block(0.0, rotation=True)
     sim.run(int(0.5 / sim.dt))
@@ -114,6 +116,7 @@ def test_sphere_on_still_trough_stays_put():
     assert np.all(np.abs(sim.spheres.v) < 1e-9) and np.all(sim.spheres.omega == 0)
 
 
+@pytest.mark.validation
 def test_block_sticks_below_friction_angle():
     """tan(15 deg) < mu = 0.35: the block creeps only by its tangential spring (m g sin a / k_t)."""
     sim = _block(15.0)
@@ -126,6 +129,7 @@ def test_block_sticks_below_friction_angle():
     assert np.all(sim.spheres.omega == 0)
 
 
+@pytest.mark.validation
 def test_block_slides_with_coulomb_acceleration_above_friction_angle():
     """tan(25 deg) > mu: dv_x/dt = -g (sin a - mu cos a) (downhill is -x), once sliding."""
     sim = _block(25.0)
@@ -159,6 +163,7 @@ def _single_sphere(throw_number, stiffness=None, tangential=None):
     )
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("throw_number", [0.4, 0.9])
 def test_sliding_block_matches_point_mass(tmp_path, throw_number):
     """Sliding block (phi 25 deg, mu 0.35, rotation locked) within 2 % of the point mass."""
@@ -169,6 +174,7 @@ def test_sliding_block_matches_point_mass(tmp_path, throw_number):
     assert summary["mean_velocity_norm"] == pytest.approx(reference, rel=0.02)
 
 
+@pytest.mark.validation
 def test_sliding_block_converges_to_coulomb_as_contact_stiffens(tmp_path):
     """Under "coulomb" the error against the point mass falls as k_n grows (about as
     k_n^-1/2): its tangential spring rings slower the softer the contact."""
@@ -183,6 +189,7 @@ def test_sliding_block_converges_to_coulomb_as_contact_stiffens(tmp_path):
 @pytest.mark.parametrize(
     "second", [(5e-5, 0.0, 90.0), (3e-5, 80.0, 60.0)], ids=["x-quarter-period", "steep-60deg"]
 )
+@pytest.mark.validation
 def test_sliding_block_on_an_elliptical_drive_matches_the_stepped_point_mass(tmp_path, second):
     """Two drive components out of phase (no flight): the block follows the point mass stepped on
     the same motion within 2 % (the line drive's tolerance above). Measured 2026-11-23: +0.07 %
@@ -201,6 +208,7 @@ def test_sliding_block_on_an_elliptical_drive_matches_the_stepped_point_mass(tmp
     assert summary["mean_velocity_norm"] == pytest.approx(reference, rel=0.021)
 
 
+@pytest.mark.validation
 def test_start_up_ramp_brings_the_block_up_to_speed(tmp_path):
     """With a 3-cycle ramp the first cycle conveys far less than the steady ones, which match the
     run without a ramp (the ramp only delays the steady state)."""
@@ -260,6 +268,7 @@ def test_run_case_writes_summary(tmp_path):
     assert on_disk["stick_rate"] > 0.0 and on_disk["normal_law_restitution"] > 0.0
 
 
+@pytest.mark.validation
 def test_from_grains_and_measure_cycles_give_what_run_case_gives(tmp_path):
     """The public path (place a grain, measure whole cycles) and dem run agree on one block."""
     from dem.engine.simulation import measure_cycles

@@ -210,6 +210,7 @@ def test_a_speed_no_drive_explains_names_the_grain_and_only_the_time_step():
 # --- the runner writes the record -------------------------------------------------------------
 
 
+@pytest.mark.validation
 def test_summary_holds_the_overlap_record_and_the_warning(tmp_path, monkeypatch):
     """Bound lowered below the single sphere's resting overlap: the run finishes and says so."""
     case = load_case("cases/single-sphere", overrides={"run.settle_cycles": 1, "run.cycles": 2})
@@ -225,6 +226,7 @@ def test_summary_holds_the_overlap_record_and_the_warning(tmp_path, monkeypatch)
     assert summary["warnings"] == [] and summary["max_overlap_fraction"] < 1e-6
 
 
+@pytest.mark.validation
 def test_a_resumed_run_reports_the_overlap_of_the_whole_run(tmp_path, monkeypatch):
     """The record travels in the checkpoint: a run stopped mid-frame and resumed reports the
     deepest overlap of both parts (the fill's landing, before the stop, included), as the

@@ -111,10 +111,12 @@ def _set(key, index, value):
 # --- the issue's cases ------------------------------------------------------------------------
 
 
+@pytest.mark.integration
 def test_a_missing_key_is_named(interrupted, tmp_path, capsys):
     _refused(interrupted, tmp_path, capsys, lambda s, lp: s.pop("sph.v"), "lacks sph.v")
 
 
+@pytest.mark.integration
 def test_a_wrong_shape_is_named(interrupted, tmp_path, capsys):
     def change(s, lp):
         s["sph.radius"] = s["sph.radius"][:-1]
@@ -122,12 +124,14 @@ def test_a_wrong_shape_is_named(interrupted, tmp_path, capsys):
     _refused(interrupted, tmp_path, capsys, change, "sph.radius", "(119,)", "(120,)")
 
 
+@pytest.mark.integration
 def test_pair_indices_beyond_the_spheres_are_refused_not_a_segfault(interrupted, tmp_path, capsys):
     """Before the fix the pair loop read far out of bounds: a segmentation fault (-11)."""
     change = _set("nb.pair_j", 0, 10**9)
     _refused(interrupted, tmp_path, capsys, change, "nb.pair_j holds 1000000000", child=True)
 
 
+@pytest.mark.integration
 def test_a_loop_record_beyond_the_run_is_refused_not_a_nan_summary(interrupted, tmp_path, capsys):
     def change(s, lp):
         lp["cycle"] = lp["h5_cycles"] = 9
@@ -184,12 +188,14 @@ VARIANTS = {
 }
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("variant", list(VARIANTS))
 def test_other_tampered_checkpoints_are_refused_in_one_line(interrupted, tmp_path, capsys, variant):
     change, words = VARIANTS[variant]
     _refused(interrupted, tmp_path, capsys, change, words)
 
 
+@pytest.mark.integration
 def test_a_checkpoint_from_another_case_is_still_refused_by_its_keys(interrupted, tmp_path, capsys):
     """Validation does not hide the case comparison: other physics is named by key."""
     case_dir, out = _copy(interrupted, tmp_path)
@@ -198,6 +204,7 @@ def test_a_checkpoint_from_another_case_is_still_refused_by_its_keys(interrupted
     assert code == 2 and "material.friction = 0.35 (now 0.5)" in err, err
 
 
+@pytest.mark.integration
 def test_the_untouched_checkpoint_passes_and_resumes(interrupted, tmp_path, capsys):
     case_dir, out = _copy(interrupted, tmp_path)
     state, loop = checkpoint.read(out / "checkpoint.npz")
@@ -209,6 +216,7 @@ def test_the_untouched_checkpoint_passes_and_resumes(interrupted, tmp_path, caps
     assert np.isfinite(summary["mean_velocity"])
 
 
+@pytest.mark.integration
 def test_a_checkpoint_of_another_tangential_law_is_refused(interrupted, tmp_path, capsys):
     """The history width is the law's: "impact" keeps 5 floats a contact, "coulomb" 3. A
     checkpoint cut to 3 columns is a valid file of another law, refused against this case."""
@@ -220,6 +228,7 @@ def test_a_checkpoint_of_another_tangential_law_is_refused(interrupted, tmp_path
     _refused(interrupted, tmp_path, capsys, change, "3 floats of contact history", "'impact'")
 
 
+@pytest.mark.integration
 def test_a_history_width_of_no_law_is_refused(interrupted, tmp_path, capsys):
     def change(s, lp):
         s["nb.hist"] = np.zeros((s["nb.hist"].shape[0], 4))

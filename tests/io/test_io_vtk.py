@@ -106,6 +106,7 @@ def test_positions_wrapped_into_periodic_section(tmp_path):
     assert np.allclose(mesh.points[:, 0], [0.09, 0.05, 0.03], atol=1e-7)
 
 
+@pytest.mark.integration
 def test_the_collection_is_rewritten_on_a_schedule_not_after_every_frame(tmp_path, monkeypatch):
     """Rewriting particles.pvd (O(frames)) after each frame made a long run O(frames^2)."""
     from dem.io import vtk
@@ -127,6 +128,7 @@ def test_the_collection_is_rewritten_on_a_schedule_not_after_every_frame(tmp_pat
     assert len(root.findall("./Collection/DataSet")) == 2 * 300  # all frames once closed
 
 
+@pytest.mark.integration
 def test_pvd_valid_after_kill(tmp_path):
     # a child process writes three frames and is killed without close()
     code = (

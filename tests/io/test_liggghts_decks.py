@@ -32,6 +32,7 @@ pytestmark = [
 ]
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name", SHIPPED)
 def test_shipped_case_deck_runs_in_liggghts_with_dems_grains_and_mass(tmp_path, name):
     case = load_case(CASES_DIR / name)
@@ -50,6 +51,7 @@ def test_shipped_case_deck_runs_in_liggghts_with_dems_grains_and_mass(tmp_path, 
     assert float(mass) == pytest.approx(case.particles.count * grain_mass(case), rel=1e-6)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name", ["screw-trough", "u-trough"])
 def test_clump_decks_insert_random_orientations_inside_the_box(tmp_path, name):
     """LIGGGHTS's insert fixes default to the template's orientation: without ``orientation

@@ -64,6 +64,7 @@ def bed_deck(tmp_path):
     return case, deck, parse(deck)
 
 
+@pytest.mark.integration
 def test_sphere_bed_material_numbers(bed_deck):
     case, deck, c = bed_deck
     assert fix(c, "m_Y")[3:5] == ["youngsModulus", "peratomtype"]
@@ -80,6 +81,7 @@ def test_sphere_bed_material_numbers(bed_deck):
     assert pair[pair.index("limitForce") + 1] == "off"
 
 
+@pytest.mark.integration
 def test_sphere_bed_geometry_and_grains(bed_deck):
     case, _, c = bed_deck
     assert c["boundary"] == [["p", "f", "f"]]
@@ -99,6 +101,7 @@ def test_sphere_bed_geometry_and_grains(bed_deck):
     assert fix(c, "integr")[2] == "nve/sphere"
 
 
+@pytest.mark.integration
 def test_sphere_bed_timestep_and_stages(bed_deck):
     _, _, c = bed_deck
     assert c["timestep"] == [["5e-06"]]
@@ -106,6 +109,7 @@ def test_sphere_bed_timestep_and_stages(bed_deck):
     assert runs[-2:] == [567, 1234]
 
 
+@pytest.mark.integration
 def test_sphere_bed_drive_is_the_accelerating_frame(bed_deck):
     case, _, c = bed_deck
     d = case.drive
@@ -130,6 +134,7 @@ def test_sphere_bed_drive_is_the_accelerating_frame(bed_deck):
     assert peak * math.sin(phi) / GRAVITY == pytest.approx(d.throw_number, rel=1e-12)
 
 
+@pytest.mark.integration
 def test_inclination_tilts_static_gravity(tmp_path):
     case = load_case(CASES_DIR / "sphere-bed")
     tilted = dataclasses.replace(case, trough=dataclasses.replace(case.trough, inclination=4.0))
@@ -198,6 +203,7 @@ def test_refuses_what_liggghts_primitives_cannot_do(tmp_path):
         write_deck(case, tmp_path, timestep=0.0, steps=10, settle_steps=0)
 
 
+@pytest.mark.integration
 def test_header_names_version_and_command(bed_deck):
     _, deck, _ = bed_deck
     header = deck.read_text().split("\n\n", 1)[0]
@@ -214,6 +220,7 @@ def screw_deck(tmp_path):
     return case, deck, parse(deck)
 
 
+@pytest.mark.integration
 def test_screw_deck_is_a_multisphere_deck(screw_deck):
     case, deck, c = screw_deck
     grain = case.particles.grain
@@ -250,6 +257,7 @@ def test_screw_deck_is_a_multisphere_deck(screw_deck):
     assert int(insert[insert.index("particles_in_region") + 1]) == case.particles.count
 
 
+@pytest.mark.integration
 def test_screw_deck_neighbour_skin_and_linear_damping_use_clump_values(tmp_path):
     case = load_case(CASES_DIR / "screw-trough")
     locked = dataclasses.replace(
@@ -300,6 +308,7 @@ def mesh_deck(request, tmp_path):
     return case, deck, parse(deck)
 
 
+@pytest.mark.integration
 def test_mesh_deck_reads_the_stl_as_a_granular_wall(mesh_deck):
     _, deck, c = mesh_deck
     surface = fix(c, "trough")
@@ -320,6 +329,7 @@ def test_mesh_deck_reads_the_stl_as_a_granular_wall(mesh_deck):
     assert "no move/mesh" in deck.read_text()
 
 
+@pytest.mark.integration
 def test_mesh_stl_round_trips_to_the_case_triangles(mesh_deck):
     case, deck, _ = mesh_deck
     length = case.trough.length
@@ -329,6 +339,7 @@ def test_mesh_stl_round_trips_to_the_case_triangles(mesh_deck):
     assert (deck.parent / MESH_FILE).read_text().isascii()
 
 
+@pytest.mark.integration
 def test_mesh_box_holds_the_mesh_and_the_fill_region_lies_inside_the_pan(mesh_deck):
     case, _, c = mesh_deck
     mesh = load_mesh(case.trough.mesh, length=case.trough.length)
@@ -407,6 +418,7 @@ def test_liggghts_runs_the_u_trough_deck(tmp_path):
     assert [loop.steps for loop in run.loop_times] == [50, 100, 100]
 
 
+@pytest.mark.integration
 def test_feeder_deck_has_the_back_wall_open_edge_and_one_grain_per_feed(tmp_path):
     """cases/feeder: x is open at the discharge edge L (lost spheres deleted and ignored), the
     back wall is the plane x = 0, the fill stands clear of both, and the feed inserts one grain
@@ -477,6 +489,7 @@ def test_liggghts_runs_a_feeder_deck_and_its_balance_closes(tmp_path):
     assert 0.0 < held <= bal.charge + bal.fed[-1]
 
 
+@pytest.mark.integration
 def test_elliptical_drive_and_ramp_variables_are_the_kernels_acceleration(tmp_path):
     """The deck's gx, gz, evaluated as LIGGGHTS would (the equal-style expressions in Python),
     equal gravity minus s''(tau) of dem.physics.drive.Motion within and after the ramp."""
@@ -520,6 +533,7 @@ def test_an_elliptical_ramped_deck_runs_in_liggghts(tmp_path):
     assert run.loop_times[-1].atoms == 100
 
 
+@pytest.mark.integration
 def test_deck_notes_the_wall_lever_arm_only_where_it_differs_from_liggghts(tmp_path):
     """LIGGGHTS's walls act at r - delta/2: a case with dem's default r - delta says so in its
     deck, one with wall_lever_arm = "midpoint" (the same as LIGGGHTS) does not."""
@@ -532,6 +546,7 @@ def test_deck_notes_the_wall_lever_arm_only_where_it_differs_from_liggghts(tmp_p
     assert note not in deck.read_text()
 
 
+@pytest.mark.integration
 def test_a_deck_of_grains_stiffer_than_1e9_pa_tells_liggghts_they_are_hard(tmp_path):
     """LIGGGHTS 3.8 stops on youngsModulus > 1e9 in SI units unless ``hard_particles yes``
     comes first; the shipped beds (2e9 Pa) need it, the 5e7 Pa LIGGGHTS-parity bed does not."""

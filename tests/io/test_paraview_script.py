@@ -51,6 +51,7 @@ print("NAMES", *sorted(p["names"].values()))
 """
 
 
+@pytest.mark.integration
 @pytest.mark.skipif(shutil.which("pvpython") is None, reason="ParaView's pvpython not on PATH")
 def test_pvpython_draws_each_sphere_with_its_diameter(tmp_path):
     """The script's pipeline in ParaView itself: glyphs reach x +- r of each sphere."""

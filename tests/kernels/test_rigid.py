@@ -161,6 +161,7 @@ def test_equal_and_opposite_member_forces_give_a_pure_couple():
 
 
 # --- free rotation ----------------------------------------------------------------------------
+@pytest.mark.validation
 def test_torque_free_asymmetric_body_conserves_energy_and_momentum(one_thread):
     rng = np.random.default_rng(3)
     n_bodies, dt, n_steps, every = 8, 0.01, 100_000, 100
@@ -183,6 +184,7 @@ def test_torque_free_asymmetric_body_conserves_energy_and_momentum(one_thread):
     np.testing.assert_array_equal(ang_mom, ang_mom0)  # L is not written by the free flight
 
 
+@pytest.mark.validation
 def test_intermediate_axis_flips_and_outer_axes_are_stable(one_thread):
     eps, dt, t_end = 1e-3, 0.005, 200.0
     n_steps, every = int(round(t_end / dt)), 10
@@ -228,6 +230,7 @@ def test_free_rotation_is_second_order(one_thread):
     np.testing.assert_allclose(ratios, 4.0, rtol=0.05)
 
 
+@pytest.mark.validation
 def test_kicked_rotation_is_second_order(one_thread):
     """Constant force F on one member at body offset d: torque (R d) x F, through the kernels."""
     d = np.array([[0.3, -0.1, 0.2]])
@@ -319,6 +322,7 @@ def test_members_move_on_circles_and_stay_rigid(one_thread):
     np.testing.assert_allclose(dist, dist0, rtol=0, atol=4 * np.spacing(np.abs(x).max()))
 
 
+@pytest.mark.validation
 def test_fused_body_step_equals_the_separate_kernels():
     rng = np.random.default_rng(6)
     nb, dt = 30, 1e-3

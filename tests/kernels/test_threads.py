@@ -85,6 +85,7 @@ def _snapshot(sim):
     return {k: np.copy(v) for k, v in out.items()}
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("text", [SMALL_CASE, SCREW_CASE], ids=["spheres", "screws"])
 def test_one_and_two_threads_give_identical_trajectories(tmp_path, monkeypatch, text):
     monkeypatch.setattr(config, "DEM_PARALLEL_MIN_SPHERES", 0)  # small beds run parallel too
@@ -178,6 +179,7 @@ def test_the_guard_notes_the_move_to_one_thread_once(monkeypatch):
     assert len(notes) == 1 and "2 threads ran slower than one" in notes[0]
 
 
+@pytest.mark.validation
 def test_a_try_of_the_other_thread_count_runs_a_short_chunk(tmp_path, monkeypatch):
     """The guard's try may be the slow choice: Simulation.run gives it a short chunk."""
     from dem.engine import threads
@@ -194,6 +196,7 @@ def test_a_try_of_the_other_thread_count_runs_a_short_chunk(tmp_path, monkeypatc
     assert sum(sizes) == 6 * config.DEM_CHECK_INTERVAL
 
 
+@pytest.mark.validation
 def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
     """Momentum sums in fixed chunks: the same bits on one thread and on two."""
     import numba

@@ -127,6 +127,7 @@ def violations(root: Path) -> list[str]:
     return out
 
 
+@pytest.mark.validation
 def test_every_import_in_dem_points_down_and_no_private_name_crosses_a_module():
     assert violations(PACKAGE) == []
 

@@ -50,6 +50,7 @@ def test_cycle_edges_and_means():
     assert math.isnan(cycles.cycle_means(steps[:0], values[:0], edges, [0], strict=False)[0])
 
 
+@pytest.mark.validation
 def test_from_grains_spins():
     case = load_case(CASES / "screw-trough")
     w = np.array([[3.0, -2.0, 5.0]])

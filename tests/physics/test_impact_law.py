@@ -50,6 +50,7 @@ def _bound(mu, incidence):
 @pytest.mark.parametrize(
     ("model", "value"), [("linear", 4.0e6), ("hertz_mindlin", 5.0e7), ("hertz_mindlin", 5.0e9)]
 )
+@pytest.mark.validation
 @pytest.mark.parametrize("rotation", [False, True])
 def test_eps_t_is_a_material_property_at_every_incidence_and_speed(model, value, rotation):
     """Flat at eps_t where Coulomb does not bind, on the rigid bounded value where it does."""
@@ -61,6 +62,7 @@ def test_eps_t_is_a_material_property_at_every_incidence_and_speed(model, value,
             assert eps_t == pytest.approx(target, abs=0.005), (incidence, speed)
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("e_t", [0.2, 0.5])
 def test_low_eps_t_of_a_block_is_reached_and_bounded(e_t):
     case = _case(e_t=e_t)
@@ -70,6 +72,7 @@ def test_low_eps_t_of_a_block_is_reached_and_bounded(e_t):
     )
 
 
+@pytest.mark.validation
 def test_a_rolling_sphere_stops_slipping_at_rolling():
     """A sphere free to roll cannot give its centre less than 5/7 of v_t without reversing its
     contact point's slip; the law ends the impact when the slip stops (no energy created)."""
@@ -89,6 +92,7 @@ def _block_on_floor(case, tilt_deg, dt, vx=0.0):
     return Simulation(spheres, trough, law, dt, rotation=False)
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("kn", [4.0e5, 4.0e6])
 def test_no_creep_below_the_friction_angle_and_coulomb_sliding_above(kn):
     """Below atan(mu) the block stays put (creep below 1e-6 m/s); above it accelerates at
@@ -113,6 +117,7 @@ def test_no_creep_below_the_friction_angle_and_coulomb_sliding_above(kn):
     assert (v2 - v1) / (t2 - t1) == pytest.approx(expected, rel=2e-3)
 
 
+@pytest.mark.validation
 def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     """Step a wall contact through an impact by hand: the force of the switch step is the
     impact's, the stick spring it leaves gives that same force, and zeroed history (a contact
@@ -153,6 +158,7 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     assert hist[0, 3] > 0.0
 
 
+@pytest.mark.validation
 def test_the_kernels_reset_the_whole_history_row_when_a_contact_breaks():
     case = _case()
     law = ContactLaw.from_case(case)
@@ -171,6 +177,7 @@ def _block_velocity(case, settle=20, cycles=20):
     return conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle).norm
 
 
+@pytest.mark.validation
 def test_sliding_block_converges_to_rigid_coulomb_as_the_contact_stiffens():
     """Gamma 0.5, phi 20 deg: the error against the point mass falls as E grows (Hertz)."""
     errors = []
@@ -182,6 +189,7 @@ def test_sliding_block_converges_to_rigid_coulomb_as_the_contact_stiffens():
     assert errors[2] < 0.01
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize(("gamma", "e_t"), [(1.2, 0.8), (2.0, 0.8), (2.5, 0.2)])
 def test_hopping_block_follows_the_coulomb_bounded_point_mass(gamma, e_t):
     """No calibration: at Gamma 1.2 the paper's Eq. 12 asks for more than Coulomb allows (paper

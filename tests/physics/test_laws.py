@@ -63,6 +63,7 @@ def test_calibration_refusal_comes_from_the_row():
         calibrate(case)
 
 
+@pytest.mark.validation
 def test_the_time_step_resolves_the_row_spring():
     """A law with a material tangential spring has a limit set by it; "impact" sizes its stick
     by the step itself, so its limit is the normal one."""

@@ -37,6 +37,7 @@ KN, MASS = 1.6e7, 7800.0 * 4 / 3 * math.pi * 0.002**3
 T_UNDAMPED = contact.linear_collision_time(KN, MASS, 0.0)
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.6, 0.9])
 def test_virtual_impact_restitution_matches_linear_formula(e):
     """Head-on impact of the linear spring-dashpot: the rebound is e, to an error that falls
@@ -97,6 +98,7 @@ def test_mapping_inverts_and_refuses_what_sticking_cannot_reach():
         tangential.tangential_stiffness_ratio(0.5, 1.0, 0.3, 2 / 7)
 
 
+@pytest.mark.validation
 def test_eps_t_moves_the_dem_impact_as_asked():
     """The spring law (limit_force off, mu = 0.35) at a landing of conveying (34 deg): eps_t = 0.2,
     0.5, 0.8 give ordered, distinct outcomes."""
@@ -105,6 +107,7 @@ def test_eps_t_moves_the_dem_impact_as_asked():
     assert out[2] == pytest.approx(0.8, abs=0.03)
 
 
+@pytest.mark.validation
 def test_grazing_impact_is_bounded_by_coulomb():
     """A sliding impact takes at most mu J_n / m from v_t. With limit_force the normal impulse
     is m v_n (1 + eps_n): eps_t >= 1 - mu (1 + eps_n) cot(theta), approached as the tangential
@@ -131,6 +134,7 @@ def test_landings_follow_the_point_mass():
     assert calibrate.landings(case.with_drive(throw_number=0.8)).shape[0] == 0
 
 
+@pytest.mark.validation
 def test_calibration_reaches_the_same_kappa_from_different_starts():
     case = _sphere_case().with_drive(throw_number=1.8)
     a = calibrate.calibrate(case, start=0.003, max_impacts=2)

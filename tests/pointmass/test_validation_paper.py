@@ -52,6 +52,7 @@ def test_quick_claims_are_consistent(quick_run):
         assert amp == pytest.approx(acc, abs=1e-5)
 
 
+@pytest.mark.validation
 def test_landing_phase_oracles():
     # one-cycle flights: z(t0 + 2 pi) = 2 pi (cos t0 - pi / Gamma) = 0, so take-off and
     # landing at acos(pi / Gamma) (after the first, longer flight from asin(1 / Gamma))

@@ -50,6 +50,7 @@ def tiny_disk():
     where.rmdir()
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("filler", [1_100_000, 800_000])
 def test_a_really_full_disk_ends_in_one_line_with_readable_files(tmp_path, tiny_disk, filler):
     (tiny_disk / "filler").write_bytes(b"\0" * filler)

@@ -65,6 +65,7 @@ NO_ROOM_CHECK = "import dem.io.hdf5_guard as h; h.check_room = lambda path, need
 #: the room check (1 MiB of headroom kept below the limit) and without it.
 @pytest.mark.parametrize("script, limit", [("", 1_300_000), (NO_ROOM_CHECK, 300_000)],
                          ids=["foreseen", "unforeseen"])  # fmt: skip
+@pytest.mark.integration
 def test_a_file_size_limit_ends_in_one_line_exit_1_and_no_crash(tmp_path, script, limit):
     """EFBIG used to print the one line and then segfault at exit (exit 139): HDF5's exit handler
     closed again a dataset whose write had failed. Now the write is refused before HDF5 starts
@@ -114,6 +115,7 @@ summary.pointmass_reference = late
 """
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_a_signal_while_the_summary_is_written_still_gives_the_summary(tmp_path, sig):
     """It used to end the run with exit 143, no message, no summary, no checkpoint, and the
@@ -131,6 +133,7 @@ def test_a_signal_while_the_summary_is_written_still_gives_the_summary(tmp_path,
     assert not (out / "checkpoint.npz").exists() and not (out / LOCK_FILE).exists()
 
 
+@pytest.mark.integration
 def test_a_stale_lock_of_a_dead_run_does_not_block_a_new_one(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
@@ -143,6 +146,7 @@ def test_a_stale_lock_of_a_dead_run_does_not_block_a_new_one(tmp_path):
 # --- item 5: the resume hint and the frames setting ---------------------------------------------
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("options", [["--no-frames"], ["--lab-frame", "--cycles", "4"]])
 def test_the_resume_hint_repeats_every_option_the_resume_needs(tmp_path, monkeypatch, capsys,
                                                                options):  # fmt: skip
@@ -170,6 +174,7 @@ def test_the_resume_hint_repeats_every_option_the_resume_needs(tmp_path, monkeyp
     [(["--no-frames"], []), ([], ["--no-frames"]), ([], ["--lab-frame"])],
     ids=["frames-on-a-run-without", "no-frames-on-a-run-with", "lab-frame-on-trough-frame"],
 )
+@pytest.mark.integration
 def test_a_resume_with_another_frames_setting_is_refused_and_changes_nothing(
     tmp_path, monkeypatch, capsys, first, resumed
 ):
@@ -190,6 +195,7 @@ def test_a_resume_with_another_frames_setting_is_refused_and_changes_nothing(
 # --- item 6: strict JSON ------------------------------------------------------------------------
 
 
+@pytest.mark.integration
 def test_summary_of_a_one_cycle_run_is_strict_json(tmp_path):
     """One measured cycle has no standard error: summary.json said NaN, which is not JSON."""
     out = tmp_path / "out"
@@ -200,6 +206,7 @@ def test_summary_of_a_one_cycle_run_is_strict_json(tmp_path):
     assert written["mean_velocity"] == summary["mean_velocity"]
 
 
+@pytest.mark.integration
 def test_summary_json_is_written_whole_by_a_rename(tmp_path, monkeypatch):
     """summary.json goes to a temporary file renamed over it: never a part-written summary."""
     import dem.io.files as files

@@ -22,6 +22,7 @@ def sphere_run(tmp_path_factory):
     return case, out, summary
 
 
+@pytest.mark.integration
 def test_cycles_csv_has_one_row_per_measured_cycle_and_the_summary_mean(sphere_run):
     case, out, summary = sphere_run
     text = (out / "cycles.csv").read_text()
@@ -114,6 +115,7 @@ def test_sphere_frames_carry_the_lab_velocity(sphere_run):
         assert np.allclose(spheres["speed_lab"], np.linalg.norm(lab, axis=1), atol=1e-6)
 
 
+@pytest.mark.integration
 def test_screw_frames_have_a_grains_block(tmp_path):
     import pyvista as pv
 
@@ -144,6 +146,7 @@ def test_screw_frames_have_a_grains_block(tmp_path):
         assert np.max(np.linalg.norm(d, axis=1)) < 0.016
 
 
+@pytest.mark.integration
 def test_a_feeder_run_prints_its_discharge_and_tables_it_per_cycle(tmp_path, capsys):
     from test_feeder import FEEDER
 

@@ -63,6 +63,7 @@ def small(tmp_path, keys=None):
     return load_case(directory, {"trough.length": 0.10, "trough.width": 0.04} | (keys or {}))
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("directory", SHIPPED, ids=lambda p: p.name)
 def test_plan_on_every_shipped_case(directory, capsys):
     """The study's own data: every field present and consistent with the case."""
@@ -97,6 +98,7 @@ def test_plan_on_every_shipped_case(directory, capsys):
         assert advice["key"].split(".")[0] in TABLES
 
 
+@pytest.mark.integration
 def test_memory_estimate_matches_what_a_run_allocates(tmp_path, study):
     """Independent check: tracemalloc's count of the bytes the built simulation holds."""
     case = small(tmp_path, {"particles.count": 3000})
@@ -110,6 +112,7 @@ def test_memory_estimate_matches_what_a_run_allocates(tmp_path, study):
     assert 0.8 * held < expected < 1.25 * held, (expected, held)
 
 
+@pytest.mark.integration
 def test_expected_error_is_the_base_error_at_shipped_settings(tmp_path, study):
     """At the shipped settings only the stiffness error counts; more cycles cut a run's noise."""
     case = small(tmp_path, {"particles.count": 1500})
@@ -125,6 +128,7 @@ def test_expected_error_is_the_base_error_at_shipped_settings(tmp_path, study):
     assert p.warnings() == []
 
 
+@pytest.mark.integration
 def test_the_step_counts_against_the_step_the_stiffness_was_measured_at(tmp_path, study):
     """The stiffness series comes from a sweep at its own step (0.5 of the limit in the
     shipped data): the step's part is its effect there minus its effect at the sweep's step,
@@ -148,6 +152,7 @@ def test_the_step_counts_against_the_step_the_stiffness_was_measured_at(tmp_path
         assert plan.plan(c).error_parts.get("time step", 0.0) == pytest.approx(want, abs=1e-6)
 
 
+@pytest.mark.integration
 def test_advice_names_what_a_case_overdoes_or_underdoes(tmp_path, study):
     stiff = plan.plan(small(tmp_path / "a", {"contact.youngs_modulus": 1e9}))
     assert [a.key for a in stiff.warnings()] == ["contact.youngs_modulus"]
@@ -165,6 +170,7 @@ def test_advice_names_what_a_case_overdoes_or_underdoes(tmp_path, study):
     assert note.level == "note" and "dem pointmass velocity --throw-number" in note.text
 
 
+@pytest.mark.integration
 def test_soft_contacts_outside_the_study_are_flagged(tmp_path, study):
     soft = plan.plan(small(tmp_path, {"contact.youngs_modulus": 1e5}))
     texts = " ".join(a.text for a in soft.warnings())
@@ -173,6 +179,7 @@ def test_soft_contacts_outside_the_study_are_flagged(tmp_path, study):
     assert len([a for a in soft.warnings() if a.key == "contact.youngs_modulus"]) == 1
 
 
+@pytest.mark.integration
 def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
     case = small(tmp_path)
     directory = case.directory
@@ -189,6 +196,7 @@ def test_wall_time_uses_the_last_run_of_the_case(tmp_path, study):
     assert after.wall_time_s == pytest.approx(after.particle_steps / 1.0e6 + overhead)
 
 
+@pytest.mark.integration
 def test_wall_time_adds_the_compile_only_where_the_cache_is_cold(tmp_path, monkeypatch, study):
     from dem import kernels
 
@@ -206,6 +214,7 @@ def test_wall_time_adds_the_compile_only_where_the_cache_is_cold(tmp_path, monke
     assert cold.frames == frames and plan.plan(case, threads=1, frames=False).frames == 0
 
 
+@pytest.mark.integration
 def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
     """The 5e7 LIGGGHTS-parity sphere bed: the stiffness rule asks for more; applied, it asks
     nothing."""
@@ -227,6 +236,7 @@ def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
     assert "--suggest" in capsys.readouterr().err
 
 
+@pytest.mark.integration
 def test_suggest_keeps_a_mesh_trough_and_the_set_keys(tmp_path, capsys):
     out = tmp_path / "deep" / "u"
     argv = ["plan", str(CASES_DIR / "u-trough"), "--set", "run.cycles=30", "--suggest", str(out)]
@@ -240,6 +250,7 @@ def test_suggest_keeps_a_mesh_trough_and_the_set_keys(tmp_path, capsys):
     assert cycles_line == [f"cycles = 30  # dem plan --suggest {date.today()}, was {filed!r}"]
 
 
+@pytest.mark.integration
 def test_suggest_refuses_advice_that_moves_a_key_back_and_forth(tmp_path, monkeypatch):
     from dem.errors import InputError
 
@@ -258,6 +269,7 @@ def test_suggest_refuses_advice_that_moves_a_key_back_and_forth(tmp_path, monkey
     assert not (tmp_path / "s").exists()  # nothing written
 
 
+@pytest.mark.integration
 def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
     """The driven steps the plan counts are the steps the run takes."""
     case = small(tmp_path, {"contact.youngs_modulus": 1e9})
@@ -274,6 +286,7 @@ def test_run_warns_once_at_start_and_writes_the_plan(tmp_path, study):
     )
 
 
+@pytest.mark.integration
 def test_plan_claims_only_what_was_measured(tmp_path):
     """The study's figures hold under its law and drive: elsewhere plan says "not measured"
     and names the command that measures it; at the study's own conditions it gives a number."""
@@ -293,6 +306,7 @@ def test_plan_claims_only_what_was_measured(tmp_path):
     assert math.isnan(p.expected_error) and "drive.throw_number = 1.3" in p.error_source
 
 
+@pytest.mark.integration
 def test_plan_json_is_strict_json_with_null_for_what_was_not_measured(capsys):
     """'not measured' is NaN in Python and null in the JSON (NaN is not JSON)."""
 

@@ -34,6 +34,7 @@ def test_replica_k_is_the_case_seeded_seed_plus_k(tiny):
     assert all(replicas.replica_case(case, k).run.replicas == 1 for k in range(4))
 
 
+@pytest.mark.integration
 def test_the_pool_is_dem_measure_pooled_of_the_replicas_own_runs(pooled_run):
     case, out, summary = pooled_run
     per = summary["per_replica"]
@@ -54,6 +55,7 @@ def test_the_pool_is_dem_measure_pooled_of_the_replicas_own_runs(pooled_run):
     assert not (out / "replicas" / "1" / "frames").exists()
 
 
+@pytest.mark.integration
 def test_replica_zero_is_the_single_run_bit_for_bit(pooled_run, tmp_path):
     case, _, summary = pooled_run
     single = run_case(replicas.replica_case(case, 0), tmp_path / "one", threads=1, progress=False)
@@ -61,6 +63,7 @@ def test_replica_zero_is_the_single_run_bit_for_bit(pooled_run, tmp_path):
     assert "excludes the fill-to-fill spread" in single["error_bar"]
 
 
+@pytest.mark.integration
 def test_a_replicated_run_is_reproducible(pooled_run, tmp_path):
     case, _, summary = pooled_run
     again = replicas.run_replicas(case, tmp_path / "again", threads=1, progress=False)
@@ -79,6 +82,7 @@ def test_an_earlier_run_is_refused_before_any_replica_starts(pooled_run):
     assert (out / "summary.json").read_bytes() == before
 
 
+@pytest.mark.integration
 def test_resume_reruns_only_what_is_missing(pooled_run, tmp_path):
     case, out, summary = pooled_run
     import shutil

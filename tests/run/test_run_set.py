@@ -12,6 +12,7 @@ def _case_dir(tmp_path):
     return write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", "cycles = 1"))
 
 
+@pytest.mark.integration
 def test_run_set_changes_the_case_and_summary_json_records_it(tmp_path):
     case_dir = _case_dir(tmp_path)
     before = (case_dir / "case.toml").read_bytes()
@@ -42,6 +43,7 @@ def test_plan_set_refuses_bad_values_before_anything_runs(tmp_path, capsys, opti
     assert not (case_dir / "output").exists()
 
 
+@pytest.mark.integration
 def test_plan_set_is_the_edited_case(tmp_path, capsys):
     case_dir = _case_dir(tmp_path)
     assert main(["plan", str(case_dir), "--json", "--set", "run.cycles=40"]) == 0

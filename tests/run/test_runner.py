@@ -22,6 +22,7 @@ def _case_dir(tmp_path: Path, cycles: int = 6) -> Path:
     return write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", f"cycles = {cycles}"))
 
 
+@pytest.mark.integration
 def test_refuses_to_overwrite_an_earlier_run(tmp_path):
     case = load_case(_case_dir(tmp_path, cycles=1))
     out = tmp_path / "out"
@@ -71,6 +72,7 @@ def _wait_for_frames(out: Path, frames: int, proc: subprocess.Popen, limit: floa
     pytest.fail("run did not reach the frame to interrupt in time")
 
 
+@pytest.mark.integration
 def test_interrupt_and_resume_is_bit_identical(tmp_path):
     case_dir = _case_dir(tmp_path)
     case = load_case(case_dir)
@@ -112,6 +114,7 @@ def test_interrupt_and_resume_is_bit_identical(tmp_path):
     assert pvd.count('part="0"') == a["frame_count"]
 
 
+@pytest.mark.integration
 def test_results_of_a_killed_run_are_readable(tmp_path):
     case_dir = _case_dir(tmp_path)
     out = tmp_path / "killed"
@@ -136,6 +139,7 @@ def test_results_of_a_killed_run_are_readable(tmp_path):
     lock_output(out).close()
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("lab_frame", [False, True])
 def test_pvd_of_a_run_is_a_time_series_with_the_documented_arrays(tmp_path, lab_frame):
     import pyvista as pv
@@ -162,6 +166,7 @@ def test_pvd_of_a_run_is_a_time_series_with_the_documented_arrays(tmp_path, lab_
         assert floor_z == pytest.approx(expected if lab_frame else 0.0, abs=1e-9)
 
 
+@pytest.mark.integration
 def test_summary_records_the_dem_version_and_commit(tmp_path):
     import dem
     from dem.provenance import git_commit
@@ -181,6 +186,7 @@ def test_summary_records_the_dem_version_and_commit(tmp_path):
     assert {"date", "host", "load_average"} <= set(provenance)
 
 
+@pytest.mark.integration
 def test_auto_settle_measures_after_the_detected_transient(tmp_path, monkeypatch, recwarn):
     from dem import config
 
@@ -201,6 +207,7 @@ def test_auto_settle_measures_after_the_detected_transient(tmp_path, monkeypatch
         assert summary["settle_transient_ended"]
 
 
+@pytest.mark.integration
 def test_auto_settle_cannot_go_into_a_liggghts_deck(tmp_path):
     from dem.io.liggghts import write_deck
 
@@ -277,6 +284,7 @@ def test_the_compile_check_tells_a_mesh_trough_variant_from_a_flat_one(tmp_path)
     assert _holds_variant(garbled, mesh=True)  # unreadable: assume compiled (nothing is lost)
 
 
+@pytest.mark.integration
 def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, monkeypatch,
                                                                      capsys):  # fmt: skip
     """The warm-up compiles on two separate grains: the run's own grains never see it."""
@@ -293,6 +301,7 @@ def test_a_first_run_says_it_compiles_and_its_trajectory_is_unchanged(tmp_path, 
     assert first["per_cycle_velocity"] == plain["per_cycle_velocity"]
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_a_signal_while_settling_stops_at_once_with_a_message(tmp_path, sig):
     """Before the drive starts there is nothing worth a checkpoint: the run stops within about
@@ -313,6 +322,7 @@ def test_a_signal_while_settling_stops_at_once_with_a_message(tmp_path, sig):
     assert not (out / "checkpoint.npz").exists()
 
 
+@pytest.mark.integration
 def test_a_full_disk_ends_in_one_line_and_a_readable_results_file(tmp_path, monkeypatch, capsys):
     """ENOSPC while a run writes its cycles: exit 1, one line naming the cause, no traceback,
     and results.h5 holds the cycles written before (the writer flushes each record)."""
@@ -342,6 +352,7 @@ def test_a_full_disk_ends_in_one_line_and_a_readable_results_file(tmp_path, monk
     assert len(r["cycles"]["mean_velocity"]) == 2
 
 
+@pytest.mark.integration
 def test_a_run_refused_inside_leaves_no_empty_output_folder(tmp_path):
     """An error raised after the folder was locked (here a fill that cannot come to rest, while
     settling) leaves no folder behind that was not there before."""
@@ -362,6 +373,7 @@ def test_a_run_refused_inside_leaves_no_empty_output_folder(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.integration
 def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_for_bit(
     tmp_path, monkeypatch
 ):
@@ -385,6 +397,7 @@ def test_a_signal_mid_frame_is_honoured_within_a_check_interval_and_resumes_bit_
     np.testing.assert_array_equal(a["frames"][-1]["positions"], b["frames"][-1]["positions"])
 
 
+@pytest.mark.integration
 def test_a_run_that_would_take_years_is_refused_at_load_with_the_figure(tmp_path, capsys):
     """The steps are estimated from the case alone (dem plan's estimate): 1e7 cycles of the
     stiffest contact allowed would take years, so dem run refuses it, naming the steps and the
@@ -402,6 +415,7 @@ def test_a_run_that_would_take_years_is_refused_at_load_with_the_figure(tmp_path
     assert not out.exists()
 
 
+@pytest.mark.integration
 def test_a_slow_scene_asks_for_a_stop_every_stop_latency_not_500_steps(tmp_path, monkeypatch):
     """When 500 steps take long (a million spheres take about a minute), ``run`` shortens its
     chunks to DEM_STOP_LATENCY_S of wall time from the last chunk's speed, so a signal is still

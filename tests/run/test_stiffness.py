@@ -16,6 +16,7 @@ CASES = Path(__file__).resolve().parents[2] / "cases"
 PARITY = Path(__file__).resolve().parents[2] / "validation" / "liggghts-bulk" / "sphere-bed-5e7"
 
 
+@pytest.mark.integration
 def test_one_grain_is_the_resting_contact_of_the_single_grain_study():
     """One grain on the floor: omega_bed is the contact's own sqrt(S / m), with S the Hertz
     tangent stiffness under the grain's weight, as validation/impact-law's compliant floor."""
@@ -32,6 +33,7 @@ def test_one_grain_is_the_resting_contact_of_the_single_grain_study():
     assert mode.compliance == pytest.approx(case.drive.omega**2 * m / s, rel=1e-12)
 
 
+@pytest.mark.integration
 def test_compliance_falls_as_e_to_the_minus_two_thirds_and_inverts():
     scene = resolve(load_case(CASES / "sphere-bed"))
     base = stiffness.bed_mode(scene).compliance
@@ -48,6 +50,7 @@ def test_compliance_falls_as_e_to_the_minus_two_thirds_and_inverts():
     assert value == pytest.approx(2.0 * linear.case.contact.stiffness)
 
 
+@pytest.mark.integration
 def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_names():
     data = stiffness.study()
     assert data is not None, "dem/data/stiffness_convergence.json ships with dem"
@@ -61,6 +64,7 @@ def test_the_warning_fires_on_the_soft_sphere_bed_and_not_at_the_stiffness_it_na
     assert not [a for a in one.warnings() if a.key.startswith("contact.")]
 
 
+@pytest.mark.integration
 def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(capsys):
     """summary.json's ``stiffness`` and the terminal's line: the 5e7 Pa LIGGGHTS-parity sphere
     bed is too soft and names the value its warning names; at that value it is stiff enough."""
@@ -90,6 +94,7 @@ def test_every_bed_summary_says_whether_its_stiffness_gives_the_rigid_answer(cap
     assert "stiff enough" in "\n".join(stiff_lines)
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("name", ["sphere-bed", "screw-trough", "u-trough", "v-trough", "feeder"])
 def test_every_shipped_bulk_case_is_stiff_enough_for_the_rigid_answer(name):
     """The shipped beds sit where validation/bulk-convergence measured them within 2 % of the

@@ -192,6 +192,7 @@ def test_tangential_keys(tmp_path):
             load_case(write_case(tmp_path, with_changes({key: keys[key]})))
 
 
+@pytest.mark.validation
 def test_wall_lever_arm_reaches_the_kernels_and_a_bad_one_is_refused_by_key(tmp_path):
     from dem.kernels.contact import P_WALL_ARM
     from dem.scene.timestep import ContactLaw
@@ -283,6 +284,7 @@ def test_a_key_of_another_shape_is_refused_naming_its_shape(tmp_path, shape, key
     assert info.value.key == f"particles.{key}"
 
 
+@pytest.mark.validation
 def test_screw_and_clump_build_their_template(tmp_path):
     screw = with_changes(
         {
@@ -568,6 +570,7 @@ def test_with_drive_keeps_the_given_quantity_and_recomputes_the_other():
     assert case.drive.angle == 25.0  # frozen: the original is untouched
 
 
+@pytest.mark.validation
 def test_second_component_and_ramp_are_read_and_kept_by_with_drive(tmp_path):
     changes = {"drive.second_amplitude": 2e-4, "drive.second_angle": 90.0,
                "drive.second_phase": 90.0, "drive.ramp_cycles": 3.5}  # fmt: skip
@@ -590,6 +593,7 @@ def test_second_component_and_ramp_are_read_and_kept_by_with_drive(tmp_path):
     assert plain.velocity_scale == plain.amplitude * plain.omega * math.cos(math.radians(25.0))
 
 
+@pytest.mark.validation
 def test_with_tangential_gives_the_deck_equivalent_case():
     hertz = load_case(CASES_DIR / "sphere-bed").with_tangential("liggghts")
     assert hertz.contact.tangential == "liggghts"
@@ -632,6 +636,7 @@ def test_a_clumps_mass_sets_its_density_and_a_density_beside_it_is_refused():
         assert info.value.key == "material.density" and "required" in str(info.value)
 
 
+@pytest.mark.validation
 def test_the_liggghts_parity_bed_is_the_sphere_bed_at_5e7_pa():
     """validation/liggghts-bulk/sphere-bed-5e7 differs from cases/sphere-bed in stiffness and
     step only: the LIGGGHTS comparisons keep their bed while the shipped one is converged."""

@@ -51,6 +51,7 @@ def test_there_are_case_readmes():
     assert len(READMES) >= 3
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("readme", READMES, ids=[p.parent.name for p in READMES])
 def test_a_case_readme_states_its_case_tomls_numbers(readme):
     case = load_case(readme.parent)

@@ -28,12 +28,14 @@ def overlaps(pos: np.ndarray, radius: np.ndarray, length: float) -> int:
     [(1500, 0.10, 0.04), (400, 0.012, 0.01), (3000, 0.05, 0.02)],
     ids=["sphere-bed", "narrow: fewer than 3 cells, the box grows", "deep"],
 )
+@pytest.mark.validation
 def test_sphere_fill_is_the_oracles_bit_for_bit(n, length, width):
     new, h_new = fill.random_fill(n, 0.002, length, width, np.random.default_rng(11))
     old, h_old = naive_fill(n, 0.002, length, width, np.random.default_rng(11))
     assert np.array_equal(new, old) and h_new == h_old
 
 
+@pytest.mark.validation
 def test_clump_fill_is_the_oracles_bit_for_bit():
     screw = shapes.screw(0.022, 0.0018, 0.0036, mass=0.0025)
     for n, length, width in [(200, 0.12, 0.06), (60, 0.05, 0.02)]:
@@ -43,6 +45,7 @@ def test_clump_fill_is_the_oracles_bit_for_bit():
         assert new[2] == old[2]
 
 
+@pytest.mark.validation
 def test_fill_is_seeded_overlap_free_and_inside_the_walls():
     r, length, width = 0.002, 0.08, 0.03
     a, h = fill.random_fill(4000, r, length, width, np.random.default_rng(1))
@@ -55,6 +58,7 @@ def test_fill_is_seeded_overlap_free_and_inside_the_walls():
     assert (a[:, 2] >= r).all() and (a[:, 2] <= h - r + 1e-15).all()
 
 
+@pytest.mark.validation
 def test_clump_fill_members_never_overlap():
     screw = shapes.screw(0.022, 0.0018, 0.0036, mass=0.0025)
     length, width = 0.1, 0.05
@@ -75,6 +79,7 @@ def test_clump_fill_members_never_overlap():
     assert (np.abs(members[:, 1]) <= width / 2 - radii + 1e-15).all()
 
 
+@pytest.mark.validation
 def test_a_large_fill_scales_linearly():
     """200,000 spheres: the grid keeps each try local (the O(N^2) oracle would take hours)."""
     pos, h = fill.random_fill(200_000, 0.002, 1.0, 0.2, np.random.default_rng(4))

@@ -111,6 +111,7 @@ def _case(directory, key: str, value: str, owner: str):
     return directory
 
 
+@pytest.mark.validation
 def test_every_owner_has_a_base_case_that_loads_and_reads_its_keys(tmp_path):
     """Each base case loads and chooses its owner's shape and laws; _set replaces, adds and
     removes keys where they live."""
@@ -152,6 +153,7 @@ def test_hostile_value_is_refused_with_one_line_and_nothing_written(
     assert not out.exists()
 
 
+@pytest.mark.validation
 def test_a_count_whose_state_exceeds_the_machine_is_refused_before_anything(tmp_path, capsys):
     """count = 1e9 used to reserve 23 GB and start a fill that never ended: now the memory
     estimate (dem plan's, extrapolated without allocating) refuses it at once."""
@@ -195,6 +197,7 @@ def _snapshot(path):
 
 @pytest.mark.parametrize("name, target, options", PLANTED,
                          ids=[f"{n}-{t}{''.join(o)}" for n, t, o in PLANTED])  # fmt: skip
+@pytest.mark.validation
 def test_a_planted_link_is_refused_and_nothing_is_written_or_deleted_through_it(
     tmp_path, capsys, name, target, options
 ):

@@ -77,6 +77,7 @@ def _closest(p, tri):
     return closest_point(p[0], p[1], p[2], tri, 0)
 
 
+@pytest.mark.validation
 def test_closest_point_matches_brute_force_and_names_the_feature():
     rng = np.random.default_rng(0)
     uv = np.array([(a, b) for a in np.linspace(0, 1, 301) for b in np.linspace(0, 1, 301)
@@ -123,6 +124,7 @@ def _run_single(case, position, velocity, steps):
     return sim, np.array(out)
 
 
+@pytest.mark.validation
 @pytest.mark.parametrize("where", ["face", "shared vertex", "shared edge"])
 def test_a_flat_mesh_reproduces_the_flat_walls(tmp_path, where):
     """A sphere on a floor cut into many triangles moves as on the flat floor: no contact twice."""
@@ -141,6 +143,7 @@ def test_a_flat_mesh_reproduces_the_flat_walls(tmp_path, where):
     assert abs(b.spheres.v[0]).max() < 1e-3
 
 
+@pytest.mark.validation
 def test_sliding_down_a_tilted_mesh_follows_coulomb(tmp_path):
     """A block on a plane tilted by a = 30 deg slides with g (sin a - mu cos a)."""
     a = math.radians(30.0)
@@ -164,6 +167,7 @@ def test_sliding_down_a_tilted_mesh_follows_coulomb(tmp_path):
     assert np.dot(dv, along) == pytest.approx(expected, rel=0.01)
 
 
+@pytest.mark.validation
 def test_a_grain_rests_in_the_u_trough(tmp_path):
     from dem.scene.mesh import extrude as ext
 
@@ -183,6 +187,7 @@ def test_a_grain_rests_in_the_u_trough(tmp_path):
     assert sim.mesh.gaps(sim.spheres.x)[0] > 0.95 * r
 
 
+@pytest.mark.validation
 def test_a_fast_grain_does_not_tunnel(tmp_path):
     mesh = _box_mesh(tmp_path / "box.stl", x_segments=2)
     case = _case(tmp_path, mesh=mesh, rotation="true")
@@ -199,6 +204,7 @@ def test_a_fast_grain_does_not_tunnel(tmp_path):
     assert np.linalg.norm(sim.spheres.v[0]) < 1e-3
 
 
+@pytest.mark.validation
 def test_a_bed_in_the_u_trough_stays_above_the_mesh_in_every_frame(tmp_path):
     """dem run on a U-trough mesh: every sphere of every frame lies inside the pan, clear of it."""
     import h5py

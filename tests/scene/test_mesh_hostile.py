@@ -64,6 +64,7 @@ def test_other_tiny_bumpiness_values_are_refused_too(tmp_path, capsys, b):
     _refused(code, err, "particles.max_bumpiness", "<= b <= 1")
 
 
+@pytest.mark.validation
 def test_the_smallest_bumpiness_named_is_accepted(tmp_path, capsys):
     """The bound in the message is rounded up: the value it names loads (at most 1000 spheres)."""
     import re
@@ -129,6 +130,7 @@ def _mesh_case(tmp_path, name: str, content: bytes):
     return write_case(case_dir, text)
 
 
+@pytest.mark.validation
 def test_the_box_meshes_load_in_every_format(tmp_path, capsys):
     """The base of the variants below: valid files of each kind pass the door."""
     for name, binary in [("b.stl", True), ("a.stl", False), ("m.obj", False)]:

@@ -49,6 +49,7 @@ def test_resolve_builds_the_law_once_and_a_scene_passes_through(case, law_builds
     assert finer.step.dt == 0.5 * scene.step.dt and finer.step.limit == scene.step.limit
 
 
+@pytest.mark.validation
 def test_the_scene_holds_what_the_case_gives(case):
     scene = resolve(case)
     assert scene.case is case
@@ -70,6 +71,7 @@ def test_the_sphere_grain_is_a_one_sphere_template_of_the_right_mass(case):
     assert np.all(sim.spheres.mass == scene.grain_mass)
 
 
+@pytest.mark.validation
 def test_a_clump_grain_is_the_case_template():
     case = load_case(CASES / "screw-trough")
     scene = resolve(case)
@@ -78,6 +80,7 @@ def test_a_clump_grain_is_the_case_template():
     assert scene.max_radius == float(max(case.particles.grain.radii))
 
 
+@pytest.mark.validation
 def test_a_scene_builds_the_same_simulation_as_its_case(case):
     from_case = setup.from_case(case)
     from_scene = setup.from_case(resolve(case))
@@ -88,6 +91,7 @@ def test_a_scene_builds_the_same_simulation_as_its_case(case):
     assert np.array_equal(from_case.spheres.v, from_scene.spheres.v)
 
 
+@pytest.mark.validation
 def test_a_scene_places_the_same_grains_as_its_case(case):
     x = [[0.01, 0.0, 0.003], [0.02, 0.0, 0.004]]
     v = [[0.1, 0.0, -0.2], [0.0, 0.0, 0.0]]
@@ -99,6 +103,7 @@ def test_a_scene_places_the_same_grains_as_its_case(case):
     assert np.array_equal(a.spheres.x, b.spheres.x)
 
 
+@pytest.mark.validation
 def test_a_changed_case_is_resolved_anew(case):
     scene = resolve(case)
     few = dataclasses.replace(case, particles=dataclasses.replace(case.particles, count=1))

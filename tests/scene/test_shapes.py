@@ -186,6 +186,7 @@ def test_screw_bumpiness_rule(b):
     assert profile.min() >= (1.0 - b) * rs * (1 - 1e-12)
 
 
+@pytest.mark.validation
 def test_screw_matches_voxel_twin():
     """Exact axial integration against brute-force voxels (independent 3-D counting)."""
     t = shapes.screw(**SCREW, mass=2.5e-3)
@@ -200,6 +201,7 @@ def test_screw_matches_voxel_twin():
     assert K * e_vol < 2e-3 * vol  # the twin is sharp enough for the check to mean something
 
 
+@pytest.mark.validation
 def test_overlapping_clump_grid_matches_voxel_twin():
     """A bent, overlapping clump (grid method) against brute-force voxels."""
     c = np.array([[0, 0, 0], [1.2, 0, 0], [2.0, 0.8, 0.0], [2.4, 1.6, 0.9], [0, 0, 1.3]])

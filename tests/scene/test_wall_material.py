@@ -24,6 +24,7 @@ def _case(tmp_path, wall: str = "", **overrides):
     return load_case(write_case(tmp_path / "case", text), overrides or None)
 
 
+@pytest.mark.validation
 def test_wall_values_default_to_the_materials_and_are_checked_by_key(tmp_path):
     case = _case(tmp_path)
     assert case.wall_material == case.material and case.wall.given == ()
@@ -65,6 +66,7 @@ def _slide(tmp_path, wall: str, incline: float, grains: float = 0.35) -> float:
     return (sim.mean_velocity_x() - v0) / (n * sim.dt)
 
 
+@pytest.mark.validation
 def test_a_block_slides_on_the_floor_by_the_walls_friction_not_the_grains(tmp_path):
     """On 14 deg, steeper than atan(0.2) = 11.3 deg: a = -g (sin a - mu_w cos a) with the wall's
     mu_w = 0.2 (the grains' 0.35 would hold it); with the wall at 0.35 and the grains at 0.2 it
@@ -82,6 +84,7 @@ def test_an_incline_steeper_than_the_walls_friction_angle_is_refused_by_that_key
     assert info.value.key == "trough.inclination" and "wall.friction" in str(info.value)
 
 
+@pytest.mark.validation
 def test_the_point_mass_and_the_deck_see_the_walls_values(tmp_path):
     from dem.io.liggghts import write_deck
     from dem.run.summary import pointmass_bounded

@@ -48,6 +48,7 @@ def test_a_bad_point_is_refused_before_anything_runs(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.integration
 def test_two_points_run_on_dask_and_a_rerun_recomputes_nothing(tmp_path, capsys):
     case = write_case(tmp_path / "case", TINY)
     out = tmp_path / "out"
@@ -83,6 +84,7 @@ def test_two_points_run_on_dask_and_a_rerun_recomputes_nothing(tmp_path, capsys)
     assert stamps == {r: (out / r / SUMMARY).stat().st_mtime_ns for r in stamps}
 
 
+@pytest.mark.integration
 def test_a_failed_point_is_reported_while_the_other_finishes(tmp_path, capsys):
     """E = 1e3 Pa passes the checks at load; the guard stops it at the first impacts."""
     case = write_case(tmp_path / "case", TINY)

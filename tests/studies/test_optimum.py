@@ -37,6 +37,7 @@ def test_the_known_maximum_is_found_within_its_stated_uncertainty(seed):
     assert abs(r.x - 31.7) < 3.0 * r.uncertainty + 0.5, (r.x, r.uncertainty, r.reason)
 
 
+@pytest.mark.integration
 def test_coverage_over_many_noisy_searches():
     """About 95 % of 2-sigma intervals hold the maximum (at least 80 % over 40 searches)."""
     hits = 0

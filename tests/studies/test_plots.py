@@ -67,6 +67,7 @@ def test_axis_label_and_held_text():
     assert text.replace(plots.NBSP, " ") == "Gamma = 1.8, f = 60 Hz, A = 0.5 mm, landing law paper"
 
 
+@pytest.mark.integration
 def test_pointmass_optimum_figures(tmp_path, figures):
     from dem.pointmass.sweep import optimum
 
@@ -83,6 +84,7 @@ def test_pointmass_optimum_figures(tmp_path, figures):
     assert figures[1].axes[0].get_xlabel() == "throw number Gamma (-)"
 
 
+@pytest.mark.integration
 def test_run_figures(tmp_path, figures):
     c = np.arange(10)
     v = 0.05 + 0.001 * np.sin(c)
@@ -119,6 +121,7 @@ def _rows():
     return rows
 
 
+@pytest.mark.integration
 def test_sweep_figure_shows_m_s_and_v_norm(tmp_path, figures):
     from dem.studies.sweep import plot
 
@@ -155,6 +158,7 @@ def _search(peak: bool):
     return maximize_noisy(evaluate, 10.0, 60.0, tolerance=1.0, max_evaluations=20)
 
 
+@pytest.mark.integration
 def test_bulk_optimum_figure_has_a_plateau_band_and_no_stop_reason(tmp_path, figures):
     from dem.pointmass.sweep import optimum
     from dem.studies.optimum import _plot, plateau

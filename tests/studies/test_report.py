@@ -80,6 +80,7 @@ def test_running_statistics_match_direct_formula():
             assert np.isclose(err[k - 1], v[:k].std(ddof=1) / np.sqrt(k))
 
 
+@pytest.mark.integration
 def test_single_run_report(tmp_path):
     out = _run_folder(tmp_path / "run")
     files = make_report([out])
@@ -111,6 +112,7 @@ def test_report_without_results_h5_skips_snapshot(tmp_path):
     assert "summary.json (6 cycles)" in text and "bed_snapshot.png skipped" in text
 
 
+@pytest.mark.integration
 def test_comparison_across_runs(tmp_path):
     outs = [_run_folder(tmp_path / f"phi{a}", angle=a) for a in (15.0, 25.0, 35.0)]
     files = make_report(outs, dest=tmp_path / "cmp")
@@ -139,6 +141,7 @@ def test_missing_summary_is_named(tmp_path):
         make_report([tmp_path / "empty"])
 
 
+@pytest.mark.integration
 def test_report_shows_the_bounded_point_mass_where_it_differs(tmp_path):
     out = _run_folder(tmp_path / "run", with_h5=False)
     s = json.loads((out / "summary.json").read_text())

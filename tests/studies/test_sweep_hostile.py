@@ -56,6 +56,7 @@ def test_a_grid_over_the_limit_is_refused_at_once(capsys, tmp_path, sets, size):
     assert not out.exists()
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("command", ["sweep", "optimum"])
 def test_an_unreachable_scheduler_is_named_not_called_a_file_error(capsys, tmp_path, command):
     import dask
@@ -129,6 +130,7 @@ def sweep(capsys, case, out, *extra):
                "--json", *extra)  # fmt: skip
 
 
+@pytest.mark.integration
 def test_a_finished_point_is_reused_only_for_the_same_case_and_options(capsys, tmp_path):
     """A finished point of another --cycles or another case was reported as the new result
     (exit 0); now the sweep refuses, naming the point and each key that differs, and leaves the
@@ -170,6 +172,7 @@ def test_a_finished_point_without_a_record_is_not_taken_as_this_sweeps(capsys, t
     assert not (tmp_path / "out" / "sweep.csv").exists()
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("text", ["", '{"mean_velocity": 0.0', "[1, 2]"])
 def test_a_corrupt_summary_of_a_finished_point_is_named(capsys, tmp_path, text):
     """A truncated or list-valued summary.json of a finished point was a traceback when the
