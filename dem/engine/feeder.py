@@ -257,7 +257,7 @@ def grain_factory(case):
 
     def make(positions, quats):
         positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
-        if pt.shape == "sphere":
+        if not pt.clumps:
             return Spheres.create(positions, pt.radius, mat.density), None
         bodies, spheres = Bodies.create(pt.grain, positions, quats)
         return spheres, bodies
@@ -268,6 +268,6 @@ def grain_factory(case):
 def grain_mass(case) -> float:
     """Mass of one grain of the case, kg."""
     pt = case.particles
-    if pt.shape == "sphere":
+    if not pt.clumps:
         return sphere_mass(case.material.density, pt.radius)
     return float(pt.grain.mass)

@@ -100,7 +100,7 @@ def _build(
     pt, mat = case.particles, case.material
     n = positions.shape[0]
     bodies = None
-    if pt.shape == "sphere":
+    if not pt.clumps:
         spheres = Spheres.create(positions, pt.radius, mat.density)
         if velocities is not None:
             spheres.v[:] = velocities

@@ -108,7 +108,7 @@ def study_data() -> dict | None:
 
 def study_kind(case) -> str:
     """The shipped case whose study applies: spheres -> sphere-bed, clumps -> screw-trough."""
-    return "sphere-bed" if case.particles.shape == "sphere" else "screw-trough"
+    return "screw-trough" if case.particles.clumps else "sphere-bed"
 
 
 def _interpolate(series: list[list[float]], x: float, cheap: str = "low") -> tuple[float, bool]:
@@ -183,7 +183,7 @@ def equivalent_youngs_modulus(case) -> float:
 def grain_length(case) -> float:
     """A grain's length, m: a sphere's diameter, a clump's largest extent."""
     pt = case.particles
-    if pt.shape == "sphere":
+    if not pt.clumps:
         return 2.0 * pt.radius
     g = pt.grain
     centres, radii = np.asarray(g.centres), np.asarray(g.radii)

@@ -101,11 +101,11 @@ def compile_first(case, progress: bool) -> None:
 
     from dem import kernels
 
-    if kernels.compiled(clumps=case.particles.shape != "sphere", mesh=case.trough.mesh is not None):
+    if kernels.compiled(clumps=case.particles.clumps, mesh=case.trough.mesh is not None):
         return
     from dem.run.progress import Status
 
-    kind = "clump" if case.particles.shape != "sphere" else "sphere"
+    kind = case.particles.kind
     kind += " mesh-trough" if case.trough.mesh is not None else ""
     small = replace(case, particles=replace(case.particles, count=min(2, case.particles.count)))
     message = (f"compiling the {kind} step kernels for this machine, once (numba, no cache yet; "

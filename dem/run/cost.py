@@ -110,7 +110,7 @@ def _allocated_bytes(scene, spheres: int, grains: int, threads: int) -> int:
     case = scene.case
     width = scene.law.history_width
     total = 0
-    if case.particles.shape == "sphere":
+    if not case.particles.clumps:
         s = Spheres.create(np.zeros((spheres, 3)), case.particles.radius, case.material.density)
         arrays = [s]
     else:
@@ -153,7 +153,7 @@ def rate(case, threads: int, data: dict | None) -> tuple[float, str]:
                 return _scale(measured, used, threads), f"measured by the last run, {last}"
         except (ValueError, KeyError, TypeError):
             pass  # an older or partial summary: fall back to the study
-    kind = "sphere" if case.particles.shape == "sphere" else "clump"
+    kind = case.particles.kind
     one = RATE_1THREAD[kind] * (MESH_RATE_FACTOR if case.trough.mesh is not None else 1.0)
     where = ", a mesh trough" if case.trough.mesh is not None else ""
     return _scale(one, 1, threads), f"the rate of the shipped {kind} cases{where} on a 2-core VM"

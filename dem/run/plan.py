@@ -122,7 +122,7 @@ def plan(
     threads = config.default_threads() if threads is None else int(threads)
     cycles = case.run.cycles if cycles is None else int(cycles)
     pt = case.particles
-    per_grain = 1 if pt.shape == "sphere" else pt.grain.count
+    per_grain = pt.spheres_per_grain
     grains = pt.count
     spheres = grains * per_grain
     step = scene.step
@@ -131,7 +131,7 @@ def plan(
     if not auto_settle:
         settle = case.run.settle_cycles
     elif grains > 1:
-        settle = cost.AUTO_SETTLE_CYCLES["sphere" if pt.shape == "sphere" else "clump"]
+        settle = cost.AUTO_SETTLE_CYCLES[pt.kind]
     else:
         settle = config.DEM_AUTO_SETTLE_MIN_CYCLES
     steps = int(cost.settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
@@ -139,7 +139,7 @@ def plan(
     speed, source = cost.rate(case, threads, data)
     from dem import kernels
 
-    shape = "sphere" if pt.shape == "sphere" else "clump"
+    shape = pt.kind
     cached = kernels.compiled(clumps=shape == "clump", mesh=case.trough.mesh is not None)
     compile_s = 0.0 if cached else cost.COMPILE_S[shape]
     fill_s = cost.FILL_S[shape] + grains * cost.FILL_S_PER_GRAIN[shape]

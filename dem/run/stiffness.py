@@ -59,7 +59,7 @@ def bed_mode(scene, youngs_modulus: float | None = None, stiffness: float | None
     case = scene.case
     c, pt = case.contact, case.particles
     mass, radius = scene.grain_mass, scene.max_radius
-    volume = mass / scene.grain.density if pt.shape != "sphere" else sphere_volume(radius)
+    volume = mass / scene.grain.density if pt.clumps else sphere_volume(radius)
     area = case.trough.length * case.trough.width
     height = pt.count * volume / (PACKING * area)
     layers = max(1.0, height / (2.0 * radius))

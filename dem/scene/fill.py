@@ -50,7 +50,7 @@ def clump_box_height(n: int, template, length: float, width: float) -> float:
 def box_height(case) -> float:
     """Starting fill-box height of a :class:`dem.scene.case.Case`'s grains, m (no fill is drawn)."""
     pt, t = case.particles, case.trough
-    if pt.shape == "sphere":
+    if not pt.clumps:
         return sphere_box_height(pt.count, pt.radius, t.length, t.width)
     return clump_box_height(pt.count, pt.grain, t.length, t.width)
 
@@ -69,7 +69,7 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     """
     pt, t = case.particles, case.trough
     rng = np.random.default_rng(case.run.seed)
-    reach = pt.radius if pt.shape == "sphere" else pt.grain.bounding_radius
+    reach = pt.reach
     start, span = 0.0, t.length
     if getattr(case, "feeder", None) is not None:
         start, span = reach, t.length - 2.0 * reach
@@ -79,7 +79,7 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
                              "its grains between the back wall and the edge)")  # fmt: skip
     if t.mesh is not None:
         return fill_mesh(case, rng, start, span)
-    if pt.shape == "sphere":
+    if not pt.clumps:
         positions, height = random_fill(pt.count, pt.radius, span, t.width, rng)
         quats = None
     else:
@@ -105,7 +105,7 @@ def fill_mesh(
     from dem.scene.mesh import load_mesh
 
     pt, t = case.particles, case.trough
-    sphere = pt.shape == "sphere"
+    sphere = not pt.clumps
     reach = pt.radius if sphere else pt.grain.bounding_radius
     mesh = load_mesh(t.mesh, length=t.length)
     lo, hi = mesh.tri.min(axis=(0, 1)), mesh.tri.max(axis=(0, 1))

@@ -62,7 +62,7 @@ class Scene:
         rho V equals it to rounding); a clump: its template's mass.
         """
         pt = self.case.particles
-        if pt.shape == "sphere":
+        if not pt.clumps:
             return sphere_mass(self.case.material.density, pt.radius)
         return float(self.grain.mass)
 
@@ -95,7 +95,7 @@ def resolve(case, *, timestep: float | None = None, check_limit: bool = True) ->
         return replace(case, step=step)
     check_buildable(case)
     pt = case.particles
-    grain = shapes.sphere(pt.radius, case.material.density) if pt.shape == "sphere" else pt.grain
+    grain = pt.grain if pt.clumps else shapes.sphere(pt.radius, case.material.density)
     law = ContactLaw.from_case(case)
     step = timestep_for(case, timestep=timestep, check_limit=check_limit, law=law)
     return Scene(case=case, grain=grain, law=law, step=step, trough=Trough.from_case(case))
@@ -104,5 +104,5 @@ def resolve(case, *, timestep: float | None = None, check_limit: bool = True) ->
 def check_buildable(case) -> None:
     """Refuse what the engine cannot build (a grain without its template)."""
     pt = case.particles
-    if pt.shape != "sphere" and pt.grain is None:
+    if pt.clumps and pt.grain is None:
         raise InputError("particles.shape", pt.shape, "a case read by dem.scene.case.load_case")

@@ -261,6 +261,26 @@ class ParticlesSpec:
     max_bumpiness: float | None = None
     grain: Any = field(default=None, repr=False, compare=False)
 
+    @property
+    def clumps(self) -> bool:
+        """Whether the grains are rigid clumps of spheres (screw, clump), not single spheres."""
+        return self.shape != "sphere"
+
+    @property
+    def kind(self) -> str:
+        """The kernel family the grains run in: ``"sphere"`` or ``"clump"``."""
+        return "clump" if self.clumps else "sphere"
+
+    @property
+    def reach(self) -> float:
+        """How far a grain reaches from its centre, m: the radius, or a clump's bounding radius."""
+        return self.grain.bounding_radius if self.clumps else self.radius
+
+    @property
+    def spheres_per_grain(self) -> int:
+        """Contact spheres in one grain: 1, or a clump's member count."""
+        return self.grain.count if self.clumps else 1
+
 
 @dataclass(frozen=True)
 class RunSpec:

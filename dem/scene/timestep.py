@@ -159,7 +159,7 @@ def timestep_for(
         impact_speed = impact_speed_for(case)
     if grains is None:
         grains = pt.count
-    if pt.shape == "sphere":
+    if not pt.clumps:
         sizes = [(pt.radius, None)]
         density = mat.density
     else:

@@ -72,7 +72,7 @@ class Impact:
 def _lowest_offset(case, quat: np.ndarray | None) -> float:
     """Height of the centre of mass above the grain's lowest surface point, m."""
     pt = case.particles
-    if pt.shape == "sphere":
+    if not pt.clumps:
         return pt.radius
     from dem.kernels.rigid import quat_to_matrix
 
@@ -105,7 +105,7 @@ def virtual_impact(case, incidence: float, speed: float, quat=None, max_steps=20
     case = scene.case
     theta = math.radians(incidence)
     v0 = np.array([speed * math.sin(theta), 0.0, -speed * math.cos(theta)])
-    if case.particles.shape != "sphere" and quat is None:
+    if case.particles.clumps and quat is None:
         quat = np.array([1.0, 0.0, 0.0, 0.0])
     q = None if quat is None else np.asarray(quat, dtype=np.float64)
     height = _lowest_offset(case, q)
@@ -379,9 +379,9 @@ def calibrate(
         order = np.argsort(impacts[:, 0])
         impacts = impacts[order[np.linspace(0, len(order) - 1, max_impacts).round().astype(int)]]
     quats: list = [None]
-    if case.particles.shape != "sphere" and poses is not None:
+    if case.particles.clumps and poses is not None:
         quats = [np.asarray(q, dtype=np.float64) for q in np.reshape(poses, (-1, 4))]
-    elif case.particles.shape != "sphere":
+    elif case.particles.clumps:
         from dem.scene.fill import random_orientations
 
         rng = np.random.default_rng(case.run.seed)

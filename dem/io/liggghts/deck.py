@@ -147,7 +147,7 @@ def write_deck(
     scene = case if isinstance(case, Scene) else None
     case = case.case if scene is not None else case
     p = case.particles
-    if p.shape != "sphere" and p.grain is None:
+    if p.clumps and p.grain is None:
         raise InputError(
             "particles.shape", p.shape, "a case read by dem.scene.case.load_case", str(case.source)
         )
@@ -212,7 +212,7 @@ def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
     case = scene.case
     p = case.particles
     n = p.count
-    if p.shape == "sphere":
+    if not p.clumps:
         grain_volume = 4.0 / 3.0 * math.pi * p.radius**3
         return Grains(
             p.radius, p.radius, grain_volume, case.material.density * grain_volume, 1,
@@ -318,7 +318,7 @@ def _units_block(case: Case, boundary: str) -> list[str]:
             if youngs is not None and youngs > 1.0e9 else [])  # fmt: skip
     return [
         "atom_style granular",
-        "atom_modify map array" + ("" if case.particles.shape == "sphere" else " sort 0 0"),
+        "atom_modify map array" + (" sort 0 0" if case.particles.clumps else ""),
         boundary,
         "newton off",
         "communicate single vel yes",

@@ -65,7 +65,7 @@ def feeder_lines(
     every = max(exchange, round(grain / (f.feed_rate * timestep))) if f.feed_rate > 0 else 0
     keywords = placement(case)
     p = case.particles
-    if p.shape == "sphere":  # all_in keeps the sphere in the zone
+    if not p.clumps:  # all_in keeps the sphere in the zone
         x0, x1 = 0.0, f.feed_length
     else:  # the zone holds centres of mass (placement), as dem's feed does
         reach = p.grain.bounding_radius

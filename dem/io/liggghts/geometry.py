@@ -166,7 +166,7 @@ def placement(case: Case) -> str:
     screws were deleted at once. The inset region holds the centre of mass instead, so every
     member stays inside at any orientation.
     """
-    if case.particles.shape == "sphere":
+    if not case.particles.clumps:
         return " all_in yes"
     return " all_in no orientation random"
 
@@ -231,7 +231,7 @@ def layout(case: Case, out: Path, *, r_min: float, r_max: float, grain_volume: f
     p, t = case.particles, case.trough
     n = p.count
     # loose insertion column and a box tall enough that thrown grains never leave it
-    if p.shape == "sphere":
+    if not p.clumps:
         fill_fraction, fill_min = FILL_VOLUME_FRACTION, 4.0 * r_max
     else:
         fill_fraction, fill_min = FILL_VOLUME_FRACTION_CLUMPS, 2.5 * p.grain.bounding_radius
@@ -251,7 +251,7 @@ def layout(case: Case, out: Path, *, r_min: float, r_max: float, grain_volume: f
                 "trough.mesh", str(t.mesh), f"a pan grains fit in ({exc})", source
             ) from None
         lo, hi = tri.min(axis=(0, 1)), tri.max(axis=(0, 1))
-        margin = MESH_BOX_MARGIN * (p.radius if p.shape == "sphere" else p.grain.bounding_radius)
+        margin = MESH_BOX_MARGIN * p.reach
         box_y, box_z0 = (float(lo[1] - margin), float(hi[1] + margin)), float(lo[2] - margin)
         fill_y, fill_z0, bottom = fill_block[:2], fill_block[2], float(lo[2])
         mesh_top = float(hi[2] + margin)
@@ -262,8 +262,8 @@ def layout(case: Case, out: Path, *, r_min: float, r_max: float, grain_volume: f
             "#   pan, clear of the mesh: insert/pack does not check grains against a mesh",
         ]
     feeder = case.feeder
-    reach = p.radius if p.shape == "sphere" else p.grain.bounding_radius
-    if p.shape != "sphere":  # the region holds centres of mass (placement)
+    reach = p.reach
+    if p.clumps:  # the region holds centres of mass (placement)
         fill_y, fill_z0 = (fill_y[0] + reach, fill_y[1] - reach), fill_z0 + reach
     # a feeder fills [reach, L - reach] as dem does (dem.engine.setup), clear of the back wall and
     # edge
