@@ -20,7 +20,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import SimulationError
-from dem.kernels.contact import P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR
+from dem.kernels.contact import P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR, youngs_modulus_from_star
 from dem.scene.trough import WALLS
 
 
@@ -99,7 +99,9 @@ class InstabilityChecks:
         # Y* = E / (2 (1 - nu^2)), G* = E / (4 (2 - nu)(1 + nu)): nu from their ratio
         q = p[P_YSTAR] / p[P_GSTAR]
         nu = (4.0 - q) / (2.0 - q)
-        return "contact.youngs_modulus", float(2.0 * (1.0 - nu * nu) * p[P_YSTAR] * ratio**2.5)
+        return "contact.youngs_modulus", float(
+            youngs_modulus_from_star(p[P_YSTAR] * ratio**2.5, nu)
+        )
 
     @staticmethod
     def _at(x) -> str:

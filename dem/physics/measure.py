@@ -48,11 +48,6 @@ class VelocityStatistics:
     stderr_independent: float = math.nan
 
 
-def drive_velocity_scale(amplitude: float, omega: float, angle: float) -> float:
-    """A omega cos phi, m/s (omega in rad/s, angle phi in degrees; :mod:`dem.physics.drive`)."""
-    return drive.drive_velocity_from_omega(amplitude, omega, angle)
-
-
 def mean_and_stderr(samples: np.ndarray) -> tuple[float, float]:
     """Mean of samples (n,) and its standard error std(samples, ddof=1) / sqrt(n).
 
@@ -275,7 +270,7 @@ def conveying_velocity(
     an elliptical drive's :attr:`dem.scene.spec.DriveSpec.velocity_scale`).
     """
     if scale is None:
-        scale = drive_velocity_scale(amplitude, omega, angle)
+        scale = drive.drive_velocity_from_omega(amplitude, omega, angle)
     u = np.asarray(per_cycle, dtype=np.float64)
     if u.ndim != 1 or u.size == 0:
         raise ValueError("per_cycle must be a non-empty 1-d array")

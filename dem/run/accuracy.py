@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dem.kernels import contact
 from dem.scene.resolved import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
@@ -153,7 +154,7 @@ def linear_equivalent_stiffness(case) -> float:
     case = scene.case
     mass, radius = grain_mass_radius(scene)
     c = case.contact
-    y_star = c.youngs_modulus / (2.0 * (1.0 - c.poisson_ratio**2))
+    y_star = contact.youngs_star(c.youngs_modulus, c.poisson_ratio)
     speed = case.drive.peak_speed
     t_c = contact.hertz_collision_time(y_star, radius, mass, speed)
     return mass * (math.pi / t_c) ** 2
@@ -174,10 +175,8 @@ def equivalent_youngs_modulus(case) -> float:
         return float(c.youngs_modulus)
     t_c = math.pi * math.sqrt(mass / c.stiffness)
     speed = case.drive.peak_speed
-    # dem.kernels.contact.hertz_collision_time inverted:
-    # t_c = 2.87 (m^2 / (R Y*^2 v))^(1/5)  ->  Y* = sqrt(m^2 / (R v (t_c / 2.87)^5))
-    y_star = math.sqrt(mass**2 / (radius * speed * (t_c / 2.87) ** 5))
-    return y_star * 2.0 * (1.0 - c.poisson_ratio**2)
+    y_star = contact.hertz_youngs_star_for_time(t_c, radius, mass, speed)
+    return contact.youngs_modulus_from_star(y_star, c.poisson_ratio)
 
 
 def grain_length(case) -> float:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from dem.config import GRAVITY
+from dem.kernels import contact
 from dem.physics.mass import sphere_volume
 
 #: Solid fraction of a resting bed assumed for its height.
@@ -68,7 +69,7 @@ def bed_mode(scene, youngs_modulus: float | None = None, stiffness: float | None
         s = float(stiffness if stiffness is not None else c.stiffness)
     else:
         youngs = youngs_modulus if youngs_modulus is not None else c.youngs_modulus
-        y_star = youngs / (2.0 * (1.0 - c.poisson_ratio**2))
+        y_star = contact.youngs_star(youngs, c.poisson_ratio)
         delta = (load / (4.0 / 3.0 * y_star * math.sqrt(radius))) ** (2.0 / 3.0)
         s = 2.0 * y_star * math.sqrt(radius * delta)
     omega_c = math.sqrt(s / mass)

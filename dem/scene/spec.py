@@ -110,7 +110,7 @@ class DriveSpec:
         (:attr:`dem.physics.drive.Motion.velocity_scale`).
         """
         if self.is_single:
-            return drive.drive_velocity_from_omega(self.amplitude, self.omega, self.angle)
+            return drive.drive_velocity(self.amplitude, self.frequency, self.angle)
         return self.motion.velocity_scale
 
     @property

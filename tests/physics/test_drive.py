@@ -7,7 +7,7 @@ import pytest
 
 from dem import pointmass
 from dem.config import GRAVITY
-from dem.physics import drive, measure
+from dem.physics import drive
 from dem.scene.spec import resolve_drive
 from dem.scene.trough import Trough
 
@@ -29,7 +29,7 @@ def test_resolve_drive_is_dem_drive_bit_for_bit():
         assert by_amp.throw_number == drive.throw_number(value * 1e-3, f, phi, alpha)
         assert by_amp.omega == drive.omega(f)
         # the DEM's velocity scale is dem.physics.drive's
-        scale = measure.drive_velocity_scale(by_amp.amplitude, by_amp.omega, phi)
+        scale = drive.drive_velocity_from_omega(by_amp.amplitude, by_amp.omega, phi)
         assert scale == drive.drive_velocity(by_amp.amplitude, f, phi)
 
 

@@ -50,7 +50,7 @@ import numpy as np
 
 from dem import pointmass, provenance
 from dem.io.liggghts import DECK_NAME, LIGGGHTS_INSTALL, find_liggghts
-from dem.physics.measure import correlated_stderr, drive_velocity_scale
+from dem.physics.measure import correlated_stderr
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
 
@@ -239,7 +239,7 @@ def run_point(p: Point, results: dict, redo: bool) -> None:
     if entry is None or entry.get("settings") != want or redo:
         entry = results["points"][p.name] = {"settings": want}
     d = default.drive
-    entry["v_norm"] = drive_velocity_scale(d.amplitude, d.omega, d.angle)
+    entry["v_norm"] = d.velocity_scale
     entry["point_mass"] = point_mass(default)
     runs = [
         ("liggghts", lambda: run_liggghts_point(p, lig_case)),

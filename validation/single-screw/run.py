@@ -172,7 +172,7 @@ def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
     sim.settle()
     axis0 = quat_to_matrix(sim.bodies.q[0])[:, 0]
     y0 = float(sim.bodies.x[0, 1])
-    scale = measure.drive_velocity_scale(case.drive.amplitude, case.drive.omega, case.drive.angle)
+    scale = case.drive.velocity_scale
     per_cycle, tilt, drift, settle = [], 0.0, 0.0, None
     c = 0
     while settle is None or c < settle + cycles:

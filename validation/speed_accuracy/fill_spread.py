@@ -41,7 +41,7 @@ def run(seed: int) -> list[float]:
     with tempfile.TemporaryDirectory() as tmp:
         summary = runner.run_case(case, Path(tmp) / "out", cycles=CYCLES, threads=1,
                                   progress=False, frames=False)  # fmt: skip
-    scale = measure.drive_velocity_scale(case.drive.amplitude, case.drive.omega, case.drive.angle)
+    scale = case.drive.velocity_scale
     tau = summary["cycle_autocorrelation_time"]
     print(f"seed {seed}: v_norm {summary['mean_velocity_norm']:.4f} +- "
           f"{summary['mean_velocity_norm_stderr']:.4f} (tau {tau:.1f})", flush=True)  # fmt: skip

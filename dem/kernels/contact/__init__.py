@@ -112,6 +112,7 @@ from dem.kernels.contact.laws import (
 )
 from dem.kernels.contact.params import (
     HERTZ,
+    HERTZ_TIME_CONSTANT,
     HISTORY_WIDTH,
     IMPACT,
     IMPACT_MAX_PHASE,
@@ -148,15 +149,19 @@ from dem.kernels.contact.params import (
     damping_ratio,
     hertz_collision_time,
     hertz_max_overlap,
+    hertz_youngs_star_for_time,
     linear_collision_time,
     make_params,
     normal_law_restitution,
     rayleigh_time,
     tangent_stiffness,
+    youngs_modulus_from_star,
+    youngs_star,
 )
 
 __all__ = [
     "HERTZ",
+    "HERTZ_TIME_CONSTANT",
     "HISTORY_WIDTH",
     "IMPACT",
     "IMPACT_MAX_PHASE",
@@ -197,6 +202,7 @@ __all__ = [
     "damping_ratio",
     "hertz_collision_time",
     "hertz_max_overlap",
+    "hertz_youngs_star_for_time",
     "impact_tangential",
     "law_coefficients",
     "liggghts_tangential",
@@ -206,6 +212,8 @@ __all__ = [
     "normal_scale",
     "rayleigh_time",
     "tangent_stiffness",
+    "youngs_modulus_from_star",
+    "youngs_star",
     "rolling_cdt",
     "spring_step",
     "wall_row",

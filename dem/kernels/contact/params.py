@@ -156,7 +156,7 @@ def make_params(
     nu = poisson_ratio
     p[P_KN] = stiffness
     p[P_KT_RATIO] = tangential_stiffness_ratio
-    p[P_YSTAR] = youngs_modulus / (2.0 * (1.0 - nu * nu))
+    p[P_YSTAR] = youngs_star(youngs_modulus, nu)
     p[P_GSTAR] = youngs_modulus / (4.0 * (2.0 - nu) * (1.0 + nu))
     p[P_BETA] = damping_beta(restitution) if beta is None else beta
     p[P_MU] = friction
@@ -275,9 +275,31 @@ def hertz_max_overlap(youngs_star: float, r_eff: float, m_eff: float, speed: flo
     return (15.0 * m_eff * speed**2 / (16.0 * youngs_star * math.sqrt(r_eff))) ** 0.4
 
 
+#: The constant of the elastic Hertz contact time, t_c = C (m*^2 / (R* Y*^2 v))^(1/5).
+HERTZ_TIME_CONSTANT = 2.87
+
+
 def hertz_collision_time(youngs_star: float, r_eff: float, m_eff: float, speed: float) -> float:
     """Elastic Hertz contact duration 2.87 (m*^2 / (R* Y*^2 v))^(1/5), s."""
-    return 2.87 * (m_eff**2 / (r_eff * youngs_star**2 * speed)) ** 0.2
+    return HERTZ_TIME_CONSTANT * (m_eff**2 / (r_eff * youngs_star**2 * speed)) ** 0.2
+
+
+def hertz_youngs_star_for_time(duration: float, r_eff: float, m_eff: float, speed: float) -> float:
+    """Y* whose elastic Hertz impact at ``speed`` lasts ``duration``, Pa.
+
+    :func:`hertz_collision_time` solved for Y*: sqrt(m*^2 / (R* v (t_c / 2.87)^5)).
+    """
+    return math.sqrt(m_eff**2 / (r_eff * speed * (duration / HERTZ_TIME_CONSTANT) ** 5))
+
+
+def youngs_star(youngs_modulus: float, poisson_ratio: float) -> float:
+    """Y* = E / (2 (1 - nu^2)) of two bodies of one material, Pa."""
+    return youngs_modulus / (2.0 * (1.0 - poisson_ratio * poisson_ratio))
+
+
+def youngs_modulus_from_star(y_star: float, poisson_ratio: float) -> float:
+    """E of the material whose Y* (:func:`youngs_star`) this is, Pa."""
+    return y_star * 2.0 * (1.0 - poisson_ratio**2)
 
 
 def rayleigh_time(radius: float, density: float, youngs_modulus: float, poisson: float) -> float:
