@@ -1,7 +1,7 @@
 """Drive cycles in steps: where each cycle ends, and a per-step series binned into cycles.
 
 dem counts cycle c as the driven steps round(c P / dt) + 1 ... round((c + 1) P / dt), with
-P = 1 / f the drive period and dt the time step (``dem.run.runner``,
+P = 2 pi / omega the trough's drive period and dt the time step (``dem.run.runner``,
 ``dem.engine.simulation.measure_cycles``). A reference run that samples every step (LIGGGHTS's
 ``vx_mean.txt`` at ``sample_steps = 1``) is binned into exactly these cycles, so that both codes
 average over the same steps.
@@ -13,16 +13,23 @@ import math
 
 import numpy as np
 
+from dem.physics import drive
+from dem.scene.trough import Trough
+
 
 def steps_per_cycle(case) -> float:
-    """Time steps per drive period, P / dt (not rounded)."""
-    return (1.0 / case.drive.frequency) / case.run.timestep
+    """Time steps per drive period, 1 / (f dt), not rounded (``drive.steps_per_cycle``)."""
+    return drive.steps_per_cycle(case.drive.frequency, case.run.timestep)
 
 
 def cycle_edges(case, n_cycles: int) -> list[int]:
-    """Driven-step index ending each cycle, round(c P / dt) for c = 0 .. n_cycles."""
-    period = 1.0 / case.drive.frequency
-    return [int(round(c * period / case.run.timestep)) for c in range(n_cycles + 1)]
+    """Driven-step index ending each cycle c = 0 .. n_cycles, as dem's run counts them.
+
+    :func:`dem.physics.drive.cycle_edge` with the trough's period 2 pi / omega, the period the
+    runner and :func:`dem.engine.simulation.measure_cycles` use.
+    """
+    period = Trough.from_case(case).period
+    return [drive.cycle_edge(0, c, period, case.run.timestep) for c in range(n_cycles + 1)]
 
 
 def cycle_means(steps, values, edges, cycles, *, strict: bool = True, source: str = "") -> list:
