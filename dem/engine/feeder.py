@@ -35,7 +35,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dem.engine.state import Bodies, Spheres
-from dem.physics.mass import sphere_mass
 
 #: Grains are exchanged at most every this fraction of a drive period.
 EXCHANGE_FRACTION = 1.0 / 16.0
@@ -266,8 +265,7 @@ def grain_factory(case):
 
 
 def grain_mass(case) -> float:
-    """Mass of one grain of the case, kg."""
-    pt = case.particles
-    if not pt.clumps:
-        return sphere_mass(case.material.density, pt.radius)
-    return float(pt.grain.mass)
+    """Mass of one grain of the case, kg (:attr:`dem.scene.resolved.Scene.grain_mass`)."""
+    from dem.scene.resolved import resolve
+
+    return resolve(case).grain_mass
