@@ -36,6 +36,7 @@ from dem.engine.checks import InstabilityChecks
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.contact import P_BETA
+from dem.kernels.forces import contact_counts as kernel_contact_counts
 from dem.kernels.integrate import (
     DONE,
     advance,
@@ -461,17 +462,19 @@ class Simulation(InstabilityChecks):
         return float(np.sum(s.mass * s.v[:, 0]) / np.sum(s.mass))
 
     def contact_counts(self) -> np.ndarray:
-        """Touching neighbours plus touching walls (floor, side walls) per sphere, (n,) int64."""
-        s, p = self.spheres, self.pairs
-        count = np.zeros(s.n, dtype=np.int64)
-        k = p.n_pairs
-        if k:
-            i, j = p.pair_i[:k], p.pair_j[:k]
-            d = self.trough.minimum_image(s.x[i] - s.x[j])
-            touch = np.einsum("ij,ij->i", d, d) < (s.radius[i] + s.radius[j]) ** 2
-            np.add.at(count, i[touch], 1)
-            np.add.at(count, j[touch], 1)
-        count += np.sum(self.wall_gaps(s.x) < s.radius, axis=0)
+        """Touching neighbours plus touching walls per sphere, (n,) int64.
+
+        Counted by the force kernels' own tests (:func:`dem.kernels.forces.contact_counts`): a
+        mesh contact is one per triangle face or shared edge point the forces add, so a sphere
+        in the bottom of a V counts both faces. The pair list is the one the last force
+        evaluation checked against the current positions (rebuilding here would reorder the
+        pairs, and so the bits, of a run that writes frames).
+        """
+        count = np.zeros(self.spheres.n, dtype=np.int64)
+        kernel_contact_counts(
+            self.spheres.n, self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs,
+            self.geom, self.mesh_layout(), count,
+        )  # fmt: skip
         return count
 
 

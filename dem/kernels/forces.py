@@ -30,10 +30,38 @@ import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
 from dem.kernels.contact import add_wall_contact, contact_force_inlined, wall_row
-from dem.kernels.mesh import mesh_wall_forces
+from dem.kernels.mesh import mesh_touches, mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
 N_WALLS = 4
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def pair_separation(x, i, j, length, half):
+    """x_i - x_j with the nearest periodic image along x, and its square: (dx, dy, dz, d2), m, m^2.
+
+    Spheres i and j touch where d2 < (r_i + r_j)^2: the test of :func:`pair_contact` and of
+    :func:`contact_counts`.
+    """
+    dx = minimum_image(x[i, 0] - x[j, 0], length, half)
+    dy = x[i, 1] - x[j, 1]
+    dz = x[i, 2] - x[j, 2]
+    return dx, dy, dz, dx * dx + dy * dy + dz * dz
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def flat_wall(w, x, i, half_width):
+    """Gap of sphere i's centre from flat wall w and the wall's inward normal: (gap, ny, nz).
+
+    w = 0 the floor z = 0, 1 the side wall y = -width/2, 2 the side wall y = +width/2. The sphere
+    touches the wall where r - gap > 0: the test of :func:`wall_forces` and
+    :func:`contact_counts`.
+    """
+    if w == 0:
+        return x[i, 2], 0.0, 1.0
+    if w == 1:
+        return x[i, 1] + half_width, 1.0, 0.0
+    return half_width - x[i, 1], -1.0, 0.0
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -44,10 +72,7 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
         (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz) in N and N m.
 
     """
-    dx = minimum_image(x[i, 0] - x[j, 0], length, half)
-    dy = x[i, 1] - x[j, 1]
-    dz = x[i, 2] - x[j, 2]
-    d2 = dx * dx + dy * dy + dz * dz
+    dx, dy, dz, d2 = pair_separation(x, i, j, length, half)
     ri = radius[i]
     rj = radius[j]
     rsum = ri + rj
@@ -243,17 +268,7 @@ def wall_forces(
         return fx, fy, fz, tx, ty, tz
     pw = wall_row(p)  # the grain-wall law ([wall])
     for w in range(N_WALLS - 1):
-        nz = 0.0
-        ny = 0.0
-        if w == 0:
-            gap = x[i, 2]
-            nz = 1.0
-        elif w == 1:
-            gap = x[i, 1] + half_width
-            ny = 1.0
-        else:
-            gap = half_width - x[i, 1]
-            ny = -1.0
+        gap, ny, nz = flat_wall(w, x, i, half_width)
         delta = r - gap
         row = N_WALLS * i + w
         if delta <= 0.0:
@@ -284,3 +299,38 @@ def _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, 
         fx, fy, fz, tx, ty, tz,
     )  # fmt: skip
     return fx, fy, fz, tx, ty, tz
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def contact_counts(n, sph, nb, n_pairs, geom, mesh, out):
+    """Add each sphere's touching neighbours and walls to ``out``, (n,) int64.
+
+    The tests are the force kernels' own: a pair of the list touches where
+    :func:`pair_separation` says so; a flat wall or the back wall where r - gap > 0
+    (:func:`flat_wall`); a mesh counts each contact that :func:`dem.kernels.mesh.mesh_forces`
+    adds (:func:`dem.kernels.mesh.mesh_touches`: a sphere in the bottom of a V touches both
+    faces). The pair list holds every pair within reach (the Verlet skin), so nothing touching is
+    missed; a clump's own spheres are no pair. Serial, O(n + pairs): for frames and summaries,
+    not every step.
+    """
+    x, radius = sph.x, sph.radius
+    half = 0.5 * geom.length
+    for k in range(n_pairs):
+        i = nb.pair_i[k]
+        j = nb.pair_j[k]
+        d2 = pair_separation(x, i, j, geom.length, half)[3]
+        rsum = radius[i] + radius[j]
+        if d2 < rsum * rsum:
+            out[i] += 1
+            out[j] += 1
+    half_width = 0.5 * geom.width
+    for i in range(n):
+        r = radius[i]
+        if mesh is not None:
+            out[i] += mesh_touches(i, x, r, mesh)
+        else:
+            for w in range(N_WALLS - 1):
+                if r - flat_wall(w, x, i, half_width)[0] > 0.0:
+                    out[i] += 1
+        if r - (x[i, 0] - geom.back) > 0.0:
+            out[i] += 1

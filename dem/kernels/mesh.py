@@ -143,6 +143,49 @@ def _counted(px, py, pz, r, tri, cell_tris, lo, hi, m, qx, qy, qz, feature):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
+def mesh_cell(i, x, mesh):
+    """Sphere i's centre x in the section and its index cell's list: (px, lo, hi).
+
+    The cell lists ``mesh.cell_tris[lo:hi]``; lo == hi where it lists none or the centre lies
+    outside the padded bounding box.
+    """
+    px = x[i, 0]
+    if mesh.grid[4] > 0.0:
+        px = wrap(px, mesh.grid[4])
+    c = cell_of(px, x[i, 1], x[i, 2], mesh.grid, mesh.dims)
+    if c < 0:
+        return px, 0, 0
+    return px, mesh.cell_start[c], mesh.cell_start[c + 1]
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def mesh_contact(e, px, py, pz, r, tri, cell_tris, lo, hi):
+    """The sphere (centre p, radius r) and the triangle of list entry e: (dx, dy, dz, d2, touch).
+
+    d = p - q with q the triangle's closest point, d2 = |d|^2; ``touch`` where the sphere overlaps
+    it and the contact counts (module docstring: no double counting).
+    """
+    qx, qy, qz, feature = closest_point(px, py, pz, tri, cell_tris[e])
+    dx, dy, dz = px - qx, py - qy, pz - qz
+    d2 = dx * dx + dy * dy + dz * dz
+    touch = d2 < r * r and d2 != 0.0
+    if touch:
+        touch = _counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature)
+    return dx, dy, dz, d2, touch
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def mesh_touches(i, x, r, mesh):
+    """The number of mesh contacts of sphere i (radius r): those :func:`mesh_forces` adds."""
+    px, lo, hi = mesh_cell(i, x, mesh)
+    count = 0
+    for e in range(lo, hi):
+        if mesh_contact(e, px, x[i, 1], x[i, 2], r, mesh.tri, mesh.cell_tris, lo, hi)[4]:
+            count += 1
+    return count
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, fz, tx, ty, tz):
     """(fx, ..., tz) plus the forces and torques of sphere i's mesh contacts, N and N m.
 
@@ -152,11 +195,8 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
     cell lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
     not inlined: inlined into every step kernel it took two minutes to compile).
     """
-    px = x[i, 0]
-    if mesh.grid[4] > 0.0:
-        px = wrap(px, mesh.grid[4])
-    c = cell_of(px, x[i, 1], x[i, 2], mesh.grid, mesh.dims)
-    if c < 0 or mesh.cell_start[c] == mesh.cell_start[c + 1]:
+    px, lo, hi = mesh_cell(i, x, mesh)
+    if lo == hi:
         for row in range(MESH_SLOTS * i, MESH_SLOTS * i + MESH_SLOTS):
             for k in range(mesh.slot_hist.shape[1]):
                 mesh.slot_hist[row, k] = 0.0
@@ -164,7 +204,7 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
                 mesh.slot_normal[row, k] = 0.0
         return fx, fy, fz, tx, ty, tz
     f = mesh_forces(
-        model, p, dt, mesh.tri, mesh.cell_start[c], mesh.cell_start[c + 1], mesh.cell_tris,
+        model, p, dt, mesh.tri, lo, hi, mesh.cell_tris,
         mesh.slot_hist, mesh.slot_normal, MESH_SLOTS * i, px, x[i, 1], x[i, 2],
         v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], radius[i], mass[i],
         fx, fy, fz, tx, ty, tz,
@@ -186,13 +226,8 @@ def mesh_forces(
     """
     claimed = 0  # bit s: slot s continued or started this step
     for e in range(lo, hi):
-        t = cell_tris[e]
-        qx, qy, qz, feature = closest_point(px, py, pz, tri, t)
-        dx, dy, dz = px - qx, py - qy, pz - qz
-        d2 = dx * dx + dy * dy + dz * dz
-        if d2 >= r * r or d2 == 0.0:
-            continue
-        if not _counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature):
+        dx, dy, dz, d2, touch = mesh_contact(e, px, py, pz, r, tri, cell_tris, lo, hi)
+        if not touch:
             continue
         d = math.sqrt(d2)
         nx, ny, nz = dx / d, dy / d, dz / d
