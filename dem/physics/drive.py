@@ -78,19 +78,13 @@ def frequency_for_peak_speed(throw_number, peak_speed, angle, inclination=0.0):
     return _float_or_array(w / (2.0 * np.pi))
 
 
-def drive_velocity(amplitude, frequency, angle):
-    """The velocity scale A omega cos(phi), m/s (normalised velocities divide by it)."""
-    return drive_velocity_from_omega(amplitude, omega(frequency), angle)
+def velocity_scale(amplitude, frequency, angle):
+    """A omega cos(phi), m/s: the paper's velocity scale (normalised velocities divide by it).
 
-
-def drive_velocity_from_omega(amplitude, angular_frequency, angle):
-    """A omega cos(phi), m/s, for omega given in rad/s (``DriveSpec.omega``, ``Trough.omega``)."""
-    return _float_or_array(amplitude * angular_frequency * np.cos(np.radians(angle)))
-
-
-def drive_velocity_from_throw_number(throw_number, frequency, angle, inclination=0.0):
-    """A omega cos(phi), m/s, for a drive given by its throw number."""
-    return drive_velocity(amplitude(throw_number, frequency, angle, inclination), frequency, angle)
+    The peak trough speed along the trough; :attr:`Motion.velocity_scale` is the same for any
+    motion, an ellipse included (|X| omega). Broadcasts over arrays.
+    """
+    return _float_or_array(amplitude * omega(frequency) * np.cos(np.radians(angle)))
 
 
 def steps_per_cycle(frequency: float, dt: float) -> float:

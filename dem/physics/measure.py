@@ -7,7 +7,7 @@
   std sqrt(2 tau_int / cycles), with tau_int the integrated autocorrelation time of the
   per-cycle means (:func:`integrated_autocorrelation_time`; 1/2 for independent cycles).
 - Normalised velocity v / (A omega cos phi) (the paper's Fig. 6; the scale is
-  :func:`dem.physics.drive.drive_velocity_from_omega`).
+  :attr:`dem.scene.spec.DriveSpec.velocity_scale`, :func:`dem.physics.drive.velocity_scale`).
 - Mass flow rate through a cross-section of the periodic section: M v / L, kg/s (M total grain
   mass, L the section length); per metre of width: M v / (L W), kg/(s m).
 """
@@ -19,8 +19,6 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-
-from dem.physics import drive
 
 
 @dataclass(frozen=True)
@@ -254,23 +252,14 @@ def running_mean_and_stderr(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return mean, stderr
 
 
-def conveying_velocity(
-    per_cycle: np.ndarray,
-    *,
-    amplitude: float | None = None,
-    omega: float | None = None,
-    angle: float | None = None,
-    scale: float | None = None,
-) -> VelocityStatistics:
+def conveying_velocity(per_cycle: np.ndarray, *, scale: float) -> VelocityStatistics:
     """Mean and standard error of per-cycle mean x-velocities, shape (cycles,), m/s.
 
     The standard error accounts for the correlation of successive cycles
     (:func:`correlated_stderr`); the independent-cycle value is kept beside it. Velocities are
-    normalised by A omega cos(phi) (``amplitude``, ``omega``, ``angle``) or by ``scale`` (m/s;
-    an elliptical drive's :attr:`dem.scene.spec.DriveSpec.velocity_scale`).
+    normalised by ``scale``, m/s: the case's :attr:`dem.scene.spec.DriveSpec.velocity_scale`
+    (A omega cos(phi) for the paper's drive, :func:`dem.physics.drive.velocity_scale`).
     """
-    if scale is None:
-        scale = drive.drive_velocity_from_omega(amplitude, omega, angle)
     u = np.asarray(per_cycle, dtype=np.float64)
     if u.ndim != 1 or u.size == 0:
         raise ValueError("per_cycle must be a non-empty 1-d array")

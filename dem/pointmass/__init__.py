@@ -12,10 +12,10 @@ from dem.pointmass.model import (
     REGIMES,
     VelocityResult,
     amplitude_from_throw_number,
-    drive_velocity,
     throw_number_from_amplitude,
     velocities,
     velocity,
+    velocity_scale,
 )
 
 __all__ = [
@@ -23,7 +23,7 @@ __all__ = [
     "Thresholds",
     "VelocityResult",
     "amplitude_from_throw_number",
-    "drive_velocity",
+    "velocity_scale",
     "thresholds",
     "throw_number_from_amplitude",
     "velocities",

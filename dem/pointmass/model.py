@@ -76,13 +76,13 @@ class VelocityResult:
     cycles: int
     impact: str = "paper"
 
-    def drive_velocity(self, frequency: float) -> float:
+    def velocity_scale(self, frequency: float) -> float:
         """A omega cos(phi) in m/s at ``frequency`` (Hz), the amplitude following from Gamma."""
-        return drive_velocity(self.throw_number, frequency, self.angle, self.inclination)
+        return velocity_scale(self.throw_number, frequency, self.angle, self.inclination)
 
     def velocity(self, frequency: float) -> float:
         """Mean conveying velocity in m/s at ``frequency`` (Hz)."""
-        return self.velocity_norm * self.drive_velocity(frequency)
+        return self.velocity_norm * self.velocity_scale(frequency)
 
     def as_dict(self) -> dict:
         """Plain dictionary (for JSON)."""
@@ -106,9 +106,13 @@ def throw_number_from_amplitude(amplitude, frequency, angle, inclination=0.0):
     return drive.throw_number(amplitude, frequency, angle, inclination)
 
 
-def drive_velocity(throw_number, frequency, angle, inclination=0.0):
-    """A omega cos(phi), m/s, of a drive given by Gamma (:mod:`~dem.physics.drive`; broadcasts)."""
-    return drive.drive_velocity_from_throw_number(throw_number, frequency, angle, inclination)
+def velocity_scale(throw_number, frequency, angle, inclination=0.0):
+    """A omega cos(phi), m/s, of a drive given by Gamma (broadcasts).
+
+    :func:`dem.physics.drive.velocity_scale` of the amplitude that Eq. 3 gives.
+    """
+    a = drive.amplitude(throw_number, frequency, angle, inclination)
+    return drive.velocity_scale(a, frequency, angle)
 
 
 def _regime_codes(stick, forward, backward, flight, periodic):

@@ -236,7 +236,7 @@ def _velocity_along(over, hold, x, fixed):
         gamma, phi, fixed["friction"], fixed["inclination"], fixed["eps_t"], fixed["eps_n"],
         impact=fixed.get("impact", "paper"),
     )  # fmt: skip
-    r["velocity"] = r["velocity_norm"] * drive.drive_velocity(amp, f, phi)
+    r["velocity"] = r["velocity_norm"] * drive.velocity_scale(amp, f, phi)
     return r[_objective(over, hold)], r, gamma, phi, amp, f
 
 

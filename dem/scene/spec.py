@@ -104,13 +104,10 @@ class DriveSpec:
 
     @property
     def velocity_scale(self) -> float:
-        """The normalising velocity, m/s: A omega cos(phi) for the paper's drive, else |X| omega.
+        """The normalising velocity, m/s: the peak trough speed along the trough, |X| omega.
 
-        |X| omega is the peak trough speed along the trough
-        (:attr:`dem.physics.drive.Motion.velocity_scale`).
+        A omega cos(phi) for the paper's drive (:attr:`dem.physics.drive.Motion.velocity_scale`).
         """
-        if self.is_single:
-            return drive.drive_velocity(self.amplitude, self.frequency, self.angle)
         return self.motion.velocity_scale
 
     @property

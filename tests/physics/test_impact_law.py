@@ -174,7 +174,7 @@ def _block_velocity(case, settle=20, cycles=20):
     sim = setup.from_grains(case, [[0.5 * case.trough.length, 0.0, case.particles.radius]])
     per_cycle = measure_cycles(sim, cycles, settle_cycles=settle)
     d = case.drive
-    return conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle).norm
+    return conveying_velocity(per_cycle, scale=d.velocity_scale).norm
 
 
 @pytest.mark.validation

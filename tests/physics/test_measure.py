@@ -8,7 +8,7 @@ import pytest
 
 from dem.io.liggghts import damping_ratio
 from dem.kernels.contact import damping_beta
-from dem.physics import measure
+from dem.physics import drive, measure
 
 
 def test_mean_and_stderr_is_std_ddof1_over_sqrt_n():
@@ -23,7 +23,7 @@ def test_mean_and_stderr_is_std_ddof1_over_sqrt_n():
 def test_running_statistics_end_at_the_summary_values():
     v = np.random.default_rng(6).normal(0.03, 0.004, 23)
     mean, stderr = measure.running_mean_and_stderr(v)
-    stat = measure.conveying_velocity(v, amplitude=0.5e-3, omega=2 * math.pi * 60, angle=25.0)
+    stat = measure.conveying_velocity(v, scale=drive.velocity_scale(0.5e-3, 60.0, 25.0))
     assert (mean[-1], stderr[-1]) == (stat.mean, stat.stderr)
     assert math.isnan(stderr[0]) and mean[0] == v[0]
 
@@ -66,7 +66,7 @@ def test_correlated_stderr_recovers_the_known_ar1_answer(rho):
 
 def test_independent_cycles_keep_the_plain_error_bar():
     white = np.random.default_rng(12).normal(0.03, 0.004, 200)
-    stat = measure.conveying_velocity(white, amplitude=0.5e-3, omega=2 * math.pi * 60, angle=25.0)
+    stat = measure.conveying_velocity(white, scale=drive.velocity_scale(0.5e-3, 60.0, 25.0))
     assert stat.stderr == pytest.approx(stat.stderr_independent, rel=0.25)
     assert stat.autocorrelation_time < 1.0
     assert measure.integrated_autocorrelation_time(np.full(10, 0.3)) == 0.5

@@ -134,7 +134,7 @@ def grain_velocity(job):
         sim = _single_screw_module().lying_simulation(case, "auto")
     per_cycle = measure_cycles(sim, CYCLES, settle_cycles=SETTLE)
     d = case.drive
-    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
+    v = conveying_velocity(per_cycle, scale=d.velocity_scale)
     return {
         "grain": grain, "model": model, "stiffness": stiffness, "tangential": LAW["tangential"],
         "throw_number": d.throw_number, "angle": d.angle, "friction": case.material.friction,

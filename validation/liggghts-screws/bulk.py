@@ -17,7 +17,6 @@ from study import AS_MEASURED, CASE, DECKS, SCRATCH, fresh_copy, rel, write_resu
 
 from dem import provenance
 from dem.io.liggghts import DECK_NAME, VX_FILE, run_liggghts, write_deck
-from dem.physics import drive
 from dem.scene.case import load_case
 from dem.scene.timestep import timestep_for
 
@@ -161,7 +160,7 @@ def part_bulk(results: dict) -> None:
             "date": provenance.utc_now(),
             "seed": case.run.seed,
             "rotation": case.particles.rotation,
-            "v_norm": drive.drive_velocity(d.amplitude, d.frequency, d.angle),
+            "v_norm": d.velocity_scale,  # the velocity scale (m/s) v is normalised by
             "liggghts": bulk_liggghts(case, tag, dt),
             "dem": bulk_dem(case, tag),
         }

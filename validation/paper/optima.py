@@ -22,7 +22,7 @@ REFERENCE_ANGLE = 25.0  # deg: the paper's "practical vibration angle" (Fig. 6)
 
 def m_per_s(v_norm, angle, amplitude):
     """Conveying velocity in m/s: v_norm times the drive velocity A omega cos(phi) at 60 Hz."""
-    return v_norm * drive.drive_velocity(amplitude, FREQUENCY, angle)
+    return v_norm * drive.velocity_scale(amplitude, FREQUENCY, angle)
 
 
 def amplitude_for(gamma: float, angle: float = REFERENCE_ANGLE, inclination: float = 0.0):

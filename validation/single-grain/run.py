@@ -85,7 +85,7 @@ def block_velocity(case) -> dict:
     sim = setup.from_grains(case, [[0.5 * case.trough.length, 0.0, z]])
     per_cycle = measure_cycles(sim, case.run.cycles, settle_cycles=case.run.settle_cycles)
     d, m = case.drive, case.material
-    v = conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega, angle=d.angle)
+    v = conveying_velocity(per_cycle, scale=d.velocity_scale)
     pm = pointmass.velocity(
         d.throw_number, d.angle, m.friction, case.trough.inclination,
         m.restitution_tangential, m.restitution_normal,

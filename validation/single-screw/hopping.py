@@ -79,8 +79,7 @@ def measure_screw(case):
     axis = quat_to_matrix(sim.bodies.q[0])[:, 0]
     tilt = float(np.degrees(np.arcsin(min(1.0, np.linalg.norm(np.cross(axis, axis0))))))
     d = case.drive
-    stat = measure.conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega,
-                                      angle=d.angle)  # fmt: skip
+    stat = measure.conveying_velocity(per_cycle, scale=d.velocity_scale)
     return stat, tilt, sim.dt
 
 

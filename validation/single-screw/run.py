@@ -185,12 +185,7 @@ def drive_and_measure(sim, case, min_settle, max_settle, tol, cycles):
         if settle is None and c >= min_settle:
             if abs(per_cycle[-1] - per_cycle[-2]) < tol * scale or c >= max_settle:
                 settle = c
-    stat = measure.conveying_velocity(
-        np.array(per_cycle[settle:]),
-        amplitude=case.drive.amplitude,
-        omega=case.drive.omega,
-        angle=case.drive.angle,
-    )
+    stat = measure.conveying_velocity(np.array(per_cycle[settle:]), scale=case.drive.velocity_scale)
     return stat, settle, tilt, drift
 
 

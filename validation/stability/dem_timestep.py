@@ -94,8 +94,7 @@ def run_point(spec) -> dict:
         sim.settle()
         per_cycle = measure_cycles(sim, case.run.cycles, settle_cycles=case.run.settle_cycles)
         d = case.drive
-        stat = measure.conveying_velocity(per_cycle, amplitude=d.amplitude, omega=d.omega,
-                                          angle=d.angle)  # fmt: skip
+        stat = measure.conveying_velocity(per_cycle, scale=d.velocity_scale)
         row |= {"velocity_norm": stat.norm, "stderr": stat.norm_stderr, "stopped_by_guard": False,
                 "message": "", "state_finite": bool(np.isfinite(sim.spheres.x).all())}  # fmt: skip
     except SimulationError as err:
