@@ -116,7 +116,9 @@ def test_interrupt_and_resume_is_bit_identical(tmp_path):
 
 @pytest.mark.integration
 def test_results_of_a_killed_run_are_readable(tmp_path):
-    case_dir = _case_dir(tmp_path)
+    # far more cycles than it runs before the kill: on a loaded machine a 6-cycle run finished
+    # between its fifth frame and the second run's lock check
+    case_dir = _case_dir(tmp_path, cycles=400)
     out = tmp_path / "killed"
     proc = _start(case_dir, out)
     _wait_for_frames(out, 5, proc)
