@@ -241,6 +241,48 @@ def cmd_export_liggghts(args) -> int:
     return 0
 
 
+def cmd_export_lammps(args) -> int:
+    """``dem export lammps``: the case as a LAMMPS deck from dem's settled fill (``--run``: run)."""
+    from dem.io.lammps.export import export_lammps, plan_lammps
+    from dem.io.lammps.launcher import LammpsError, LammpsMissing, run_lammps, summarize_run
+    from dem.scene.case import load_case
+
+    case = load_case(args.case_dir, set_overrides(args.set))
+    plan = plan_lammps(case, timestep=args.timestep, settle_cycles=args.settle_cycles,
+                       from_run=args.from_run)  # fmt: skip
+    out = writable_path("OUT_DIR", args.out_dir, folder=True)
+    if args.run:  # say it now, not after the fill
+        try:
+            from dem.io.lammps.launcher import find_lammps
+
+            find_lammps()
+        except LammpsMissing as exc:
+            print(f"dem: {exc}", file=sys.stderr)
+            return 2
+    path = export_lammps(plan, out, overwrite=args.overwrite)
+    print(f"wrote {path} (dt = {plan.timestep:.4g} s, {plan.settle_cycles} settling and "
+          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
+    if plan.settle_note:
+        print(f"settle: {plan.settle_note}")
+    if not args.run:
+        return 0
+    print(f"dem: running LAMMPS on {args.ranks} rank(s) in {out}", file=sys.stderr)
+    try:
+        log, wall = run_lammps(out, ranks=args.ranks)
+    except LammpsError as exc:
+        print(f"dem: {exc}", file=sys.stderr)
+        return 1
+    s = summarize_run(plan, out, log, wall, args.ranks)
+    err = s["mean_velocity_stderr"]
+    err_text = "" if err is None else f" +- {err:.3g}"
+    rate = s["particle_steps_per_s"]
+    print(f"LAMMPS {s['engine_version']}: mean velocity {s['mean_velocity']:.4g}{err_text} m/s "
+          f"(v_norm {s['mean_velocity_norm']:.4g}) over {s['cycles']} cycles; "
+          f"{rate:.3g} particle-steps/s on {args.ranks} rank(s); "
+          f"{out / 'summary.json'}")  # fmt: skip
+    return 0
+
+
 def cmd_calibrate(args) -> int:
     """``dem calibrate``: fit the tangential spring to eps_t, and write it back."""
     import time

