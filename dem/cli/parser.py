@@ -222,15 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
     e = es.add_parser("liggghts", help="write an equivalent LIGGGHTS-PUBLIC 3.8 deck")
     e.add_argument("case_dir")
     e.add_argument("out_dir")
-    e.add_argument("--timestep", type=number, help="dt in s (default: dem's for this case)")
-    e.add_argument(
-        "--settle-cycles", type=WHOLE_FROM_0,
-        help="driven cycles before measuring (default: the case's; for \"auto\" what an earlier "
-        f"dem run detected, else {DEM_EXPORT_SETTLE_CYCLES})",
-    )  # fmt: skip
-    e.add_argument("--from-run", metavar="RUN_DIR",
-                   help='the dem run whose detected settling an "auto" case takes '
-                   "(default CASE_DIR/output)")  # fmt: skip
+    _deck_options(e)
     e.add_argument(
         "--no-dump",
         action="store_true",
@@ -249,6 +241,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--set", action="append", metavar="TABLE.KEY=VALUE",
         help="a case key set over case.toml, e.g. contact.tangential=coulomb (repeatable)",
     )  # fmt: skip
+    _deck_options(e)
+    e.add_argument("--overwrite", action="store_true",
+                   help="replace a deck already in OUT_DIR (in.lammps, data.fill)")  # fmt: skip
+    e.add_argument("--run", action="store_true",
+                   help="run the deck in LAMMPS and write OUT_DIR/summary.json")  # fmt: skip
+    e.add_argument("--ranks", type=WHOLE, default=1, help="MPI ranks for --run (default 1)")
+    e.set_defaults(func=c.cmd_export_lammps)
+    return parser
+
+
+def _deck_options(e) -> None:
+    """The step and settling options every exported deck takes."""
     e.add_argument("--timestep", type=number, help="dt in s (default: dem's for this case)")
     e.add_argument(
         "--settle-cycles", type=WHOLE_FROM_0,
@@ -258,10 +262,3 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--from-run", metavar="RUN_DIR",
                    help='the dem run whose detected settling an "auto" case takes '
                    "(default CASE_DIR/output)")  # fmt: skip
-    e.add_argument("--overwrite", action="store_true",
-                   help="replace a deck already in OUT_DIR (in.lammps, data.fill)")  # fmt: skip
-    e.add_argument("--run", action="store_true",
-                   help="run the deck in LAMMPS and write OUT_DIR/summary.json")  # fmt: skip
-    e.add_argument("--ranks", type=WHOLE, default=1, help="MPI ranks for --run (default 1)")
-    e.set_defaults(func=c.cmd_export_lammps)
-    return parser

@@ -45,6 +45,17 @@ class VelocityStatistics:
     autocorrelation_time: float = 0.5
     stderr_independent: float = math.nan
 
+    def summary_fields(self) -> dict:
+        """The velocity fields of a run's summary.json (``dem run``'s and an exported deck's)."""
+        return {
+            "mean_velocity": self.mean,
+            "mean_velocity_stderr": self.stderr,
+            "mean_velocity_norm": self.norm,
+            "mean_velocity_norm_stderr": self.norm_stderr,
+            "cycle_autocorrelation_time": self.autocorrelation_time,
+            "mean_velocity_stderr_independent": self.stderr_independent,
+        }
+
 
 def mean_and_stderr(samples: np.ndarray) -> tuple[float, float]:
     """Mean of samples (n,) and its standard error std(samples, ddof=1) / sqrt(n).

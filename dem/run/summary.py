@@ -42,12 +42,7 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
     return {
         "case": case.name,
         "overrides": dict(case.overrides),
-        "mean_velocity": stat.mean,
-        "mean_velocity_stderr": stat.stderr,
-        "mean_velocity_norm": stat.norm,
-        "mean_velocity_norm_stderr": stat.norm_stderr,
-        "cycle_autocorrelation_time": stat.autocorrelation_time,
-        "mean_velocity_stderr_independent": stat.stderr_independent,
+        **stat.summary_fields(),
         "replicas": 1,
         "error_bar": "within this run (autocorrelated per-cycle means): it excludes the "
         "fill-to-fill spread; pool fills with run.replicas",
