@@ -14,12 +14,17 @@ x-velocity of the grains is written every step to ``vx_mean.txt`` (step, m/s), f
 Geometry: x periodic over the section length, flat side walls y = -+width/2 and the floor z = 0
 (``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), the top open
 (``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve`` with rotation
-locked, the spins staying zero).
+locked, the spins staying zero). Screws and clumps are rigid bodies of ``fix rigid/small
+molecule``: each member carries its body's number (``fix property/atom mol``), each body its exact
+mass, centre of mass, inertia tensor and motion from dem (``bodies.rigid``, the ``infile``; LAMMPS
+would otherwise sum the overlapping members), gravity and the drive act on the body's mass at its
+centre (the fix's ``gravity`` keyword), a member's contacts take the body's mass as m* (as in
+dem), members of one body do not touch (``neigh_modify exclude molecule/intra``), and the mean
+x-velocity is that of the bodies' centres (``compute rigid/local``).
 
 Refused, with the reason (:class:`dem.errors.InputError`): what the contact mapping refuses,
-clumps and screws (``fix rigid/small`` with exact mass and inertia is not written yet), mesh
-troughs (LAMMPS's GRANULAR package has no triangle-mesh wall) and finite feeders (no feed and
-discharge yet).
+clumps with rotation locked (``fix rigid/small`` has no such switch), mesh troughs (LAMMPS's
+GRANULAR package has no triangle-mesh wall) and finite feeders (no feed and discharge yet).
 """
 
 from __future__ import annotations
@@ -46,6 +51,8 @@ DATA_NAME = "data.fill"
 VX_FILE = "vx_mean.txt"
 #: Neighbour skin as a fraction of the largest radius (dem's own skin, :mod:`dem.engine`).
 SKIN_FRACTION = 0.4
+#: The clumps' exact mass, centre of mass, inertia and motion (``fix rigid/small ... infile``).
+BODIES_NAME = "bodies.rigid"
 
 
 def refuse_unsupported(scene: Scene) -> None:
@@ -63,17 +70,21 @@ def refuse_unsupported(scene: Scene) -> None:
             "feeder", "a [feeder] table",
             "a periodic section for a LAMMPS deck (the feed and the discharge are not written yet)",
         )  # fmt: skip
-    if case.particles.clumps:
+    if case.particles.clumps and not case.particles.rotation:
         raise InputError(
-            "particles.shape", case.particles.shape,
-            '"sphere" for a LAMMPS deck (clumps need fix rigid/small with the template\'s exact '
-            "mass and inertia, which this exporter does not write yet)",
+            "particles.rotation", False,
+            "true for a LAMMPS deck of clumps (fix rigid/small cannot lock a body's rotation)",
         )  # fmt: skip
 
 
 def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np.ndarray,
-               radius: np.ndarray, mass: np.ndarray) -> Path:  # fmt: skip
-    """Write the spheres as a LAMMPS data file (atom_style sphere): the box and every atom."""
+               radius: np.ndarray, mass: np.ndarray, body=None) -> Path:  # fmt: skip
+    """Write the spheres as a LAMMPS data file (atom_style sphere): the box and every atom.
+
+    ``body`` (n,) numbers each clump member's body from 0 (a ``Molecules`` section, read by
+    ``fix property/atom mol``); a member's x is its body's wrapped centre plus its offset, so
+    LAMMPS remaps it into the box with the image flag that keeps the body whole.
+    """
     t = scene.trough
     n = len(x)
     r_max = float(radius.max())
@@ -92,7 +103,7 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
         "Atoms # sphere",
         "",
     ]
-    xw = np.mod(x[:, 0], t.length)
+    xw = np.mod(x[:, 0], t.length) if body is None else x[:, 0]
 
     def row(*values) -> str:
         return " ".join(repr(float(u)) for u in values)
@@ -102,6 +113,34 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
     lines += ["", "Velocities", ""]
     for i in range(n):
         lines.append(f"{i + 1} {row(*v[i], *omega[i])}")
+    if body is not None:
+        lines += ["", "Molecules", ""]
+        lines += [f"{i + 1} {int(body[i]) + 1}" for i in range(n)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def _extent(scene: Scene) -> float:
+    """The largest distance of a grain's surface from its centre of mass, m."""
+    g = scene.grain
+    return float(np.max(np.linalg.norm(g.centres, axis=1) + g.radii))
+
+
+def write_bodies(path: Path, bodies, inertia_space: np.ndarray, length: float) -> Path:
+    """The clumps for ``fix rigid/small ... infile``: one line a body.
+
+    molecule id, M, centre of mass (x wrapped into [0, length)), the inertia tensor about it in
+    the trough's axes (Ixx Iyy Izz Ixy Ixz Iyz), the centre's velocity, the angular momentum and
+    zero image flags. LAMMPS takes these instead of summing the member spheres (which would count
+    their overlaps twice).
+    """
+    lines = [str(len(bodies.x))]
+    for b in range(len(bodies.x)):
+        i = inertia_space[b]
+        values = [bodies.mass[b], np.mod(bodies.x[b, 0], length), bodies.x[b, 1], bodies.x[b, 2],
+                  i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2], *bodies.v[b],
+                  *bodies.ang_mom[b]]  # fmt: skip
+        lines.append(f"{b + 1} " + " ".join(repr(float(u)) for u in values) + " 0 0 0")
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
@@ -131,6 +170,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     lines += [f"#   grain-wall: {n}" for n in wall.notes]
     lines += [f"#   NOTE: {n}" for n in CONVENTION_NOTES]
     rotate = case.particles.rotation
+    clumps = case.particles.clumps
     lines += [
         "",
         "units si",
@@ -138,8 +178,23 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         "atom_modify map array",
         "boundary p f fm",
         "newton off",
-        "comm_modify vel yes",
-        f"read_data {DATA_NAME}",
+        "comm_modify vel yes"
+        + (
+            f" cutoff {fmt(2.0 * _extent(scene) + 2.0 * r_max + SKIN_FRACTION * r_max)}"
+            if clumps
+            else ""
+        ),  # a body's members within the ghost cutoff
+    ]
+    if clumps:
+        lines += [
+            "# clump members carry their body's number (molecule id): fix property/atom mol",
+            "fix pmol all property/atom mol ghost yes",
+            f"read_data {DATA_NAME} fix pmol NULL Molecules",
+            "neigh_modify exclude molecule/intra all",
+        ]
+    else:
+        lines.append(f"read_data {DATA_NAME}")
+    lines += [
         "",
         "pair_style granular",
         f"pair_coeff * * {pair.words}",
@@ -151,19 +206,43 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         f"fix sides all wall/gran granular {wall.words} yplane {fmt(-half)} {fmt(half)}",
         "",
         f"timestep {fmt(timestep)}",
-        "fix integrate all nve/sphere"
-        if rotate
-        else "fix integrate all nve  # particles.rotation = false: the spins stay zero",
-        *gravity_block(gx0, gz0),
-        "",
-        "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
-        "compute vxm all reduce ave vx",
+    ]
+    if clumps:
+        # gravity acts on each body's exact mass at its centre (fix rigid/small's gravity
+        # keyword, with fix grav on an empty group); a contact on a member takes the body's mass
+        # as m*, as in dem
+        lines += [
+            "group nobody empty",
+            *(
+                g.replace("fix grav all gravity", "fix grav nobody gravity")
+                for g in gravity_block(gx0, gz0)
+            ),
+            f"fix integrate all rigid/small molecule infile {BODIES_NAME} gravity grav",
+            "",
+            "# the bodies' mean x-velocity (equal masses: the mass-weighted mean), every step",
+            "compute bodies all rigid/local integrate vx",
+            "compute vxm all reduce ave c_bodies inputs local",
+        ]
+    else:
+        lines += [
+            "fix integrate all nve/sphere"
+            if rotate
+            else "fix integrate all nve  # particles.rotation = false: the spins stay zero",
+            *gravity_block(gx0, gz0),
+            "",
+            "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
+            "compute vxm all reduce ave vx",
+        ]
+    lines += [
         f"fix vxout all ave/time 1 1 1 c_vxm file {VX_FILE}",
         f"thermo {max(1, round(period_steps))}",
         "thermo_style custom step time c_vxm atoms cpu",
         "thermo_modify lost error norm no",
         "",
-        *drive_block(d, gx0, gz0, 0, timestep),
+        *(
+            b.replace("fix grav all gravity", "fix grav nobody gravity") if clumps else b
+            for b in drive_block(d, gx0, gz0, 0, timestep)
+        ),
         "",
         "# stage 1: settle (driven, not measured)",
         f"run {settle_steps}",

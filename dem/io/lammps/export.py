@@ -11,9 +11,20 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from dem.errors import InputError
-from dem.io.lammps.deck import DATA_NAME, DECK_NAME, refuse_unsupported, write_data, write_deck
+from dem.io.lammps.deck import (
+    BODIES_NAME,
+    DATA_NAME,
+    DECK_NAME,
+    refuse_unsupported,
+    write_bodies,
+    write_data,
+    write_deck,
+)
 from dem.io.liggghts.export import ExportPlan, plan_export
+from dem.kernels.rigid import quat_to_matrix
 from dem.scene.case import Case
 
 
@@ -30,7 +41,7 @@ def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False,
     from dem.engine import setup
 
     out = Path(out_dir)
-    written = [n for n in (DECK_NAME, DATA_NAME) if (out / n).exists()]
+    written = [n for n in (DECK_NAME, DATA_NAME, BODIES_NAME) if (out / n).exists()]
     if written and not overwrite:
         raise InputError(
             "OUT_DIR", str(out), f"a folder without a deck: it holds {', '.join(written)}, "
@@ -44,7 +55,18 @@ def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False,
     sim.settle()
     s = sim.spheres
     out.mkdir(parents=True, exist_ok=True)
-    write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, s.mass)
+    b = sim.bodies
+    if b is None:
+        write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, s.mass)
+    else:
+        # the member spheres' own masses only set their density: fix rigid/small takes each
+        # body's mass, centre and inertia from the bodies file
+        b.place(s)
+        per = np.full(s.n, float(b.mass[0]) / plan.scene.grain.count)
+        write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, per, body=b.body_of)
+        inertia = np.array([quat_to_matrix(q) @ np.diag(m) @ quat_to_matrix(q).T
+                            for q, m in zip(b.q, b.moments, strict=True)])  # fmt: skip
+        write_bodies(out / BODIES_NAME, b, inertia, plan.scene.trough.length)
     return write_deck(plan.scene, out, timestep=plan.timestep, steps=plan.steps,
                       settle_steps=plan.settle_steps, r_max=float(s.radius.max()),
                       settle_note=plan.settle_note)  # fmt: skip

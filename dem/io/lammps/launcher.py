@@ -121,6 +121,7 @@ def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> di
     loops = loop_times(log)
     measured = loops[-1] if loops else None
     n = case.particles.count
+    spheres = n * case.particles.spheres_per_grain
     summary = {
         "case": case.name,
         "overrides": dict(case.overrides),
@@ -133,7 +134,7 @@ def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> di
         "settle_cycles": plan.settle_cycles,
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "grains": n,
-        "spheres": n,
+        "spheres": spheres,
         "timestep": plan.timestep,
         "steps": plan.steps,
         "wall_time_s": measured.seconds if measured else None,
