@@ -57,3 +57,16 @@ def plot_path(key: str, text: str, default_name: str) -> Path:
         raise InputError(key, text, f"a .png file name, or an existing folder to write "
                          f"{default_name} in")  # fmt: skip
     return writable_path(key, path, folder=False)
+
+
+def refuse_replacing(key: str, folder: Path, names, what: str = "a deck") -> None:
+    """Raise :class:`InputError` where ``folder`` holds any of ``names`` (an earlier export).
+
+    Called before anything is written, unless the caller's ``--overwrite`` asks to replace them.
+    """
+    found = [n for n in names if (Path(folder) / n).exists()]
+    if found:
+        raise InputError(
+            key, str(folder), f"a folder without {what}: it holds {', '.join(found)}, which the "
+            "export would replace (pass --overwrite to replace them)",
+        )  # fmt: skip

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-from dem.errors import InputError
 from dem.io.lammps.deck import (
     BODIES_NAME,
     DATA_NAME,
@@ -24,6 +23,7 @@ from dem.io.lammps.deck import (
     write_deck,
 )
 from dem.io.liggghts.export import ExportPlan, plan_export
+from dem.io.paths import refuse_replacing
 from dem.kernels.rigid import quat_to_matrix
 from dem.scene.case import Case
 
@@ -41,12 +41,8 @@ def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False,
     from dem.engine import setup
 
     out = Path(out_dir)
-    written = [n for n in (DECK_NAME, DATA_NAME, BODIES_NAME) if (out / n).exists()]
-    if written and not overwrite:
-        raise InputError(
-            "OUT_DIR", str(out), f"a folder without a deck: it holds {', '.join(written)}, "
-            "which the export would replace (pass --overwrite to replace them)",
-        )  # fmt: skip
+    if not overwrite:
+        refuse_replacing("OUT_DIR", out, (DECK_NAME, DATA_NAME, BODIES_NAME))
     case = plan.scene.case
     if progress:
         print(f"dem: filling and settling {case.particles.count} grains (drive off) for the "

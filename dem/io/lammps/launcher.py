@@ -12,7 +12,6 @@ of the measured stage.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dem.io.files import finite_or_none, json_text, replace_text
 from dem.io.lammps.deck import DECK_NAME, VX_FILE
 from dem.io.liggghts.readers import loop_times
 from dem.physics import drive, measure
@@ -146,14 +146,5 @@ def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> di
         ),  # fmt: skip
         "provenance": record(),
     }
-    summary = {k: _strict(v) for k, v in summary.items()}
-    text = json.dumps(summary, indent=1, allow_nan=False)
-    (deck_dir / "summary.json").write_text(text + "\n", encoding="utf-8")
-    return summary
-
-
-def _strict(value):
-    """NaN (a one-cycle run's standard error) as null, as ``dem run``'s summary writes it."""
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
+    replace_text(deck_dir / "summary.json", json_text(summary, indent=1) + "\n")
+    return finite_or_none(summary)

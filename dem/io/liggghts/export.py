@@ -19,6 +19,7 @@ from dem.config import DEM_EXPORT_SETTLE_CYCLES
 from dem.errors import InputError
 from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, write_deck
 from dem.io.liggghts.geometry import MESH_FILE
+from dem.io.paths import refuse_replacing
 from dem.scene.case import Case
 from dem.scene.resolved import Scene, resolve
 
@@ -130,12 +131,8 @@ def export_deck(
 
     """
     out = Path(out_dir)
-    written = [n for n in (DECK_NAME, CLUMP_FILE, MESH_FILE) if (out / n).exists()]
-    if written and not overwrite:
-        raise InputError(
-            "OUT_DIR", str(out), f"a folder without a deck: it holds {', '.join(written)}, "
-            "which the export would replace (pass --overwrite to replace them)",
-        )  # fmt: skip
+    if not overwrite:
+        refuse_replacing("OUT_DIR", out, (DECK_NAME, CLUMP_FILE, MESH_FILE))
     return write_deck(
         plan.scene, out, timestep=plan.timestep, steps=plan.steps,
         settle_steps=plan.settle_steps, settle_note=plan.settle_note, dump=dump,
