@@ -158,7 +158,8 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         f"# LAMMPS deck of dem case {case.name}, written by dem {__version__} "
         f"(dem export lammps), for {LAMMPS_VERSION}",
         f"# run: lmp -in {DECK_NAME}   or on N ranks: mpirun -np N lmp -in {DECK_NAME}",
-        f"# {case.particles.count} spheres from dem's settled fill ({DATA_NAME}); drive "
+        f"# {case.particles.count} {case.particles.shape} grains from dem's settled fill "
+        f"({DATA_NAME}); drive "
         f"{d.frequency:g} Hz, {d.angle:g} deg, throw number {d.throw_number:.4g}; dt = "
         f"{timestep:.6g} s ({period_steps:.1f} steps a cycle); {settle_steps} settling and "
         f"{steps} measured driven steps",
@@ -171,6 +172,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     lines += [f"#   NOTE: {n}" for n in CONVENTION_NOTES]
     rotate = case.particles.rotation
     clumps = case.particles.clumps
+    group = "nobody" if clumps else "all"  # rigid bodies take gravity from fix rigid/small
     lines += [
         "",
         "units si",
@@ -213,10 +215,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         # as m*, as in dem
         lines += [
             "group nobody empty",
-            *(
-                g.replace("fix grav all gravity", "fix grav nobody gravity")
-                for g in gravity_block(gx0, gz0)
-            ),
+            *gravity_block(gx0, gz0, group),
             f"fix integrate all rigid/small molecule infile {BODIES_NAME} gravity grav",
             "",
             "# the bodies' mean x-velocity (equal masses: the mass-weighted mean), every step",
@@ -239,10 +238,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         "thermo_style custom step time c_vxm atoms cpu",
         "thermo_modify lost error norm no",
         "",
-        *(
-            b.replace("fix grav all gravity", "fix grav nobody gravity") if clumps else b
-            for b in drive_block(d, gx0, gz0, 0, timestep)
-        ),
+        *drive_block(d, gx0, gz0, 0, timestep, group),
         "",
         "# stage 1: settle (driven, not measured)",
         f"run {settle_steps}",

@@ -27,17 +27,24 @@ def static_gravity(inclination: float) -> tuple[float, float]:
     return -GRAVITY * math.sin(alpha), -GRAVITY * math.cos(alpha)
 
 
-def gravity_block(gx0: float, gz0: float) -> list[str]:
-    """Static gravity (g_x, 0, g_z), m/s^2, as ``fix grav``: its magnitude and direction."""
+def gravity_block(gx0: float, gz0: float, group: str = "all") -> list[str]:
+    """Static gravity (g_x, 0, g_z), m/s^2, as ``fix grav``: its magnitude and direction.
+
+    ``group`` is the atoms it acts on (a LAMMPS deck of rigid bodies gives an empty group and
+    lets ``fix rigid/small ... gravity grav`` apply it to each body's mass).
+    """
     g0 = math.hypot(gx0, gz0)
-    return [f"fix grav all gravity {fmt(g0)} vector {fmt(gx0 / g0)} 0.0 {fmt(gz0 / g0)}"]
+    return [f"fix grav {group} gravity {fmt(g0)} vector {fmt(gx0 / g0)} 0.0 {fmt(gz0 / g0)}"]
 
 
-def drive_block(d, gx0: float, gz0: float, drive_start: int, timestep: float) -> list[str]:
+def drive_block(
+    d, gx0: float, gz0: float, drive_start: int, timestep: float, group: str = "all"
+) -> list[str]:
     """The drive from step ``drive_start`` on: ``fix grav`` replaced by the effective gravity.
 
     ``tau`` counts the drive time, s, from ``drive_start`` in steps of ``timestep`` s; ``d`` is
-    the case's drive (:class:`dem.scene.case.DriveSpec`) and (gx0, gz0) the static gravity.
+    the case's drive (:class:`dem.scene.case.DriveSpec`) and (gx0, gz0) the static gravity;
+    ``group`` as in :func:`gravity_block`.
     """
     return [
         "# --- drive: effective gravity in the accelerating frame",
@@ -45,7 +52,7 @@ def drive_block(d, gx0: float, gz0: float, drive_start: int, timestep: float) ->
         *drive_variables(d, gx0, gz0),
         "variable gmag equal sqrt(v_gx*v_gx+v_gz*v_gz)",
         "unfix grav",
-        "fix grav all gravity v_gmag vector v_gx 0.0 v_gz",
+        f"fix grav {group} gravity v_gmag vector v_gx 0.0 v_gz",
     ]
 
 
