@@ -19,7 +19,8 @@ order both ways, so one thread and several give the same bits (tested).
 Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
 wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
 infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_w delta
-(``[contact] wall_lever_arm``: f_w = 1 or 1/2, :data:`dem.kernels.contact.WALL_LEVER_ARMS`).
+(``[contact] wall_lever_arm``: f_w = 1, 1/2 or 0, :data:`dem.kernels.contact.WALL_LEVER_ARMS`;
+the slip velocity's arm is r_i with ``slip_lever_arm = "radius"``).
 
 Every contact law goes through :func:`dem.kernels.contact.contact_force`.
 """
@@ -29,7 +30,7 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contact import add_wall_contact, contact_force_inlined, wall_row
+from dem.kernels.contact import P_SLIP_ARM, add_wall_contact, contact_force_inlined, wall_row
 from dem.kernels.mesh import mesh_touches, mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
@@ -89,7 +90,8 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
         model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
         v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
         omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
-        ri - 0.5 * delta, rj - 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
+        ri - 0.5 * delta, rj - 0.5 * delta, ri - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta,
+        rj - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
     )  # fmt: skip
     return f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]
 

@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from dem.config import NUMBA_OPTIONS
-from dem.kernels.contact import P_WALL_ARM, contact_force
+from dem.kernels.contact import P_SLIP_ARM, P_WALL_ARM, contact_force
 from dem.kernels.periodic import wrap
 
 #: Contact slots (tangential springs) per sphere for mesh contacts.
@@ -263,7 +263,8 @@ def mesh_forces(
         delta = r - d  # a fixed wall: m* = m, R* = r, lever arm r - f_w delta
         f = contact_force(
             model, p, nx, ny, nz, delta, vx, vy, vz, wx, wy, wz, 0.0, 0.0, 0.0,
-            r - p[P_WALL_ARM] * delta, 0.0, m, r, slot_hist, row, dt,
+            r - p[P_WALL_ARM] * delta, 0.0, r - (1.0 - p[P_SLIP_ARM]) * p[P_WALL_ARM] * delta, 0.0,
+            m, r, slot_hist, row, dt,
         )  # fmt: skip
         fx, fy, fz = fx + f[0], fy + f[1], fz + f[2]
         tx, ty, tz = tx + f[3], ty + f[4], tz + f[5]

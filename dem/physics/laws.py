@@ -230,6 +230,7 @@ def _params(case) -> np.ndarray:
         limit_force=c.limit_force,
         tangential=c.tangential,
         wall_lever_arm=c.wall_lever_arm,
+        slip_lever_arm=c.slip_lever_arm,
         restitution_tangential=m.restitution_tangential,
         **TANGENTIAL_LAWS[c.tangential].coefficients(case),
     )
@@ -303,6 +304,8 @@ class ContactLaw:
             out["normal_law_restitution"] = float(p[contact.P_NORMAL_E])
         f_w = float(p[contact.P_WALL_ARM])
         out["wall_lever_arm"] = next(k for k, v in contact.WALL_LEVER_ARMS.items() if v == f_w)
+        a = float(p[contact.P_SLIP_ARM])
+        out["slip_lever_arm"] = next(k for k, v in contact.SLIP_LEVER_ARMS.items() if v == a)
         return out
 
     @property

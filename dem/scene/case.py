@@ -201,6 +201,7 @@ def _read_contact(t: Table) -> ContactSpec:
         tangential=tangential,
         tangential_damping_ratio=damping,
         wall_lever_arm=t.read("wall_lever_arm"),
+        slip_lever_arm=t.read("slip_lever_arm"),
     )
 
 

@@ -22,8 +22,10 @@ SHAPES = ("sphere", "screw", "clump")
 CONTACT_MODELS = ("hertz_mindlin", "linear")
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
 TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts", "impact")
-#: Where a wall contact's tangential force acts (:data:`dem.kernels.contacts.WALL_LEVER_ARMS`).
-WALL_LEVER_ARMS = ("surface", "midpoint")
+#: Where a wall contact's tangential force acts (:data:`dem.kernels.contact.WALL_LEVER_ARMS`).
+WALL_LEVER_ARMS = ("surface", "midpoint", "radius")
+#: The slip velocity's lever arms (:data:`dem.kernels.contact.SLIP_LEVER_ARMS`).
+SLIP_LEVER_ARMS = ("contact", "radius")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
@@ -101,6 +103,7 @@ CONTACT = (
     Key("tangential", "choice", default="impact", choices=TANGENTIAL_CONVENTIONS),
     Key("limit_force", "boolean", default=False),
     Key("wall_lever_arm", "choice", default="surface", choices=WALL_LEVER_ARMS),
+    Key("slip_lever_arm", "choice", default="contact", choices=SLIP_LEVER_ARMS),
 )
 PARTICLES = (
     Key("shape", "choice", default="sphere", choices=SHAPES),

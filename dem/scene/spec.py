@@ -206,8 +206,12 @@ class ContactSpec:
         tangential_damping_ratio: zeta_t of "coulomb" (None: the default,
             :data:`dem.config.DEM_TANGENTIAL_DAMPING_RATIO`); "liggghts" refuses it.
         wall_lever_arm: Where a wall contact's tangential force acts: ``"surface"`` (default,
-            r - delta from the centre: the point on the wall) or ``"midpoint"`` (r - delta / 2,
-            as LIGGGHTS 3.8's walls), :data:`dem.kernels.contacts.WALL_LEVER_ARMS`.
+            r - delta from the centre: the point on the wall), ``"midpoint"`` (r - delta / 2,
+            as LIGGGHTS 3.8's walls) or ``"radius"`` (r, as LAMMPS's ``fix wall/gran``),
+            :data:`dem.kernels.contact.WALL_LEVER_ARMS`.
+        slip_lever_arm: The slip velocity's lever arms: ``"contact"`` (default, the torque's
+            arms: the contact point's slip) or ``"radius"`` (the full radii, as LAMMPS's ``pair
+            granular``), :data:`dem.kernels.contact.SLIP_LEVER_ARMS`.
 
     """
 
@@ -220,6 +224,7 @@ class ContactSpec:
     tangential: str = "impact"
     tangential_damping_ratio: float | None = None
     wall_lever_arm: str = "surface"
+    slip_lever_arm: str = "contact"
 
 
 @dataclass(frozen=True)

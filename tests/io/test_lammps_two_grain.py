@@ -95,3 +95,15 @@ def test_the_twin_with_lammps_conventions_reproduces_lammps():
         assert max(v for v in twin[key].values() if v == v) < 1e-10, key
     assert twin["switch"]["spring"]["ft_history"] < 1e-6
     assert twin["switch"]["slip_arm"]["eps_t"] == pytest.approx(row["diff"]["eps_t"], rel=1e-3)
+
+
+@pytest.mark.parametrize("geometry", ["wall-45", "pair-30", "pair-60"])
+def test_with_lammps_lever_arms_the_oblique_collisions_agree(geometry):
+    """dem with LAMMPS's lever arms (contact.slip_lever_arm = "radius", wall_lever_arm =
+    "radius") at the softest Hertz law, e = 0.5, where the default arms differ most (2.0e-3 in
+    eps_t and 6.3e-3 in F_t(t) at the floor): every measure agrees within the 1e-3 asked, and far
+    inside it; what remains is the spring's rotation against its projection (measured 1.6e-7 in
+    F_t(t))."""
+    row = two_grain.collide("hertz-5e7", 0.5, geometry, two_grain.LAMMPS_ARMS)
+    d = row["diff"]
+    assert max(d.values()) < 1e-5, d

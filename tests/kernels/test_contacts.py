@@ -30,7 +30,9 @@ def _coefficients(model, e, mu, mu_roll, limit, tangential="liggghts", arm="surf
     return {
         "kn": 2.0e3, "kt_ratio": 0.4, "E": 1.0e7, "nu": 0.25, "e": e, "mu": mu,
         "mu_roll": mu_roll, "limit": limit, "tangential": tangential, "zeta_t": 0.7,
-        "f_t": 2 / 7, "arm": arm, "f_w": {"surface": 1.0, "midpoint": 0.5}[arm],
+        "f_t": 2 / 7, "arm": "radius" if arm == "lammps" else arm,
+        "f_w": {"surface": 1.0, "midpoint": 0.5, "lammps": 0.0}[arm],
+        "slip": "radius" if arm == "lammps" else "contact",
     }  # fmt: skip
 
 
@@ -43,12 +45,12 @@ def _law(model, c):
             poisson_ratio=c["nu"], restitution=c["e"], friction=c["mu"],
             rolling_friction=c["mu_roll"], limit_force=c["limit"], tangential=c["tangential"],
             tangential_damping_ratio=c["zeta_t"], tangential_mass_factor=c["f_t"],
-            wall_lever_arm=c.get("arm", "surface"),
+            wall_lever_arm=c.get("arm", "surface"), slip_lever_arm=c.get("slip", "contact"),
         ),
     )  # fmt: skip
 
 
-@pytest.mark.parametrize("arm", ["surface", "midpoint"])
+@pytest.mark.parametrize("arm", ["surface", "midpoint", "lammps"])
 @pytest.mark.parametrize("tangential", ["liggghts", "coulomb"])
 @pytest.mark.parametrize(
     ("model", "e", "mu", "mu_roll", "limit", "dt"),
@@ -62,7 +64,8 @@ def _law(model, c):
 def test_forces_match_brute_force_twin(model, e, mu, mu_roll, limit, dt, tangential, arm):
     """Forces and torques equal an O(N^2) NumPy twin, over periodic images and walls, twice:
     the second evaluation after a move and a rebuild uses the carried-over tangential history.
-    Both wall lever arms (r - delta and LIGGGHTS's r - delta / 2)."""
+    The wall lever arms r - delta, LIGGGHTS's r - delta / 2, and LAMMPS's arms (slip velocity at
+    the full radii, wall torque at r)."""
     rng = np.random.default_rng(7)
     x, r = _packing(rng)
     c = _coefficients(model, e, mu, mu_roll, limit, tangential, arm)
@@ -205,7 +208,7 @@ def test_coulomb_convention_never_exceeds_the_friction_limit(model):
             v = rng.normal(0, 0.05, 3)
             f = contact.contact_force(
                 contact.MODELS[model], p, *n, rng.uniform(1e-6, 1e-4), *v, 0.0, 0.0, 0.0,
-                0.0, 0.0, 0.0, 1e-3, 1e-3, 1e-4, 1e-3, hist, 0, 1e-6,
+                0.0, 0.0, 0.0, 1e-3, 1e-3, 1e-3, 1e-3, 1e-4, 1e-3, hist, 0, 1e-6,
             )  # fmt: skip
             force = np.array(f[:3])
             ft = force - np.dot(force, n) * n
@@ -237,6 +240,42 @@ def test_wall_lever_arm_moves_the_contact_point_into_the_overlap():
         assert ft[0] == pytest.approx(out["surface"][0][0] * lever / (r - delta), rel=1e-12)
         assert ft[0] != 0.0
     assert out["surface"][1][1] != out["midpoint"][1][1]
+
+
+@pytest.mark.parametrize("wall_arm", ["surface", "radius"])
+def test_slip_lever_arm_radius_takes_the_slip_at_the_full_radius(wall_arm):
+    """Two spheres spinning alike, pressed together, and one pressed into the floor: with
+    slip_lever_arm = "radius" the slip is the spin times the full radius r, with "contact" times
+    the torque's arm (r - delta/2 between grains, r - f_w delta at the floor); F_t is linear in
+    the slip on the first step, and the torques keep their arms either way."""
+    r, delta, spin = 1.0e-3, 2.0e-5, 50.0
+    f_w = {"surface": 1.0, "radius": 0.0}[wall_arm]
+    out = {}
+    for slip in ("contact", "radius"):
+        c = dict(_coefficients("linear", 0.5, 0.3, 0.0, False, "coulomb"), arm=wall_arm,
+                 slip=slip)  # fmt: skip
+        x = np.array([[0.003, 0.0, 0.004], [0.003, 0.0, 0.004 + 2 * r - delta],
+                      [0.009, 0.0, r - delta]])  # fmt: skip
+        spheres = Spheres.create(x, np.full(3, r), 2500.0)
+        spheres.omega[:] = (0.0, spin, 0.0)
+        sim = Simulation(spheres, Trough(LENGTH, WIDTH), _law("linear", c), 1e-6)
+        sim.compute_forces()
+        out[slip] = (spheres.force.copy(), spheres.torque.copy())
+    pair_arm, wall_torque_arm = r - 0.5 * delta, r - f_w * delta
+    f_pair = out["radius"][0][0, 0]
+    assert f_pair == pytest.approx(out["contact"][0][0, 0] * r / pair_arm, rel=1e-12)
+    f_wall = out["radius"][0][2, 0]
+    assert f_wall == pytest.approx(out["contact"][0][2, 0] * r / wall_torque_arm, rel=1e-12)
+    for slip in ("contact", "radius"):
+        force, torque = out[slip]
+        ft = np.array([force[2, 0], force[2, 1], 0.0])
+        np.testing.assert_allclose(torque[2], -wall_torque_arm * np.cross([0, 0, 1.0], ft),
+                                   rtol=1e-12)  # fmt: skip
+        n = np.array([0.0, 0.0, -1.0])  # from the upper sphere (j) to the lower (i)
+        ft = force[0] - np.dot(force[0], n) * n
+        np.testing.assert_allclose(torque[0], -pair_arm * np.cross(n, ft), rtol=1e-9,
+                                   atol=1e-18)  # fmt: skip
+    assert f_pair != 0.0 and f_wall != 0.0
 
 
 def test_settle_failure_names_the_incline_and_only_advises_eps_n_where_it_helps():

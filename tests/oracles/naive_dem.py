@@ -46,13 +46,18 @@ def coefficients(model, delta, m_eff, r_eff, c):
     )
 
 
-def one_contact(model, c, n, delta, vr, wi, wj, ci, cj, m_eff, r_eff, shear, dt):
-    """Force on i, torques on i and j, new shear, for one contact (vectors as arrays)."""
+def one_contact(model, c, n, delta, vr, wi, wj, ci, cj, m_eff, r_eff, shear, dt, ai=None, aj=None):
+    """Force on i, torques on i and j, new shear, for one contact (vectors as arrays).
+
+    ci, cj are the torques' lever arms; ai, aj the slip velocity's (default ci, cj).
+    """
+    ai = ci if ai is None else ai
+    aj = cj if aj is None else aj
     kn, gn, kt, gt = coefficients(model, delta, m_eff, r_eff, c)
     fn = kn * delta - gn * np.dot(vr, n)
     if c.get("limit", False):
         fn = max(fn, 0.0)
-    vt = vr - np.dot(vr, n) * n - np.cross(ci * wi + cj * wj, n)
+    vt = vr - np.dot(vr, n) * n - np.cross(ai * wi + aj * wj, n)
     s = shear + vt * dt
     s = s - np.dot(s, n) * n
     if c.get("tangential", "coulomb") == "coulomb":
@@ -87,7 +92,10 @@ def all_forces(model, c, x, v, w, r, m, length, width, gravity, dt, history):
     """Forces and torques on all spheres (periodic x, floor and side walls, gravity).
 
     ``history`` maps (i, j) (j = -1 - wall for walls) to the shear vector; updated in place.
+    ``c["f_w"]`` sets a wall's lever arm r - f_w delta; ``c["slip"] == "radius"`` takes the slip
+    velocity at the full radii.
     """
+    full = c.get("slip", "contact") == "radius"
     n = len(r)
     f = m[:, None] * np.asarray(gravity)[None, :]
     t = np.zeros((n, 3))
@@ -104,6 +112,7 @@ def all_forces(model, c, x, v, w, r, m, length, width, gravity, dt, history):
                 model, c, d / dist, delta, v[i] - v[j], w[i], w[j], r[i] - delta / 2,
                 r[j] - delta / 2, m[i] * m[j] / (m[i] + m[j]), r[i] * r[j] / (r[i] + r[j]),
                 history.get((i, j), np.zeros(3)), dt,
+                ai=r[i] if full else None, aj=r[j] if full else None,
             )  # fmt: skip
             history[(i, j)] = s
             f[i] += fi
@@ -123,7 +132,7 @@ def all_forces(model, c, x, v, w, r, m, length, width, gravity, dt, history):
             fi, ti, _, s = one_contact(
                 model, c, normal, delta, v[i], w[i], np.zeros(3),
                 r[i] - c.get("f_w", 1.0) * delta, 0.0, m[i], r[i],
-                history.get((i, -1 - k), np.zeros(3)), dt,
+                history.get((i, -1 - k), np.zeros(3)), dt, ai=r[i] if full else None,
             )  # fmt: skip
             history[(i, -1 - k)] = s
             f[i] += fi

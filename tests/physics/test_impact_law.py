@@ -134,7 +134,7 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
             break
         f = contact.contact_force(
             0, p, 0.0, 0.0, 1.0, x, vx, 0.0, vz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-            RADIUS - x, 0.0, MASS, RADIUS, hist, 0, dt,
+            RADIUS - x, 0.0, RADIUS - x, 0.0, MASS, RADIUS, hist, 0, dt,
         )  # fmt: skip
         before = phases[-1] if phases else 0.0
         phases.append(hist[0, 3])
@@ -153,7 +153,7 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     hist[:] = 0.0
     contact.contact_force(
         0, p, 0.0, 0.0, 1.0, 1e-7, vx, 0.0, -0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-        RADIUS, 0.0, MASS, RADIUS, hist, 0, dt,
+        RADIUS, 0.0, RADIUS, 0.0, MASS, RADIUS, hist, 0, dt,
     )  # fmt: skip
     assert hist[0, 3] > 0.0
 

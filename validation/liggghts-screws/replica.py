@@ -38,7 +38,7 @@ def replica_sphere(start: np.ndarray, times: np.ndarray, case, dt: float, lever:
         c = r - delta if lever == "dem" else r - 0.5 * delta
         f = contact_force(
             model, p, 0.0, 0.0, 1.0, delta, v[0], v[1], v[2], w[0], w[1], w[2],
-            0.0, 0.0, 0.0, c, 0.0, m, r, hist, 0, dt,
+            0.0, 0.0, 0.0, c, 0.0, c, 0.0, m, r, hist, 0, dt,
         )  # fmt: skip
         return np.array([f[0], f[1], f[2] + m * g]), np.array(f[3:6])
 

@@ -20,11 +20,13 @@ What LAMMPS cannot express is refused (:class:`dem.errors.InputError`, naming th
 LIGGGHTS the spring alone; the impact law has no spring), rolling resistance (LAMMPS's ``sds``
 is not dem's ``cdt``) and a tangential dashpot without a normal one (x undefined).
 
-Conventions that differ by O(delta / r) and are stated in the deck, not refused: LAMMPS takes the
-slip velocity with the full radii (R_i w_i + R_j w_j) x n where dem takes r - delta/2, its wall
-torque at the full radius r (dem: r - f_w delta), and it rotates the spring onto the new tangent
-plane keeping its length where dem projects it. e = 0 (critical damping, beta = -1 in dem) is
-written as e = 1e-300: LAMMPS evaluates ln e, which is NaN at 0, and beta is then -0.99999.
+Conventions stated in the deck, not refused (:func:`convention_notes`): LAMMPS takes the slip
+velocity with the full radii (R_i w_i + R_j w_j) x n and its wall torque at the full radius r,
+which dem does with ``[contact] slip_lever_arm = "radius"`` and ``wall_lever_arm = "radius"``
+(by default dem takes r - delta/2 and r - f_w delta, a difference of order delta / r); and it
+rotates the spring onto the new tangent plane keeping its length where dem projects it.
+e = 0 (critical damping, beta = -1 in dem) is written as e = 1e-300: LAMMPS evaluates ln e,
+which is NaN at 0, and beta is then -0.99999.
 """
 
 from __future__ import annotations
@@ -156,11 +158,32 @@ def contact_models(scene: Scene) -> tuple[GranularModel, GranularModel]:
     return granular_model(law.params, model, nu), granular_model(law.wall_params, model, nu)
 
 
-#: Conventions LAMMPS fixes differently from dem, by O(delta / r), written into every deck.
-CONVENTION_NOTES = [
-    "slip velocity: LAMMPS uses the full radii, v_t - (R_i w_i + R_j w_j) x n; dem uses the "
-    "lever arms r - delta/2 (r - f_w delta at a wall): a difference of order delta / r",
-    "wall torque: LAMMPS acts at the full radius r; dem at r - f_w delta (contact.wall_lever_arm)",
-    "spring: LAMMPS rotates it onto the new tangent plane keeping its length, then adds v_t dt; "
-    "dem adds v_t dt, then projects it",
-]
+def convention_notes(scene: Scene) -> list[str]:
+    """The conventions of the case against LAMMPS's, one line each, for the deck's header.
+
+    LAMMPS takes the slip velocity at the full radii and a wall's torque at the full radius;
+    ``[contact] slip_lever_arm = "radius"`` and ``wall_lever_arm = "radius"`` run dem the same
+    way (validation/lammps-two-grain); otherwise the difference is of order delta / r.
+    """
+    c = scene.case.contact
+    if c.slip_lever_arm == "radius":
+        slip = "v_t - (R_i w_i + R_j w_j) x n with the full radii in both (slip_lever_arm)"
+    else:
+        slip = (
+            "LAMMPS uses the full radii, v_t - (R_i w_i + R_j w_j) x n; dem the lever arms "
+            "r - delta/2 (r - f_w delta at a wall), a difference of order delta / r "
+            "(contact.slip_lever_arm = 'radius' is LAMMPS's)"
+        )
+    if c.wall_lever_arm == "radius":
+        torque = "at the full radius r in both (contact.wall_lever_arm = 'radius')"
+    else:
+        torque = (
+            f"LAMMPS acts at the full radius r; dem at r - f_w delta (contact.wall_lever_arm = "
+            f"'{c.wall_lever_arm}'; 'radius' is LAMMPS's)"
+        )
+    return [
+        f"slip velocity: {slip}",
+        f"wall torque: {torque}",
+        "spring: LAMMPS rotates it onto the new tangent plane keeping its length, then adds "
+        "v_t dt; dem adds v_t dt, then projects it (a difference of order (dt |omega|)^2 a step)",
+    ]

@@ -36,7 +36,7 @@ import numpy as np
 
 from dem import __version__
 from dem.errors import InputError
-from dem.io.lammps.contact import CONVENTION_NOTES, contact_models
+from dem.io.lammps.contact import contact_models, convention_notes
 from dem.io.liggghts.drive import drive_block, gravity_block, static_gravity
 from dem.io.liggghts.text import fmt
 from dem.scene.resolved import Scene
@@ -169,7 +169,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     lines.append("# contact law mapped from dem's (dem.io.lammps.contact):")
     lines += [f"#   grain-grain: {n}" for n in pair.notes]
     lines += [f"#   grain-wall: {n}" for n in wall.notes]
-    lines += [f"#   NOTE: {n}" for n in CONVENTION_NOTES]
+    lines += [f"#   NOTE: {n}" for n in convention_notes(scene)]
     rotate = case.particles.rotation
     clumps = case.particles.clumps
     group = "nobody" if clumps else "all"  # rigid bodies take gravity from fix rigid/small

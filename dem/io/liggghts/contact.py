@@ -69,10 +69,17 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
         return " ".join(fmt(x) for x in (grains, walls, walls, walls))
 
     mu = pair(material.friction, wall.friction)
-    if contact.wall_lever_arm == "surface":
+    if contact.wall_lever_arm != "midpoint":
+        arm = "r - delta" if contact.wall_lever_arm == "surface" else "r"
         lines.append(
-            "# NOTE: the case's wall contacts act at r - delta (contact.wall_lever_arm = "
-            "'surface'); LIGGGHTS's walls at r - delta/2, as dem's wall_lever_arm = 'midpoint'"
+            f"# NOTE: the case's wall contacts act at {arm} (contact.wall_lever_arm = "
+            f"'{contact.wall_lever_arm}'); LIGGGHTS's walls at r - delta/2, as dem's "
+            "wall_lever_arm = 'midpoint'"
+        )
+    if contact.slip_lever_arm == "radius":
+        lines.append(
+            "# NOTE: the case takes the slip velocity at the full radii (contact.slip_lever_arm "
+            "= 'radius'); LIGGGHTS at r - delta/2, as dem's slip_lever_arm = 'contact'"
         )
     lines += [
         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu}",

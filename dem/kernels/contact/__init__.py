@@ -11,8 +11,11 @@ A contact between sphere i and sphere j (or a wall, j = wall) is described by
 - the unit normal n pointing from j to i and the overlap delta = r_i + r_j - |x_i - x_j| > 0,
 - the relative velocity of the centres v_r = v_i - v_j and the spins omega_i, omega_j,
 - the lever arms c_i = r_i - delta / 2, c_j = r_j - delta / 2 (a wall: c_i = r_i - f_w delta,
-  c_j = 0, with f_w = 1, the contact point on the wall's surface, or f_w = 1/2, LIGGGHTS's
-  midpoint of the overlap: ``[contact] wall_lever_arm``, :data:`WALL_LEVER_ARMS`),
+  c_j = 0, with f_w = 1, the contact point on the wall's surface, f_w = 1/2, LIGGGHTS's
+  midpoint of the overlap, or f_w = 0, LAMMPS's full radius: ``[contact] wall_lever_arm``,
+  :data:`WALL_LEVER_ARMS`), and the slip velocity's arms a_i, a_j: the same c_i, c_j by
+  default, or the full radii r_i, r_j as LAMMPS takes them (``[contact] slip_lever_arm``,
+  :data:`SLIP_LEVER_ARMS`),
 - the effective mass m* = m_i m_j / (m_i + m_j) and radius R* = r_i r_j / (r_i + r_j) (a wall has
   infinite mass and radius: m* = m_i, R* = r_i),
 - the tangential spring elongation s (3 floats of contact history, per contact pair).
@@ -21,7 +24,7 @@ A *law* maps (delta, m*, R*) to the four coefficients (k_n, gamma_n, k_t, gamma_
 spring-dashpot routine :func:`contact_force` turns them into forces:
 
     F_n = k_n delta - gamma_n (v_r . n)                    (clamped to >= 0 with limit_force)
-    v_t = v_r - (v_r . n) n - (c_i omega_i + c_j omega_j) x n   (slip velocity at the contact)
+    v_t = v_r - (v_r . n) n - (a_i omega_i + a_j omega_j) x n   (slip velocity at the contact)
     s  <- s + v_t dt;  s <- s - (s . n) n                  (increment, then project)
     F_i = F_n n + F_t,  tau_i = -c_i n x F_t,  tau_j = -c_j n x F_t,  F_j = -F_i
 
@@ -136,12 +139,14 @@ from dem.kernels.contact.params import (
     P_MU,
     P_MU_ROLL,
     P_NORMAL_E,
+    P_SLIP_ARM,
     P_STICK_RATE,
     P_STICK_ZETA,
     P_TANGENTIAL,
     P_WALL_ARM,
     P_YSTAR,
     P_ZETA_T,
+    SLIP_LEVER_ARMS,
     TANGENTIAL,
     WALL_LEVER_ARMS,
     critical_timestep,
@@ -185,12 +190,14 @@ __all__ = [
     "P_MU",
     "P_MU_ROLL",
     "P_NORMAL_E",
+    "P_SLIP_ARM",
     "P_STICK_RATE",
     "P_STICK_ZETA",
     "P_TANGENTIAL",
     "P_WALL_ARM",
     "P_YSTAR",
     "P_ZETA_T",
+    "SLIP_LEVER_ARMS",
     "TANGENTIAL",
     "WALL_LEVER_ARMS",
     "add_wall_contact",

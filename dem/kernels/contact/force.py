@@ -26,6 +26,7 @@ from dem.kernels.contact.params import (
     P_MASS_T,
     P_MU,
     P_MU_ROLL,
+    P_SLIP_ARM,
     P_STICK_RATE,
     P_STICK_ZETA,
     P_TANGENTIAL,
@@ -36,7 +37,7 @@ from dem.kernels.contact.params import (
 @numba.njit(**NUMBA_OPTIONS)
 def contact_force(
     model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
-    ci, cj, m_eff, r_eff, hist, k, dt,
+    ci, cj, ai, aj, m_eff, r_eff, hist, k, dt,
 ):  # fmt: skip
     """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
 
@@ -51,7 +52,9 @@ def contact_force(
         delta: Overlap > 0, m.
         vrx, vry, vrz: v_i - v_j, m/s.
         wix, wiy, wiz, wjx, wjy, wjz: Spins of i and j, rad/s.
-        ci, cj: Lever arms from the centres to the contact point, m.
+        ci, cj: Lever arms of the torques, from the centres to the contact point, m.
+        ai, aj: Lever arms of the slip velocity, m: ci, cj, or the full radii
+            (``[contact] slip_lever_arm``).
         m_eff, r_eff: m*, kg, and R*, m.
         hist: Contact history, shape (n, width) (:data:`HISTORY_WIDTH`); row k is this contact.
         k: Row of ``hist``.
@@ -67,10 +70,10 @@ def contact_force(
     fn = kn * delta - gn * vn
     if p[P_LIMIT_FORCE] != 0.0 and fn < 0.0:
         fn = 0.0
-    # slip velocity at the contact point: tangential part minus (c_i w_i + c_j w_j) x n
-    wx = ci * wix + cj * wjx
-    wy = ci * wiy + cj * wjy
-    wz = ci * wiz + cj * wjz
+    # slip velocity at the contact point: tangential part minus (a_i w_i + a_j w_j) x n
+    wx = ai * wix + aj * wjx
+    wy = ai * wiy + aj * wjy
+    wz = ai * wiz + aj * wjz
     vtx = vrx - vn * nx - (wy * nz - wz * ny)
     vty = vry - vn * ny - (wz * nx - wx * nz)
     vtz = vrz - vn * nz - (wx * ny - wy * nx)
@@ -128,9 +131,11 @@ def add_wall_contact(
     sphere), overlap delta, m* = m, R* = r, lever arm r - f_w delta (``p[P_WALL_ARM]``),
     spring in ``hist[row]``.
     """
+    f_w = p[P_WALL_ARM]
     f = contact_force(
         model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-        omega[i, 2], 0.0, 0.0, 0.0, r - p[P_WALL_ARM] * delta, 0.0, m, r, hist, row, dt,
+        omega[i, 2], 0.0, 0.0, 0.0, r - f_w * delta, 0.0, r - (1.0 - p[P_SLIP_ARM]) * f_w * delta,
+        0.0, m, r, hist, row, dt,
     )  # fmt: skip
     return fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
 

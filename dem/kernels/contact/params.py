@@ -46,7 +46,8 @@ P_NORMAL_E = 19  #: "impact": e_n, the normal law's own restitution (:func:`norm
 P_KT_COEF = 20  #: tangential spring: C_kt, k_t = C_kt a
 P_DAMP_T = 21  #: tangential dashpot: C_dt, gamma_t = C_dt sqrt(B_t a m*)
 P_DAMP_T_SCALE = 22  #: tangential dashpot: B_t
-N_PARAMS = 23
+P_SLIP_ARM = 23  #: 1.0: the slip velocity takes the full radii (:data:`SLIP_LEVER_ARMS`), else 0.0
+N_PARAMS = 24
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
@@ -60,7 +61,14 @@ IMPACT_MAX_PHASE = 2.0 * math.pi
 #: f_w of each ``wall_lever_arm``: "surface" puts a wall contact's point on the wall's surface
 #: (r - delta from the centre), "midpoint" halfway into the overlap (r - delta / 2), as
 #: LIGGGHTS 3.8 does for its walls (surface_model_default.h: ``cr = radi - 0.5 * deltan``).
-WALL_LEVER_ARMS = {"surface": 1.0, "midpoint": 0.5}
+#: "radius" puts it at the full radius r, as LAMMPS's ``fix wall/gran`` does (f_w = 0).
+WALL_LEVER_ARMS = {"surface": 1.0, "midpoint": 0.5, "radius": 0.0}
+#: The slip velocity's lever arms (``[contact] slip_lever_arm``) -> ``params[P_SLIP_ARM]``:
+#: "contact" takes the torque's arms (r_i - delta / 2 between grains, r - f_w delta at a wall), so
+#: the slip is that of the contact point; "radius" takes the full radii r_i, r_j, as LAMMPS's
+#: ``pair granular`` and ``fix wall/gran`` do (its torques keep r_i - delta / 2 between grains).
+#: With ``wall_lever_arm = "radius"`` too, dem's contact is LAMMPS's, term for term.
+SLIP_LEVER_ARMS = {"contact": 0.0, "radius": 1.0}
 
 _SQRT_5_6 = math.sqrt(5.0 / 6.0)
 
@@ -127,6 +135,7 @@ def make_params(
     tangential_damping_ratio: float = DEM_TANGENTIAL_DAMPING_RATIO,
     tangential_mass_factor: float = 1.0,
     wall_lever_arm: str = "surface",
+    slip_lever_arm: str = "contact",
     restitution_tangential: float = 0.8,
     stick_rate: float = DEM_STICK_RATE,
     stick_damping_ratio: float = DEM_STICK_DAMPING_RATIO,
@@ -142,13 +151,17 @@ def make_params(
     by "coulomb" and "impact"; "impact" uses ``restitution_tangential`` eps_t, ``stick_rate``
     alpha and ``stick_damping_ratio``. ``beta`` overrides the damping parameter derived from
     ``restitution`` (over-critical damping, beta < -1, for studies). ``wall_lever_arm`` is a key
-    of :data:`WALL_LEVER_ARMS`.
+    of :data:`WALL_LEVER_ARMS`, ``slip_lever_arm`` one of :data:`SLIP_LEVER_ARMS`.
     """
     if model not in MODELS:
         raise ValueError(f"model must be one of {sorted(MODELS)}, got {model!r}")
     if wall_lever_arm not in WALL_LEVER_ARMS:
         raise ValueError(
             f"wall_lever_arm must be one of {sorted(WALL_LEVER_ARMS)}, got {wall_lever_arm!r}"
+        )
+    if slip_lever_arm not in SLIP_LEVER_ARMS:
+        raise ValueError(
+            f"slip_lever_arm must be one of {sorted(SLIP_LEVER_ARMS)}, got {slip_lever_arm!r}"
         )
     if tangential not in TANGENTIAL:
         raise ValueError(f"tangential must be one of {sorted(TANGENTIAL)}, got {tangential!r}")
@@ -166,6 +179,7 @@ def make_params(
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
     p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
+    p[P_SLIP_ARM] = SLIP_LEVER_ARMS[slip_lever_arm]
     _normal_params(p, model)
     _damping_params(p, model)
     _tangential_params(p, model, tangential)
