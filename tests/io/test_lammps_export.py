@@ -76,12 +76,87 @@ def test_what_lammps_cannot_express_is_refused_by_key(tmp_path, keys, key):
     assert info.value.key == key
 
 
-@pytest.mark.parametrize("name, key", [("u-trough", "trough.mesh"),
-                                       ("feeder", "feeder")])  # fmt: skip
-def test_shipped_cases_lammps_cannot_take_are_refused_naming_what_is_missing(name, key):
+def test_shipped_cases_lammps_cannot_take_are_refused_naming_what_is_missing():
     with pytest.raises(InputError) as info:
-        plan_lammps(load_case(CASES / name, COULOMB))
-    assert info.value.key == key
+        plan_lammps(load_case(CASES / "feeder", COULOMB))
+    assert info.value.key == "feeder"
+
+
+def _extrude(profile, length=0.1):
+    from dem.scene.mesh import extrude
+
+    mesh = extrude(np.array(profile, dtype=float), length)
+    return mesh.points[mesh.cells_dict["triangle"]]
+
+
+@pytest.mark.parametrize(("name", "planes", "faces"), [("u", 50, 2), ("v", 4, 2)])
+def test_the_shipped_pans_are_their_face_planes(name, planes, faces):
+    """The U pan (48 arc facets and two walls) and the V pan (two flanks and two walls) become
+    one plane per face of the profile, each normal into the pan, every vertex on or inside
+    every plane (convex), each plane holding its two triangles."""
+    from dem.io.lammps.walls import pan_planes
+    from dem.scene.mesh import load_mesh
+
+    mesh = load_mesh(CASES / "geometry" / f"{name}_trough.stl", length=0.12)
+    pan = pan_planes(mesh.tri)
+    assert len(pan.points) == planes and np.all(pan.faces == faces)
+    assert np.allclose(np.linalg.norm(pan.normals, axis=1), 1.0)
+    assert np.all(pan.normals[:, 0] == 0.0)
+    verts = mesh.tri.reshape(-1, 3)
+    offsets = np.einsum("kj,kj->k", pan.points, pan.normals)
+    assert (verts @ pan.normals.T - offsets).min() > -1e-12
+    # the centre line, 1 mm above the pan's lowest point, is inside every plane
+    bottom = np.array([0.06, 0.0, float(pan.lo[2]) + 1e-3])
+    assert np.all(pan.normals @ bottom - offsets > 0.0)
+
+
+def test_a_pan_is_the_same_whatever_the_winding():
+    from dem.io.lammps.walls import pan_planes
+
+    tri = _extrude([(-0.03, 0.04), (-0.03, 0.01), (0.0, 0.0), (0.03, 0.01), (0.03, 0.04)])
+    a, b = pan_planes(tri), pan_planes(tri[:, ::-1])
+    np.testing.assert_array_equal(a.normals, b.normals)
+
+
+@pytest.mark.parametrize(
+    ("tri", "words"),
+    [
+        (_extrude([(-0.03, 0.04), (-0.02, 0.0), (0.0, 0.02), (0.02, 0.0), (0.03, 0.04)]),
+         "convex cross-section"),
+        (np.array([[[0.0, -0.01, 0.0], [0.1, -0.01, 0.01], [0.0, 0.01, 0.0]],
+                   [[0.0, 0.01, 0.0], [0.1, -0.01, 0.01], [0.1, 0.01, 0.01]]]),
+         "extruded along x"),
+    ],
+    ids=["w-profile", "tilted-floor"],
+)  # fmt: skip
+def test_a_pan_lammps_planes_cannot_make_is_refused_naming_the_mesh(tri, words):
+    """A W-shaped profile (a ridge in the middle: not an intersection of half-spaces) and a
+    floor that rises along x (not a profile extruded along x) are refused by key."""
+    from dem.io.lammps.walls import pan_planes
+
+    with pytest.raises(InputError) as info:
+        pan_planes(tri, "w.stl")
+    assert info.value.key == "trough.mesh" and words in str(info.value)
+
+
+def test_a_pan_deck_has_region_walls_and_no_flat_walls(tmp_path):
+    """The V pan's deck: four planes, their intersection, one wall/gran/region fix with the
+    grain-wall law; no floor or side-wall fix; the data file's box holds the pan."""
+    from dem.io.lammps.deck import write_data, write_deck
+
+    scene = resolve(load_case(CASES / "v-trough", COULOMB))
+    x = np.array([[0.06, 0.0, 0.01]])
+    write_data(tmp_path / "data.fill", scene, x, np.zeros((1, 3)), np.zeros((1, 3)),
+               np.array([0.002]), np.array([1e-4]))  # fmt: skip
+    write_deck(scene, tmp_path, timestep=4e-6, steps=10, settle_steps=10, r_max=0.002)
+    deck = (tmp_path / "in.lammps").read_text()
+    _, wall = contact_models(scene)
+    assert "region pan intersect 4 pan1 pan2 pan3 pan4 side in units box" in deck
+    assert f"fix pan all wall/gran/region granular {wall.words} region pan" in deck
+    assert "zplane" not in deck and "yplane" not in deck
+    assert "v_trough.stl" in deck and str(CASES) not in deck
+    data = (tmp_path / "data.fill").read_text()
+    assert "-0.032 0.032 ylo yhi" in data
 
 
 def test_clumps_that_cannot_rotate_are_refused():
@@ -196,6 +271,21 @@ def test_a_short_screw_deck_runs_in_lammps(tmp_path):
     # particle-steps count the member spheres, as dem run's do
     rate = s["spheres"] * s["steps"] / s["wall_time_s"]
     assert s["particle_steps_per_s"] == pytest.approx(rate, rel=1e-9)
+
+
+@pytest.mark.integration
+@pytest.mark.skipif(not _lammps_installed(),
+                    reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)  # fmt: skip
+def test_a_short_v_pan_deck_runs_in_lammps(tmp_path):
+    """Screws in the V pan (its four face planes as one wall/gran/region): one cycle runs to the
+    end with every body kept, conveyed forward."""
+    out = tmp_path / "deck"
+    assert main(["export", "lammps", str(CASES / "v-trough"), str(out),
+                 "--set", "contact.tangential=coulomb", "--set", "particles.count=40",
+                 "--set", "run.cycles=1", "--settle-cycles", "0", "--run"]) == 0  # fmt: skip
+    s = json.loads((out / "summary.json").read_text())
+    assert s["grains"] == 40 and np.isfinite(s["mean_velocity"]) and s["mean_velocity"] > 0
+    assert "wall/gran/region" in (out / "in.lammps").read_text()
 
 
 def test_lmp_is_found_beside_this_python_first(tmp_path, monkeypatch):

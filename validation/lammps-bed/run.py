@@ -5,11 +5,13 @@
     .venv/bin/python validation/lammps-bed/run.py --report-only         # the table again
 
 cases/sphere-bed (1500 spheres of 2 mm, Hertz at E = 2e9 Pa, 60 Hz, 25 deg, Gamma 3.06) and
-cases/screw-trough (200 screws of 2.5 g: rigid bodies in LAMMPS, fix rigid/small) with
+cases/screw-trough (200 screws of 2.5 g: rigid bodies in LAMMPS, fix rigid/small), and
+cases/u-trough and cases/v-trough (150 screws in mesh pans: plane walls in LAMMPS) with
 ``contact.tangential = "coulomb"`` (the law LAMMPS's mindlin expresses, dem.io.lammps.contact) and
 10 settling cycles instead of "auto", so both engines measure the same 20 cycles, at three
 drives (:data:`DRIVES`: as shipped; 40 deg, at A = 0.3 mm (Gamma 2.8) for the spheres and at
-the case's Gamma 1.8 for the screws; uphill on a 3 deg incline). Per seed:
+the case's Gamma 1.8 for the screws; uphill on a 3 deg incline; the pans as shipped only,
+:data:`BED_DRIVES`). Per seed:
 ``dem run`` on one thread, then ``dem export lammps ... --run`` on one rank from dem's settled fill
 of the same seed, alternating which engine goes first. Each run's error bar is its correlated
 standard error over the 20 per-cycle means; the seeds are pooled as independent replicas
@@ -34,8 +36,13 @@ sys.path.insert(0, str(ROOT))
 from dem import provenance  # noqa: E402
 from validation._lib import replicas  # noqa: E402
 
-#: The beds: 1500 spheres, and 200 screws of 2.5 g (fix rigid/small bodies in LAMMPS).
-CASES = {"spheres": ROOT / "cases" / "sphere-bed", "screws": ROOT / "cases" / "screw-trough"}
+#: The beds: 1500 spheres, 200 screws of 2.5 g (fix rigid/small bodies in LAMMPS), and 150 screws
+#: in the U and V pans of cases/u-trough and cases/v-trough (meshes in dem, the intersections of
+#: their face planes in LAMMPS, dem.io.lammps.walls).
+CASES = {"spheres": ROOT / "cases" / "sphere-bed", "screws": ROOT / "cases" / "screw-trough",
+         "u-pan": ROOT / "cases" / "u-trough", "v-pan": ROOT / "cases" / "v-trough"}  # fmt: skip
+#: The drives each bed runs at (the pans: as shipped).
+BED_DRIVES = {"u-pan": ("shipped",), "v-pan": ("shipped",)}
 SETS = ["contact.tangential=coulomb", "run.settle_cycles=10"]
 #: Three drives: the shipped one, 40 deg at a smaller amplitude (Gamma 2.8), conveying uphill.
 DRIVES = {
@@ -128,14 +135,16 @@ def main(argv=None) -> int:
         results = {"cases": {k: str(c.relative_to(ROOT)) for k, c in CASES.items()},
                    "sets": SETS, "drives": DRIVES, "runs": kept, "command": command}  # fmt: skip
         with tempfile.TemporaryDirectory() as tmp:
-            trials = [(b, d, seed) for b in args.beds for d in args.drives for seed in args.seeds]
+            trials = [(b, d, seed) for b in args.beds for d in args.drives for seed in args.seeds
+                      if d in BED_DRIVES.get(b, DRIVES)]  # fmt: skip
             for k, (kind, drive, seed) in enumerate(trials):
                 order = (("dem", run_dem), ("lammps", run_lammps))
                 for engine, fn in order if k % 2 == 0 else order[::-1]:
                     s = fn(kind, seed, drive, Path(tmp))
                     row = {"engine": engine, "kind": kind, "drive": drive, "seed": seed,
                            **{key: s.get(key) for key in KEEP},
-                           "load_average": os.getloadavg()[0]}  # fmt: skip
+                           "load_average": os.getloadavg()[0],
+                           "dem_commit": provenance.record()["git_commit"]}  # fmt: skip
                     results["runs"].append(row)
                     path.write_text(json.dumps(results, indent=1) + "\n")  # after every run
                     print(json.dumps({k: v for k, v in row.items() if k != "per_cycle_velocity"}))

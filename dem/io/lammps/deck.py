@@ -12,8 +12,9 @@ x-velocity of the grains is written every step to ``vx_mean.txt`` (step, m/s), f
 :mod:`dem.io.lammps.launcher` takes per-cycle means on dem's own cycle edges.
 
 Geometry: x periodic over the section length, flat side walls y = -+width/2 and the floor z = 0
-(``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), the top open
-(``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve`` with rotation
+(``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), or a mesh pan
+as the intersection of its face planes (``fix wall/gran/region``, :mod:`dem.io.lammps.walls`),
+the top open (``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve`` with rotation
 locked, the spins staying zero). Screws and clumps are rigid bodies of ``fix rigid/small
 molecule``: each member carries its body's number (``fix property/atom mol``), each body its exact
 mass, centre of mass, inertia tensor and motion from dem (``bodies.rigid``, the ``infile``; LAMMPS
@@ -23,8 +24,9 @@ dem), members of one body do not touch (``neigh_modify exclude molecule/intra``)
 x-velocity is that of the bodies' centres (``compute rigid/local``).
 
 Refused, with the reason (:class:`dem.errors.InputError`): what the contact mapping refuses,
-clumps with rotation locked (``fix rigid/small`` has no such switch), mesh troughs (LAMMPS's
-GRANULAR package has no triangle-mesh wall) and finite feeders (no feed and discharge yet).
+clumps with rotation locked (``fix rigid/small`` has no such switch), meshes that are not a
+convex pan extruded along x (LAMMPS's GRANULAR package has no triangle-mesh wall) and finite
+feeders (no feed and discharge yet).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ import numpy as np
 from dem import __version__
 from dem.errors import InputError
 from dem.io.lammps.contact import contact_models, convention_notes
+from dem.io.lammps.walls import Pan, flat_wall_lines, pan_planes, pan_wall_lines
 from dem.io.liggghts.drive import drive_block, gravity_block, static_gravity
 from dem.io.liggghts.text import fmt
 from dem.scene.resolved import Scene
@@ -59,12 +62,7 @@ def refuse_unsupported(scene: Scene) -> None:
     """Raise :class:`InputError` for what this exporter cannot write, before anything is run."""
     case = scene.case
     contact_models(scene)  # the law's refusals
-    if case.trough.mesh is not None:
-        raise InputError(
-            "trough.mesh", str(case.trough.mesh),
-            "none for a LAMMPS deck (LAMMPS's GRANULAR package has flat, cylindrical and region "
-            "walls but no triangle-mesh wall)",
-        )  # fmt: skip
+    trough_pan(scene)  # a mesh that is not a convex extruded pan
     if case.feeder is not None:
         raise InputError(
             "feeder", "a [feeder] table",
@@ -75,6 +73,16 @@ def refuse_unsupported(scene: Scene) -> None:
             "particles.rotation", False,
             "true for a LAMMPS deck of clumps (fix rigid/small cannot lock a body's rotation)",
         )  # fmt: skip
+
+
+def trough_pan(scene: Scene) -> Pan | None:
+    """The case's mesh pan as planes (:func:`dem.io.lammps.walls.pan_planes`), or None (flat)."""
+    mesh = scene.case.trough.mesh
+    if mesh is None:
+        return None
+    from dem.scene.mesh import load_mesh
+
+    return pan_planes(load_mesh(mesh, length=scene.case.trough.length).tri, str(mesh))
 
 
 def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np.ndarray,
@@ -88,7 +96,10 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
     t = scene.trough
     n = len(x)
     r_max = float(radius.max())
-    top = max(float(x[:, 2].max()) + 4.0 * r_max, 8.0 * r_max)
+    pan = trough_pan(scene)
+    y_lo, y_hi = (-0.5 * t.width, 0.5 * t.width) if pan is None else (pan.lo[1], pan.hi[1])
+    z_lo = 0.0 if pan is None else min(0.0, float(pan.lo[2]))
+    top = max(float(x[:, 2].max()) + 4.0 * r_max, z_lo + 8.0 * r_max)
     density = mass / (4.0 / 3.0 * math.pi * radius**3)
     lines = [
         f"dem {__version__}: the settled fill of case {scene.case.name} (SI units, trough frame)",
@@ -97,8 +108,8 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
         "1 atom types",
         "",
         f"0.0 {float(t.length)!r} xlo xhi",
-        f"{-0.5 * t.width - r_max!r} {0.5 * t.width + r_max!r} ylo yhi",
-        f"0.0 {top!r} zlo zhi",
+        f"{float(y_lo) - r_max!r} {float(y_hi) + r_max!r} ylo yhi",
+        f"{z_lo!r} {top!r} zlo zhi",
         "",
         "Atoms # sphere",
         "",
@@ -152,7 +163,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     pair, wall = contact_models(scene)
     d = case.drive
     gx0, gz0 = static_gravity(case.trough.inclination)
-    half = 0.5 * case.trough.width
+    pan = trough_pan(scene)
     period_steps = 1.0 / (d.frequency * timestep)
     lines = [
         f"# LAMMPS deck of dem case {case.name}, written by dem {__version__} "
@@ -203,9 +214,11 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         f"neighbor {fmt(SKIN_FRACTION * r_max)} bin",
         "neigh_modify delay 0 every 1 check yes",
         "",
-        "# the floor z = 0 and the side walls y = -+width/2 (each grain feels the nearer one)",
-        f"fix floor all wall/gran granular {wall.words} zplane 0.0 NULL",
-        f"fix sides all wall/gran granular {wall.words} yplane {fmt(-half)} {fmt(half)}",
+        *(
+            flat_wall_lines(wall.words, case.trough.width)
+            if pan is None
+            else pan_wall_lines(wall.words, pan, Path(case.trough.mesh).name)
+        ),
         "",
         f"timestep {fmt(timestep)}",
     ]
