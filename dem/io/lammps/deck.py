@@ -15,8 +15,8 @@ Geometry: x periodic over the section length, flat side walls y = -+width/2 and 
 (``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), or a mesh pan
 as the intersection of its face planes (``fix wall/gran/region``, :mod:`dem.io.lammps.walls`),
 the top open (``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve``
-with rotation locked, the spins staying zero). Screws and clumps are rigid bodies of ``fix rigid/small
-molecule``: each member carries its body's number (``fix property/atom mol``), each body its exact
+with rotation locked, the spins staying zero). Screws and clumps are rigid bodies of
+``fix rigid/small molecule``: each member carries its body's number (``fix property/atom mol``), each body its exact
 mass, centre of mass, inertia tensor and motion from dem (``bodies.rigid``, the ``infile``; LAMMPS
 would otherwise sum the overlapping members), gravity and the drive act on the body's mass at its
 centre (the fix's ``gravity`` keyword), a member's contacts take the body's mass as m* (as in
