@@ -12,16 +12,16 @@ x-velocity of the grains is written every step to ``vx_mean.txt`` (step, m/s), f
 :mod:`dem.io.lammps.launcher` takes per-cycle means on dem's own cycle edges.
 
 Geometry: x periodic over the section length, flat side walls y = -+width/2 and the floor z = 0
-(``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), or a mesh pan
-as the intersection of its face planes (``fix wall/gran/region``, :mod:`dem.io.lammps.walls`),
-the top open (``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve``
-with rotation locked, the spins staying zero). Screws and clumps are rigid bodies of
-``fix rigid/small molecule``: each member carries its body's number (``fix property/atom mol``), each body its exact
-mass, centre of mass, inertia tensor and motion from dem (``bodies.rigid``, the ``infile``; LAMMPS
-would otherwise sum the overlapping members), gravity and the drive act on the body's mass at its
-centre (the fix's ``gravity`` keyword), a member's contacts take the body's mass as m* (as in
-dem), members of one body do not touch (``neigh_modify exclude molecule/intra``), and the mean
-x-velocity is that of the bodies' centres (``compute rigid/local``).
+(``fix wall/gran granular``, the grain-wall law of :mod:`dem.io.lammps.contact`), or a mesh pan as
+the intersection of its face planes (``fix wall/gran/region``, :mod:`dem.io.lammps.walls`), the top
+open (``boundary p f fm``). Spheres are integrated by ``fix nve/sphere`` (``fix nve`` with rotation
+locked, the spins staying zero). Screws and clumps are rigid bodies of ``fix rigid/small molecule``:
+each member carries its body's number (``fix property/atom mol``), each body its exact mass, centre
+of mass, inertia tensor and motion from dem (``bodies.rigid``, the ``infile``; LAMMPS would
+otherwise sum the overlapping members), gravity and the drive act on the body's mass at its centre
+(the fix's ``gravity`` keyword), a member's contacts take the body's mass as m* (as in dem), members
+of one body do not touch (``neigh_modify exclude molecule/intra``), and the mean x-velocity is that
+of the bodies' centres (``compute rigid/local``).
 
 Refused, with the reason (:class:`dem.errors.InputError`): what the contact mapping refuses,
 clumps with rotation locked (``fix rigid/small`` has no such switch), meshes that are not a
