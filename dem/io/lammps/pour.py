@@ -6,8 +6,8 @@ rest with the drive off, all inside LAMMPS, so a bed of a million grains needs n
 machine that writes the deck. The stages, in the deck's order:
 
 1. Pour (``fix pour``, drive off, gravity along -z, which fix pour requires at every ``run``):
-   every grain is inserted in one batch into a block above the floor, clear of the walls, as
-   tall as dem's own fill box (:class:`PourGeometry`); each grain at a random place (seed
+   the grains are inserted batch by batch into a block above the future bed, clear of the
+   walls, as tall as dem's own fill box (:class:`PourGeometry`); each grain at a random place (seed
    ``run.seed``), a clump also with a random orientation. Spheres take the case's one diameter
    and density (``diam one``, ``dens``; dem's spheres have one size). A clump is the molecule
    template :data:`MOLECULE_NAME`, written from dem's grain: the members in the body frame (the
@@ -21,8 +21,9 @@ machine that writes the deck. The stages, in the deck's order:
    :data:`REST_CHECK_TIME` (dem's settle chunk), at which all grains are in and
    the rms speed of the spheres (members for clumps) is below
    ``DEM_SETTLE_SPEED_FRACTION sqrt(g r)``, dem's own criterion
-   (:meth:`dem.engine.simulation.Simulation.settle`); if the step cap (the pour's fall time twice
-   plus ``DEM_SETTLE_MAX_TIME``) comes first, the deck stops with exit status 3 and says so. On
+   (:meth:`dem.engine.simulation.Simulation.settle`); if the step cap (a fall through the box
+   for each batch and one more, plus ``DEM_SETTLE_MAX_TIME``) comes first, the deck stops with
+   exit status 3 and says so. On
    an inclined trough the pour is removed, gravity turns to the trough's static gravity and the
    same rest test runs again (cap ``DEM_SETTLE_MAX_TIME``).
 3. ``reset_timestep 0``: the drive's clock and ``vx_mean.txt`` count from the drive's start, as
@@ -48,6 +49,9 @@ from dem.scene.resolved import Scene
 FILLS = ("dem", "lammps")
 #: The clump template for ``fix pour ... mol`` (``--fill lammps``).
 MOLECULE_NAME = "grain.mol"
+#: Peak volume fraction (in fix pour's spheres) of a pour batch near the block's top; denser,
+#: pour's random insertion leaves grains out and retries them a batch later.
+POUR_PEAK_FRACTION = 0.15
 #: Insertion tries per grain (``fix pour ... vol`` second value).
 POUR_TRIES = 200
 #: Simulated time between two rest checks, s (dem's settle chunk).
@@ -129,11 +133,14 @@ class PourGeometry:
     """Where the grains are poured, m: the block (x, y, z bounds), the box's top, pour's ``vol``.
 
     The block spans the periodic length, stays ``clearance`` (fix pour's grain radius) from the
-    side walls and the floor, and is as tall as dem's own fill box for that width
-    (:func:`dem.scene.fill.sphere_box_height`, :func:`~dem.scene.fill.clump_box_height`: 2.5
-    times a dense or loose bed). ``vol`` is the fraction of the block that the grains' spheres of
-    radius ``clearance`` fill (fix pour's measure, at most 1), so that pour puts them all in one
-    batch.
+    side walls, starts above the settled bed (dem's bed height: the grains' volume at packing
+    0.6 for spheres, 0.3 for clumps, over the floor) and is as tall as dem's own fill box
+    (:func:`dem.scene.fill.sphere_box_height`, :func:`~dem.scene.fill.clump_box_height`). fix
+    pour draws each grain's height h = top - u^2 (top - bottom), u uniform, so that grains
+    arrive evenly in time: their density near the top is sqrt(height / (2 clearance)) times
+    the mean. ``vol`` (pour's fraction of the block, in spheres of radius ``clearance``) keeps
+    that peak at :data:`POUR_PEAK_FRACTION`, where random insertion still finds room; pour then
+    inserts ``batches`` batches, one each fall through the block, above the growing bed.
     """
 
     def __init__(self, scene: Scene):
@@ -148,12 +155,16 @@ class PourGeometry:
         width = self.y[1] - self.y[0]
         if pt.clumps:
             height = clump_box_height(n, scene.grain, t.length, width)
+            bed = n * scene.grain.volume / (0.3 * t.length * width)
         else:
             height = sphere_box_height(n, pt.radius, t.length, width)
-        self.z = (c, c + height)
+            bed = n * 4.0 / 3.0 * math.pi * pt.radius**3 / (0.6 * t.length * width)
+        self.z = (c + bed, c + bed + height)
         self.top = self.z[1] + c
         one = 4.0 / 3.0 * math.pi * self.clearance**3
-        self.vol = min(1.0, (n + 1) * one / (t.length * width * height))
+        filled = (n + 1) * one / (t.length * width * height)
+        self.vol = min(filled, POUR_PEAK_FRACTION / math.sqrt(height / (2.0 * c)))
+        self.batches = math.ceil(filled / self.vol)
 
     def fall_time(self) -> float:
         """Time to fall from the block's top to the floor, s."""
@@ -172,9 +183,9 @@ def header_lines(scene: Scene, geometry: PourGeometry, timestep: float) -> list[
     )
     (z0, z1) = geometry.z
     return [
-        f"# fill: LAMMPS pours the {pt.count} grains (fix pour, seed {scene.case.run.seed}, one "
-        f"batch at random places and orientations, gravity -z) into the block z = {z0:.4g} to "
-        f"{z1:.4g} m clear of the walls by {geometry.clearance:.4g} m; {how}",
+        f"# fill: LAMMPS pours the {pt.count} grains (fix pour, seed {scene.case.run.seed}, about "
+        f"{geometry.batches} batches at random places and orientations, gravity -z) into the "
+        f"block z = {z0:.4g} to {z1:.4g} m clear of the walls by {geometry.clearance:.4g} m; {how}",
         f"# rest: the drive off, until every grain is in and the rms sphere speed is below "
         f"{rest_threshold(scene):.4g} m/s (dem's settle criterion), checked every {chunk} steps "
         f"(fix halt); past the step cap the deck quits with status {NOT_AT_REST_STATUS}; then "
@@ -213,7 +224,8 @@ def pour_lines(scene: Scene, geometry: PourGeometry, timestep: float, group: str
         what = f"diam one {fmt(d)} dens {fmt(rho)} {fmt(rho)}"
         ntype = 1
     chunk = max(1, round(REST_CHECK_TIME / timestep))
-    cap = chunk * math.ceil((2.0 * geometry.fall_time() + DEM_SETTLE_MAX_TIME) / timestep / chunk)
+    pour_time = (geometry.batches + 1) * geometry.fall_time()
+    cap = chunk * math.ceil((pour_time + DEM_SETTLE_MAX_TIME) / timestep / chunk)
     g = GRAVITY
     return [
         "# --- fill: pour (fix pour needs gravity along -z), then rest with the drive off",
