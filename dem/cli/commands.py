@@ -259,7 +259,7 @@ def cmd_export_lammps(args) -> int:
         except LammpsMissing as exc:
             print(f"dem: {exc}", file=sys.stderr)
             return 2
-    path = export_lammps(plan, out, overwrite=args.overwrite)
+    path = export_lammps(plan, out, overwrite=args.overwrite, fill=args.fill)
     print(f"wrote {path} (dt = {plan.timestep:.4g} s, {plan.settle_cycles} settling and "
           f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
     if plan.settle_note:

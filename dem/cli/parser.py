@@ -247,6 +247,11 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--run", action="store_true",
                    help="run the deck in LAMMPS and write OUT_DIR/summary.json")  # fmt: skip
     e.add_argument("--ranks", type=WHOLE, default=1, help="MPI ranks for --run (default 1)")
+    e.add_argument(
+        "--fill", choices=("dem", "lammps"), default="dem",
+        help="who fills the trough: dem (settled here, data.fill; default) or lammps (the deck "
+        "pours and settles its own with fix pour)",
+    )  # fmt: skip
     e.set_defaults(func=c.cmd_export_lammps)
     return parser
 

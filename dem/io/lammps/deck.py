@@ -7,7 +7,9 @@ shares). It starts from dem's own fill, settled by dem with the drive off
 (:func:`dem.engine.setup.from_case` and :meth:`~dem.engine.simulation.Simulation.settle`), written
 as ``data.fill``; so both engines start from the same packing (LAMMPS starts without the fill's
 tangential springs, which a data file cannot carry). Then it runs two stages, each its own
-``run``: settle (``settle_steps`` driven steps, not measured) and measure (``steps``). The mean
+``run``: settle (``settle_steps`` driven steps, not measured) and measure (``steps``). With
+``fill="lammps"`` the deck instead creates the empty box and makes its own fill, poured and
+settled by LAMMPS before those stages (:mod:`dem.io.lammps.pour`). The mean
 x-velocity of the grains is written every step to ``vx_mean.txt`` (step, m/s), from which
 :mod:`dem.io.lammps.launcher` takes per-cycle means on dem's own cycle edges.
 
@@ -38,6 +40,7 @@ import numpy as np
 
 from dem import __version__
 from dem.errors import InputError
+from dem.io.lammps import pour
 from dem.io.lammps.contact import contact_models, convention_notes
 from dem.io.lammps.walls import Pan, flat_wall_lines, pan_planes, pan_wall_lines
 from dem.io.liggghts.drive import drive_block, gravity_block, static_gravity
@@ -157,8 +160,16 @@ def write_bodies(path: Path, bodies, inertia_space: np.ndarray, length: float) -
 
 
 def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_steps: int,
-               r_max: float, settle_note: str | None = None) -> Path:  # fmt: skip
-    """Write ``out/in.lammps`` for ``scene`` (its fill already in ``out/data.fill``)."""
+               r_max: float, settle_note: str | None = None,
+               fill: str = "dem") -> Path:  # fmt: skip
+    """Write ``out/in.lammps`` for ``scene``.
+
+    ``fill`` "dem": its fill already in ``out/data.fill`` (and ``bodies.rigid``); "lammps": the
+    deck pours and settles its own (:mod:`dem.io.lammps.pour`; a clump's template in
+    ``out/grain.mol``).
+    """
+    own = fill == "lammps"
+    geometry = pour.PourGeometry(scene) if own else None
     case = scene.case
     pair, wall = contact_models(scene)
     d = case.drive
@@ -169,14 +180,21 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         f"# LAMMPS deck of dem case {case.name}, written by dem {__version__} "
         f"(dem export lammps), for {LAMMPS_VERSION}",
         f"# run: lmp -in {DECK_NAME}   or on N ranks: mpirun -np N lmp -in {DECK_NAME}",
-        f"# {case.particles.count} {case.particles.shape} grains from dem's settled fill "
-        f"({DATA_NAME}); drive "
+        f"# {case.particles.count} {case.particles.shape} grains "
+        + (
+            "poured and settled by LAMMPS (fix pour, see the fill stage)"
+            if own
+            else f"from dem's settled fill ({DATA_NAME})"
+        )
+        + "; drive "
         f"{d.frequency:g} Hz, {d.angle:g} deg, throw number {d.throw_number:.4g}; dt = "
         f"{timestep:.6g} s ({period_steps:.1f} steps a cycle); {settle_steps} settling and "
         f"{steps} measured driven steps",
     ]
     if settle_note:
         lines.append(f"# settle: {settle_note}")
+    if own:
+        lines += pour.header_lines(scene, geometry, timestep)
     lines.append("# contact law mapped from dem's (dem.io.lammps.contact):")
     lines += [f"#   grain-grain: {n}" for n in pair.notes]
     lines += [f"#   grain-wall: {n}" for n in wall.notes]
@@ -198,14 +216,18 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
             else ""
         ),  # a body's members within the ghost cutoff
     ]
+    if own:
+        lines += pour.box_lines(scene, geometry, r_max)
     if clumps:
         lines += [
             "# clump members carry their body's number (molecule id): fix property/atom mol",
             "fix pmol all property/atom mol ghost yes",
-            f"read_data {DATA_NAME} fix pmol NULL Molecules",
+            f"molecule grain {pour.MOLECULE_NAME}"
+            if own
+            else f"read_data {DATA_NAME} fix pmol NULL Molecules",
             "neigh_modify exclude molecule/intra all",
         ]
-    else:
+    elif not own:
         lines.append(f"read_data {DATA_NAME}")
     lines += [
         "",
@@ -228,8 +250,10 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         # as m*, as in dem
         lines += [
             "group nobody empty",
-            *gravity_block(gx0, gz0, group),
-            f"fix integrate all rigid/small molecule infile {BODIES_NAME} gravity grav",
+            *([] if own else gravity_block(gx0, gz0, group)),
+            "fix integrate all rigid/small molecule mol grain reinit no gravity grav"
+            if own
+            else f"fix integrate all rigid/small molecule infile {BODIES_NAME} gravity grav",
             "",
             "# the bodies' mean x-velocity (equal masses: the mass-weighted mean), every step",
             "compute bodies all rigid/local integrate vx",
@@ -240,11 +264,13 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
             "fix integrate all nve/sphere"
             if rotate
             else "fix integrate all nve  # particles.rotation = false: the spins stay zero",
-            *gravity_block(gx0, gz0),
+            *([] if own else gravity_block(gx0, gz0)),
             "",
             "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
             "compute vxm all reduce ave vx",
         ]
+    if own:
+        lines += ["", *pour.fill_lines(scene, timestep, group, gx0, gz0, geometry), ""]
     lines += [
         f"fix vxout all ave/time 1 1 1 c_vxm file {VX_FILE}",
         f"thermo {max(1, round(period_steps))}",

@@ -1,5 +1,8 @@
 """``dem export lammps``: the deck, dem's settled fill as its data file, and optionally the run.
 
+With ``--fill lammps`` no dem fill is made: the deck pours and settles its own grains
+(:mod:`dem.io.lammps.pour`), and a clump's template goes beside it as ``grain.mol``.
+
 The step, the measured steps and the settling are chosen as for the LIGGGHTS deck
 (:func:`dem.io.liggghts.export.plan_export`: dem's own step, the case's cycles); everything
 LAMMPS cannot express is refused before the fill (:func:`dem.io.lammps.deck.refuse_unsupported`),
@@ -13,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dem.errors import InputError
 from dem.io.lammps.deck import (
     BODIES_NAME,
     DATA_NAME,
@@ -22,6 +26,7 @@ from dem.io.lammps.deck import (
     write_data,
     write_deck,
 )
+from dem.io.lammps.pour import FILLS, MOLECULE_NAME, refuse_unpourable, write_molecule
 from dem.io.liggghts.export import ExportPlan, plan_export
 from dem.io.paths import refuse_replacing
 from dem.kernels.rigid import quat_to_matrix
@@ -35,15 +40,31 @@ def plan_lammps(case: Case, **options) -> ExportPlan:
     return plan
 
 
-def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False,
-                  progress: bool = True) -> Path:  # fmt: skip
-    """Fill and settle the case in dem, write ``data.fill`` and ``in.lammps``; the deck's path."""
+def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False, progress: bool = True,
+                  fill: str = "dem") -> Path:  # fmt: skip
+    """Write the deck; the deck's path.
+
+    ``fill`` "dem": fill and settle the case in dem and write ``data.fill`` (and for clumps
+    ``bodies.rigid``) beside ``in.lammps``; "lammps": no dem fill, the deck pours its own
+    (:mod:`dem.io.lammps.pour`), clumps from ``grain.mol``.
+    """
     from dem.engine import setup
 
+    if fill not in FILLS:
+        raise InputError("--fill", fill, " or ".join(FILLS))
+    if fill == "lammps":
+        refuse_unpourable(plan.scene)
     out = Path(out_dir)
     if not overwrite:
-        refuse_replacing("OUT_DIR", out, (DECK_NAME, DATA_NAME, BODIES_NAME))
+        refuse_replacing("OUT_DIR", out, (DECK_NAME, DATA_NAME, BODIES_NAME, MOLECULE_NAME))
     case = plan.scene.case
+    if fill == "lammps":
+        out.mkdir(parents=True, exist_ok=True)
+        if case.particles.clumps:
+            write_molecule(out / MOLECULE_NAME, plan.scene)
+        return write_deck(plan.scene, out, timestep=plan.timestep, steps=plan.steps,
+                          settle_steps=plan.settle_steps, r_max=plan.scene.max_radius,
+                          settle_note=plan.settle_note, fill=fill)  # fmt: skip
     if progress:
         print(f"dem: filling and settling {case.particles.count} grains (drive off) for the "
               "deck's data file", file=sys.stderr)  # fmt: skip
