@@ -76,6 +76,23 @@ def test_what_lammps_cannot_express_is_refused_by_key(tmp_path, keys, key):
     assert info.value.key == key
 
 
+SHIPPED = sorted(p.parent.name for p in CASES.glob("*/case.toml"))
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_case_exports_or_is_refused_by_key(name):
+    """As shipped, every case runs the impact law, refused by its key; under "coulomb" every
+    case plans a deck (validation/lammps-bed runs them in LAMMPS) except the feeder, refused by
+    its table."""
+    with pytest.raises(InputError) as info:
+        plan_lammps(load_case(CASES / name))
+    assert info.value.key == "contact.tangential"
+    if name == "feeder":
+        return
+    plan = plan_lammps(load_case(CASES / name, COULOMB))
+    assert plan.steps > 0
+
+
 def test_shipped_cases_lammps_cannot_take_are_refused_naming_what_is_missing():
     with pytest.raises(InputError) as info:
         plan_lammps(load_case(CASES / "feeder", COULOMB))
