@@ -83,7 +83,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     results = json.loads(PATH.read_text()) if PATH.exists() else {"runs": []}
     if not args.report_only:
-        kept = [r for r in results["runs"] if r["bed"] not in args.beds]
+        kept = [r for r in results["runs"]
+                if r["bed"] not in args.beds or r["seed"] not in args.seeds]  # fmt: skip
         results = {"command": " ".join(["validation/lammps-bed/fills.py", *sys.argv[1:]]),
                    "sets": SETS, "beds": {k: [str(c.relative_to(ROOT)), e]
                                           for k, (c, e) in BEDS.items()},
