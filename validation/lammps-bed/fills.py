@@ -2,6 +2,7 @@
 
     nice -n 10 .venv/bin/python validation/lammps-bed/fills.py             # seeds 1-3
     .venv/bin/python validation/lammps-bed/fills.py --report-only
+    nice -n 10 .venv/bin/python validation/lammps-bed/fills.py --packing 1 2   # the packings
 
 cases/screw-trough at 100 screws (and cases/sphere-bed with ``--beds spheres screws``), under
 ``contact.tangential = "coulomb"`` with 10 settling and 20 measured cycles: ``dem export lammps
@@ -53,6 +54,56 @@ def run(bed: str, fill: str, seed: int, work: Path) -> dict:
             "load_average": os.getloadavg()[0]}  # fmt: skip
 
 
+def _atoms(path: Path):
+    """(diameter, z) of every atom in a LAMMPS data file (atom_style sphere)."""
+    import numpy as np
+
+    lines = path.read_text().split("\n")
+    start = next(k for k, line in enumerate(lines) if line.startswith("Atoms")) + 2
+    rows = []
+    for line in lines[start:]:
+        if not line.strip():
+            break
+        rows.append([float(w) for w in line.split()[:7]])
+    a = np.array(rows)
+    return a[:, 2], a[:, 6]
+
+
+def packing(bed: str, seed: int, work: Path, below: float = 0.015) -> dict:
+    """Each method's settled fill before the drive: the spheres' mean height and their solid
+    fraction below ``below`` m over the section, from dem's data.fill and from the pour deck
+    stopped where the drive would start (``write_data``)."""
+    import math
+
+    from dem.io.lammps.launcher import find_lammps
+    from dem.scene.case import load_case
+
+    case, extra = BEDS[bed]
+    trough = load_case(case).trough
+    sets = []
+    for s in [*SETS, *extra, f"run.seed={seed}"]:
+        sets += ["--set", s]
+    out = {"seed": seed, "below_m": below}
+    for fill in ("dem", "lammps"):
+        d = work / f"pack-{bed}-{fill}-{seed}"
+        subprocess.run([*DEM, "export", "lammps", str(case), str(d), "--fill", fill, *sets],
+                       check=True, capture_output=True)  # fmt: skip
+        name = "data.fill"
+        if fill == "lammps":
+            deck = (d / "in.lammps").read_text()
+            (d / "in.lammps").write_text(
+                deck.replace("reset_timestep 0\n", "write_data poured.data\nquit\n", 1)
+            )
+            subprocess.run([find_lammps()[0], "-in", "in.lammps", "-log", "none", "-screen",
+                            "none"], cwd=d, check=True)  # fmt: skip
+            name = "poured.data"
+        diameter, z = _atoms(d / name)
+        solid = float(sum(math.pi / 6.0 * diameter[z < below] ** 3))
+        area = trough.length * trough.width
+        out[fill] = {"mean_z_m": float(z.mean()), "solid_fraction_below": solid / (area * below)}
+    return out
+
+
 def report(results: dict) -> list[str]:
     rows = ["| bed | fill | seeds | v (m/s), each seed | pooled v (m/s) |",
             "| --- | --- | --- | --- | --- |"]  # fmt: skip
@@ -72,6 +123,13 @@ def report(results: dict) -> list[str]:
             d = replicas.difference(*pooled["lammps"], *pooled["dem"])
             notes.append(f"{bed}: LAMMPS's fill - dem's = {d['percent_of_liggghts']:+.2f} % of "
                          f"dem's fill's v, {d['sigma']:+.2f} combined standard errors")  # fmt: skip
+    for pk in results.get("packing", []):
+        a, b = pk["dem"], pk["lammps"]
+        notes.append(f"spheres, seed {pk['seed']}, settled before the drive: mean height "
+                     f"{a['mean_z_m'] * 1e3:.2f} mm (dem's fill) and {b['mean_z_m'] * 1e3:.2f} "
+                     f"mm (LAMMPS's pour); solid fraction below {pk['below_m'] * 1e3:g} mm "
+                     f"{a['solid_fraction_below']:.3f} and "
+                     f"{b['solid_fraction_below']:.3f}")  # fmt: skip
     return [*rows, "", *notes]
 
 
@@ -80,9 +138,15 @@ def main(argv=None) -> int:
     ap.add_argument("--beds", nargs="+", default=["screws"], choices=list(BEDS))
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--packing", type=int, nargs="+", metavar="SEED",
+                    help="measure both fills' packing (spheres) at these seeds")  # fmt: skip
     args = ap.parse_args(argv)
     results = json.loads(PATH.read_text()) if PATH.exists() else {"runs": []}
-    if not args.report_only:
+    if args.packing:
+        with tempfile.TemporaryDirectory() as tmp:
+            results["packing"] = [packing("spheres", seed, Path(tmp)) for seed in args.packing]
+        PATH.write_text(json.dumps(results, indent=1) + "\n")
+    elif not args.report_only:
         kept = [r for r in results["runs"]
                 if r["bed"] not in args.beds or r["seed"] not in args.seeds]  # fmt: skip
         results = {"command": " ".join(["validation/lammps-bed/fills.py", *sys.argv[1:]]),
