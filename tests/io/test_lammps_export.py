@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from needs_lammps import NEEDS_LAMMPS
 from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
@@ -246,17 +247,8 @@ def test_deck_and_data_file_hold_dems_fill(tmp_path, monkeypatch):
     assert (out / "in.lammps").read_bytes() == before  # said before the fill
 
 
-def _lammps_installed() -> bool:
-    try:
-        launcher.find_lammps()
-    except launcher.LammpsMissing:
-        return False
-    return True
-
-
 @pytest.mark.integration
-@pytest.mark.skipif(not _lammps_installed(),
-                    reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)  # fmt: skip
+@NEEDS_LAMMPS
 def test_a_short_deck_runs_in_lammps_and_summarises_like_dem_run(tmp_path, capsys):
     case_dir = write_case(tmp_path / "case", SMALL_CASE.replace("count = 120", "count = 40"))
     out = tmp_path / "deck"
@@ -273,8 +265,7 @@ def test_a_short_deck_runs_in_lammps_and_summarises_like_dem_run(tmp_path, capsy
 
 
 @pytest.mark.integration
-@pytest.mark.skipif(not _lammps_installed(),
-                    reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)  # fmt: skip
+@NEEDS_LAMMPS
 def test_a_short_screw_deck_runs_in_lammps(tmp_path):
     """Clumps under fix rigid/small: a few hundred steps, the bodies conveyed forward."""
     out = tmp_path / "deck"
@@ -291,8 +282,7 @@ def test_a_short_screw_deck_runs_in_lammps(tmp_path):
 
 
 @pytest.mark.integration
-@pytest.mark.skipif(not _lammps_installed(),
-                    reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL)  # fmt: skip
+@NEEDS_LAMMPS
 def test_a_short_v_pan_deck_runs_in_lammps(tmp_path):
     """Screws in the V pan (its four face planes as one wall/gran/region): one cycle runs to the
     end with every body kept, conveyed forward."""

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from needs_lammps import NEEDS_LAMMPS
 from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.io.lammps import launcher
 from dem.io.lammps.export import export_lammps, plan_lammps
 from dem.io.lammps.pour import MOLECULE_NAME, NOT_AT_REST_STATUS, rest_threshold
 from dem.scene.case import load_case
@@ -27,19 +27,6 @@ def _deck(tmp_path, case_dir, keys=None):
     out = tmp_path / "deck"
     export_lammps(plan, out, progress=False, fill="lammps")
     return plan, out, (out / "in.lammps").read_text()
-
-
-def _lammps_installed() -> bool:
-    try:
-        launcher.find_lammps()
-    except launcher.LammpsMissing:
-        return False
-    return True
-
-
-NEEDS_LAMMPS = pytest.mark.skipif(
-    not _lammps_installed(), reason="LAMMPS is not installed: " + launcher.LAMMPS_INSTALL
-)
 
 
 def test_a_sphere_deck_pours_the_case_grains_and_waits_for_rest(tmp_path):
