@@ -22,7 +22,8 @@ infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_
 (``[contact] wall_lever_arm``: f_w = 1, 1/2 or 0, :data:`dem.kernels.contact.WALL_LEVER_ARMS`;
 the slip velocity's arm is r_i with ``slip_lever_arm = "radius"``).
 
-Every contact law goes through :func:`dem.kernels.contact.contact_force`.
+Every contact law goes through :func:`dem.kernels.contact.contact_core` (by
+:func:`dem.kernels.contact.contact_force`, its CPU wrapper).
 """
 
 import math
@@ -30,7 +31,7 @@ import math
 import numba
 
 from dem.config import NUMBA_OPTIONS, NUMBA_PARALLEL_OPTIONS
-from dem.kernels.contact import P_SLIP_ARM, add_wall_contact, contact_force_inlined, wall_row
+from dem.kernels.contact import add_wall_contact, contact_force_inlined, pair_arms, wall_row
 from dem.kernels.mesh import mesh_touches, mesh_wall_forces
 from dem.kernels.periodic import minimum_image
 
@@ -51,18 +52,18 @@ def pair_separation(x, i, j, length, half):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def flat_wall(w, x, i, half_width):
-    """Gap of sphere i's centre from flat wall w and the wall's inward normal: (gap, ny, nz).
+def flat_wall(w, y, z, half_width):
+    """Gap of a centre at (y, z) from flat wall w and the wall's inward normal: (gap, ny, nz).
 
     w = 0 the floor z = 0, 1 the side wall y = -width/2, 2 the side wall y = +width/2. The sphere
     touches the wall where r - gap > 0: the test of :func:`wall_forces` and
-    :func:`contact_counts`.
+    :func:`contact_counts`, and of the GPU kernel (:mod:`dem.kernels.cuda`), hence scalars.
     """
     if w == 0:
-        return x[i, 2], 0.0, 1.0
+        return z, 0.0, 1.0
     if w == 1:
-        return x[i, 1] + half_width, 1.0, 0.0
-    return half_width - x[i, 1], -1.0, 0.0
+        return y + half_width, 1.0, 0.0
+    return half_width - y, -1.0, 0.0
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -86,12 +87,12 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
     inv_d = 1.0 / d
     mi = mass[i]
     mj = mass[j]
+    ci, cj, ai, aj = pair_arms(p, ri, rj, delta)
     f = contact_force_inlined(
         model, p, dx * inv_d, dy * inv_d, dz * inv_d, delta,
         v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
         omega[i, 0], omega[i, 1], omega[i, 2], omega[j, 0], omega[j, 1], omega[j, 2],
-        ri - 0.5 * delta, rj - 0.5 * delta, ri - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta,
-        rj - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
+        ci, cj, ai, aj, mi * mj / (mi + mj), ri * rj / rsum, hist, k, dt,
     )  # fmt: skip
     return f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]
 
@@ -270,7 +271,7 @@ def wall_forces(
         return fx, fy, fz, tx, ty, tz
     pw = wall_row(p)  # the grain-wall law ([wall])
     for w in range(N_WALLS - 1):
-        gap, ny, nz = flat_wall(w, x, i, half_width)
+        gap, ny, nz = flat_wall(w, x[i, 1], x[i, 2], half_width)
         delta = r - gap
         row = N_WALLS * i + w
         if delta <= 0.0:
@@ -332,7 +333,7 @@ def contact_counts(n, sph, nb, n_pairs, geom, mesh, out):
             out[i] += mesh_touches(i, x, r, mesh)
         else:
             for w in range(N_WALLS - 1):
-                if r - flat_wall(w, x, i, half_width)[0] > 0.0:
+                if r - flat_wall(w, x[i, 1], x[i, 2], half_width)[0] > 0.0:
                     out[i] += 1
         if r - (x[i, 0] - geom.back) > 0.0:
             out[i] += 1

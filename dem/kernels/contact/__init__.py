@@ -2,7 +2,9 @@
 
 Each sub-model is a small ``@njit`` function of scalars that returns scalars (the contact's
 history goes in and comes out as numbers), so the same functions can run inside GPU kernels;
-:func:`contact_force` is the thin wrapper that reads the parameter array and the history row.
+:func:`contact_core` assembles them into one contact (scalars in and out, for the CPU engine and
+the GPU kernels of :mod:`dem.kernels.cuda` alike) and :func:`contact_force` is the CPU's thin
+wrapper that reads the contact's history row, calls the core and writes the row back.
 What the rest of dem asks of a law (case keys, time step, export, calibration) is its row in
 :mod:`dem.physics.laws`.
 
@@ -21,7 +23,7 @@ A contact between sphere i and sphere j (or a wall, j = wall) is described by
 - the tangential spring elongation s (3 floats of contact history, per contact pair).
 
 A *law* maps (delta, m*, R*) to the four coefficients (k_n, gamma_n, k_t, gamma_t); the
-spring-dashpot routine :func:`contact_force` turns them into forces:
+spring-dashpot routine :func:`contact_core` turns them into forces:
 
     F_n = k_n delta - gamma_n (v_r . n)                    (clamped to >= 0 with limit_force)
     v_t = v_r - (v_r . n) n - (a_i omega_i + a_j omega_j) x n   (slip velocity at the contact)
@@ -100,8 +102,11 @@ Parameters reach the kernels as one float64 array ``params`` indexed by the ``P_
 
 from dem.kernels.contact.force import (
     add_wall_contact,
+    contact_core,
     contact_force,
     contact_force_inlined,
+    pair_arms,
+    wall_arms,
     wall_row,
 )
 from dem.kernels.contact.laws import (
@@ -201,6 +206,7 @@ __all__ = [
     "TANGENTIAL",
     "WALL_LEVER_ARMS",
     "add_wall_contact",
+    "contact_core",
     "contact_force",
     "contact_force_inlined",
     "coulomb_tangential",
@@ -217,11 +223,13 @@ __all__ = [
     "make_params",
     "normal_law_restitution",
     "normal_scale",
+    "pair_arms",
     "rayleigh_time",
     "tangent_stiffness",
     "youngs_modulus_from_star",
     "youngs_star",
     "rolling_cdt",
     "spring_step",
+    "wall_arms",
     "wall_row",
 ]

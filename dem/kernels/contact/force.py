@@ -1,7 +1,8 @@
-"""One contact's forces: the routine that reads the law's row and history, and the wall rows.
+"""One contact's forces: the law on scalars for CPU and GPU, its CPU wrapper, lever arms, walls.
 
-:func:`contact_force` reads the parameter row and the contact's history, calls the sub-models
-(:mod:`dem.kernels.contact.laws`) and writes the history back.
+:func:`contact_core` is the contact law on scalars (the history in and out as numbers), for the
+CPU and GPU engines alike; :func:`contact_force` is the CPU's wrapper that reads the contact's
+history row, calls the core and writes the row back.
 """
 
 import numba
@@ -34,20 +35,23 @@ from dem.kernels.contact.params import (
 )
 
 
-@numba.njit(**NUMBA_OPTIONS)
-def contact_force(
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def contact_core(
     model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
-    ci, cj, ai, aj, m_eff, r_eff, hist, k, dt,
+    ci, cj, ai, aj, m_eff, r_eff, h0, h1, h2, h3, h4, dt,
 ):  # fmt: skip
-    """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
+    """Force on i, torques on i and j and the new history of one touching contact: scalars only.
 
-    The array-facing wrapper of the sub-models: it reads the parameters and the contact's
-    history row, calls the scalar sub-models (normal, damping, tangential, rolling) and writes
-    the history back.
+    The contact law itself, shared by the CPU engine (through :func:`contact_force`) and the GPU
+    kernels (:mod:`dem.kernels.cuda`), which call it as a device function. It takes the
+    contact's history as five numbers and returns the new five, so it touches no array but
+    ``p``, which may be anything indexable: the float64 parameter array on the CPU, a tuple of
+    floats on the GPU (numba compiles one specialisation per type). Inlined at numba's IR level
+    so that the CPU's wrappers compile to the same code as before the split.
 
     Args:
         model: Normal law id (:data:`MODELS`).
-        p: Contact parameters, shape (N_PARAMS,).
+        p: Contact parameters, N_PARAMS floats (:mod:`dem.kernels.contact.params`).
         nx, ny, nz: Unit normal from j to i.
         delta: Overlap > 0, m.
         vrx, vry, vrz: v_i - v_j, m/s.
@@ -56,13 +60,14 @@ def contact_force(
         ai, aj: Lever arms of the slip velocity, m: ci, cj, or the full radii
             (``[contact] slip_lever_arm``).
         m_eff, r_eff: m*, kg, and R*, m.
-        hist: Contact history, shape (n, width) (:data:`HISTORY_WIDTH`); row k is this contact.
-        k: Row of ``hist``.
+        h0, h1, h2, h3, h4: The contact's history (:data:`HISTORY_WIDTH`): the spring s (h0..h2);
+            "impact" adds its phase and the previous normal velocity (h3, h4), which the other
+            laws pass through unchanged.
         dt: Time step, s.
 
     Returns:
-        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, fn): force on i (N), torques on i and j
-        (N m) and the normal force F_n (N).
+        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, fn, h0, h1, h2, h3, h4): force on i (N),
+        torques on i and j (N m), the normal force F_n (N) and the new history.
 
     """
     kn, gn, kt, gt = law_coefficients(model, delta, m_eff, r_eff, p)
@@ -82,13 +87,11 @@ def contact_force(
         ftx, fty, ftz, h0, h1, h2, h3, h4 = impact_tangential(
             p[P_IMPACT_RATIO], p[P_IMPACT_CAP], p[P_MU], p[P_MASS_T], p[P_STICK_RATE],
             p[P_STICK_ZETA], nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt,
-            hist[k, 0], hist[k, 1], hist[k, 2], hist[k, 3], hist[k, 4],
+            h0, h1, h2, h3, h4,
         )  # fmt: skip
-        hist[k, 3] = h3
-        hist[k, 4] = h4
     else:
         # tangential spring: increment, then project onto the current tangent plane
-        sx, sy, sz = spring_step(hist[k, 0], hist[k, 1], hist[k, 2], vtx, vty, vtz, nx, ny, nz, dt)
+        sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)
         f_max = p[P_MU] * abs(fn)
         if tangential != 0.0:
             ftx, fty, ftz, h0, h1, h2 = liggghts_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
@@ -96,9 +99,6 @@ def contact_force(
         else:
             ftx, fty, ftz, h0, h1, h2 = coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
                                                            vtz)  # fmt: skip
-    hist[k, 0] = h0
-    hist[k, 1] = h1
-    hist[k, 2] = h2
     # torques -c n x F_t, plus rolling resistance
     cx = ny * ftz - nz * fty
     cy = nz * ftx - nx * ftz
@@ -107,7 +107,41 @@ def contact_force(
         p[P_MU_ROLL], fn, r_eff, nx, ny, nz, wix, wiy, wiz, wjx, wjy, wjz,
         (-ci * cx, -ci * cy, -ci * cz), (-cj * cx, -cj * cy, -cj * cz),
     )  # fmt: skip
-    return fn * nx + ftx, fn * ny + fty, fn * nz + ftz, ti[0], ti[1], ti[2], tj[0], tj[1], tj[2], fn
+    return (fn * nx + ftx, fn * ny + fty, fn * nz + ftz, ti[0], ti[1], ti[2], tj[0], tj[1], tj[2],
+            fn, h0, h1, h2, h3, h4)  # fmt: skip
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def contact_force(
+    model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
+    ci, cj, ai, aj, m_eff, r_eff, hist, k, dt,
+):  # fmt: skip
+    """Force on i and torques on i and j of one touching contact; updates ``hist[k]`` in place.
+
+    The CPU's array-facing wrapper of :func:`contact_core`: it reads the contact's history row
+    (h3, h4 only where the row has five columns, else zeros), calls the core and writes the row
+    back. Arguments as :func:`contact_core`, with the history as ``hist``, shape (n, width)
+    (:data:`HISTORY_WIDTH`), whose row ``k`` is this contact.
+
+    Returns:
+        (fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, fn): force on i (N), torques on i and j
+        (N m) and the normal force F_n (N).
+
+    """
+    wide = hist.shape[1] > 3
+    h3 = hist[k, 3] if wide else 0.0
+    h4 = hist[k, 4] if wide else 0.0
+    f = contact_core(
+        model, p, nx, ny, nz, delta, vrx, vry, vrz, wix, wiy, wiz, wjx, wjy, wjz,
+        ci, cj, ai, aj, m_eff, r_eff, hist[k, 0], hist[k, 1], hist[k, 2], h3, h4, dt,
+    )  # fmt: skip
+    hist[k, 0] = f[10]
+    hist[k, 1] = f[11]
+    hist[k, 2] = f[12]
+    if wide:
+        hist[k, 3] = f[13]
+        hist[k, 4] = f[14]
+    return f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], f[9]
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -122,6 +156,28 @@ def wall_row(p):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
+def pair_arms(p, ri, rj, delta):
+    """Lever arms of a sphere-sphere contact of overlap delta: (c_i, c_j, a_i, a_j), m.
+
+    Torques act at c = r - delta / 2 (the middle of the overlap); the slip velocity takes the
+    same arms, or the full radii with ``slip_lever_arm = "radius"`` (``p[P_SLIP_ARM]`` = 1).
+    """
+    return (ri - 0.5 * delta, rj - 0.5 * delta, ri - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta,
+            rj - (1.0 - p[P_SLIP_ARM]) * 0.5 * delta)  # fmt: skip
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def wall_arms(p, r, delta):
+    """Lever arms of a sphere-wall contact of overlap delta: (c_i, a_i), m.
+
+    c_i = r - f_w delta (``p[P_WALL_ARM]``); the slip's arm a_i is c_i, or r with
+    ``slip_lever_arm = "radius"``. The wall's own arms are zero.
+    """
+    f_w = p[P_WALL_ARM]
+    return r - f_w * delta, r - (1.0 - p[P_SLIP_ARM]) * f_w * delta
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def add_wall_contact(
     model, p, nx, ny, nz, delta, v, omega, i, m, r, hist, row, dt, fx, fy, fz, tx, ty, tz,
 ):  # fmt: skip
@@ -131,11 +187,10 @@ def add_wall_contact(
     sphere), overlap delta, m* = m, R* = r, lever arm r - f_w delta (``p[P_WALL_ARM]``),
     spring in ``hist[row]``.
     """
-    f_w = p[P_WALL_ARM]
+    ci, ai = wall_arms(p, r, delta)
     f = contact_force(
         model, p, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-        omega[i, 2], 0.0, 0.0, 0.0, r - f_w * delta, 0.0, r - (1.0 - p[P_SLIP_ARM]) * f_w * delta,
-        0.0, m, r, hist, row, dt,
+        omega[i, 2], 0.0, 0.0, 0.0, ci, 0.0, ai, 0.0, m, r, hist, row, dt,
     )  # fmt: skip
     return fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
 

@@ -1,0 +1,12 @@
+"""GPU kernels on numba.cuda: the CPU engine's physics, one thread per sphere.
+
+The contact law is not copied: the kernels call :func:`dem.kernels.contact.contact_core` and the
+scalar helpers beside it (lever arms, wall gaps, the periodic image) as device functions,
+compiled from the same source as the CPU engine's. The parameter rows reach them as tuples of
+floats.
+
+numba.cuda is imported only by the kernel modules (:mod:`dem.kernels.cuda.forces`), which
+nothing in dem imports: importing dem, or this package, needs no CUDA. Without a GPU, numba's
+CUDA simulator runs the kernels (``NUMBA_ENABLE_CUDASIM=1``, set before numba.cuda is first
+imported).
+"""
