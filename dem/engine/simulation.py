@@ -264,6 +264,10 @@ class Simulation(InstabilityChecks):
         Updates the contact history once, as a step does; ``spheres.force``/``torque`` hold
         contact forces plus m a_body.
         """
+        if self._gpu() is not None:
+            self._gpu().compute_forces(self, self._drive())
+            self.forces_valid = True
+            return
         self._build()
         serial = self._serial()
         if self.bodies is not None:
@@ -300,7 +304,24 @@ class Simulation(InstabilityChecks):
         finally:
             numba.set_num_threads(threads)
 
+    def _gpu(self):
+        """The GPU engine (:mod:`dem.engine.gpu`) when ``device`` is "cuda", else None."""
+        if getattr(self, "device", "cpu") != "cuda":
+            return None
+        if getattr(self, "_gpu_engine", None) is None:
+            from dem.engine.gpu import GpuEngine
+
+            self._gpu_engine = GpuEngine(self)
+        return self._gpu_engine
+
     def _advance_steps(self, n_steps: int) -> None:
+        gpu = self._gpu()
+        if gpu is not None:
+            step0 = self.step_index - self.drive_start_step
+            self.stats[0] += gpu.advance(self, n_steps, step0, self._drive())
+            self.stats[1] += n_steps
+            self.step_index += n_steps
+            return
         if not self.forces_valid:
             self.compute_forces()
         done = 0

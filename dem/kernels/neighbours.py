@@ -39,20 +39,27 @@ MAX_CELLS_Z = 4096
 
 @numba.njit(**NUMBA_OPTIONS)
 def _grid(x, n, cell, length, width):
-    """Cell grid of the current positions: (ncx, ncy, ncz, sx, sy, sz, zmin).
-
-    ncx < 3 collapses to one column in x (every neighbour then is found through the minimum image
-    in that column, without visiting a column twice).
-    """
-    ncx = int(length / cell)
-    if ncx < 3:
-        ncx = 1
-    ncy = max(1, int(width / cell))
+    """Cell grid of the current positions: (ncx, ncy, ncz, sx, sy, sz, zmin)."""
     zmin = x[0, 2]
     zmax = x[0, 2]
     for i in range(1, n):
         zmin = min(zmin, x[i, 2])
         zmax = max(zmax, x[i, 2])
+    return grid_of(zmin, zmax, cell, length, width)
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def grid_of(zmin, zmax, cell, length, width):
+    """Cell grid for centres between heights zmin and zmax: (ncx, ncy, ncz, sx, sy, sz, zmin).
+
+    ncx < 3 collapses to one column in x (every neighbour then is found through the minimum image
+    in that column, without visiting a column twice). The GPU build (:mod:`dem.kernels.cuda`)
+    calls it with the extremes it reduced on the device, for the same grid.
+    """
+    ncx = int(length / cell)
+    if ncx < 3:
+        ncx = 1
+    ncy = max(1, int(width / cell))
     ncz = max(1, int((zmax - zmin) / cell) + 1)
     sz = cell
     if ncz > MAX_CELLS_Z:
@@ -61,11 +68,12 @@ def _grid(x, n, cell, length, width):
     return ncx, ncy, ncz, length / ncx, width / ncy, sz, zmin
 
 
-@numba.njit(**NUMBA_OPTIONS)
-def _cell_coords(x, i, ncx, ncy, ncz, sx, sy, sz, zmin, width):
-    cx = min(max(int(x[i, 0] / sx), 0), ncx - 1)
-    cy = min(max(int((x[i, 1] + 0.5 * width) / sy), 0), ncy - 1)
-    cz = min(max(int((x[i, 2] - zmin) / sz), 0), ncz - 1)
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def cell_coords(px, py, pz, ncx, ncy, ncz, sx, sy, sz, zmin, width):
+    """Cell (cx, cy, cz) of a centre at (px, py, pz); scalars, so a GPU kernel calls it too."""
+    cx = min(max(int(px / sx), 0), ncx - 1)
+    cy = min(max(int((py + 0.5 * width) / sy), 0), ncy - 1)
+    cz = min(max(int((pz - zmin) / sz), 0), ncz - 1)
     return cx, cy, cz
 
 
@@ -86,7 +94,7 @@ def _scan_neighbours(
     half = 0.5 * length
     dxs = 3 if ncx >= 3 else 1
     for i in numba.prange(n):
-        cx, cy, cz = _cell_coords(x, i, ncx, ncy, ncz, sx, sy, sz, zmin, width)
+        cx, cy, cz = cell_coords(x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, sx, sy, sz, zmin, width)
         found = 0
         base = i * slots
         xi = x[i, 0]
@@ -200,7 +208,9 @@ def rebuild(
     # counting sort into cells
     cell_start[: n_cells + 1] = 0
     for i in range(n):
-        cx, cy, cz = _cell_coords(x, i, ncx, ncy, ncz, grid[3], grid[4], grid[5], grid[6], width)
+        cx, cy, cz = cell_coords(
+            x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, grid[3], grid[4], grid[5], grid[6], width
+        )
         c = (cz * ncy + cy) * ncx + cx
         cell_of[i] = c
         cell_start[c + 1] += 1

@@ -98,12 +98,20 @@ def test_gpu_forces_equal_the_cpu_engine(
     assert np.any(wall_hist != 0.0)  # and walls
 
 
-def test_slots_list_each_pair_under_both_ends_in_pair_order():
-    """Sphere i's slots are its pairs in increasing pair index, the CPU engine's order."""
-    from dem.kernels.cuda.forces import sphere_slots
+def test_slots_hold_the_compact_list_in_key_order():
+    """The CPU engine's compact list (sorted by key i n + j) goes to per-sphere slots and back
+    unchanged: slot order is key order."""
+    from dem.kernels.cuda.forces import compact_to_slots, slots_to_compact
 
-    pair_i = np.array([0, 0, 1, 2, 3])
-    pair_j = np.array([1, 3, 3, 3, 4])
-    start, slot = sphere_slots(pair_i, pair_j, 5, 6)
-    lists = [slot[start[i] : start[i + 1]].tolist() for i in range(6)]
-    assert lists == [[0, 1], [0, 2], [3], [1, 2, 3, 4], [4], []]
+    pair_i = np.array([0, 0, 1, 2, 3, 3])
+    pair_j = np.array([1, 3, 3, 3, 4, 5])
+    hist = np.arange(18.0).reshape(6, 3)
+    nbr, count, slot_hist, slots = compact_to_slots(pair_i, pair_j, hist, 6, 6)
+    assert slots == 16
+    assert count.tolist() == [2, 1, 1, 2, 0, 0]
+    assert nbr[3 * slots : 3 * slots + 2].tolist() == [4, 5]
+    pi, pj, back = slots_to_compact(nbr, count, slot_hist, slots)
+    assert pi.tolist() == pair_i.tolist() and pj.tolist() == pair_j.tolist()
+    np.testing.assert_array_equal(back, hist)
+    with pytest.raises(ValueError, match="2 pairs, more than the 1 slots"):
+        compact_to_slots(pair_i, pair_j, hist, 6, 6, slots=1)

@@ -1,0 +1,256 @@
+"""The GPU engine: a :class:`~dem.engine.simulation.Simulation`'s spheres stepped on numba.cuda.
+
+The state lives on the device between calls; the host's arrays (``sim.spheres``, ``sim.pairs``)
+are brought up to date after every call of :meth:`GpuEngine.advance`, so the instability checks,
+checkpoints and writers read the same arrays whichever engine ran. Before a call the host's
+positions, velocities and spins are compared with what the last call left there: anything that
+changed them in between (a fill, a restart, a replaced grain) makes the engine upload the host's
+state again, pair list and history included. A call costs two copies of the state across the bus
+(about 120 bytes a sphere each way and 30 bytes a pair) besides the steps.
+
+The step is the CPU engine's (:mod:`dem.kernels.cuda.step`), the pair list the CPU engine's in
+per-sphere slots (:mod:`dem.kernels.cuda.neighbours`), the force the CPU engine's contact law
+compiled for the GPU (:mod:`dem.kernels.cuda.forces`). Plain spheres with flat walls only: clumps,
+meshes and feeders are refused before a run starts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dem.config import DEM_GROWTH_FACTOR
+from dem.kernels.integrate import body_acceleration
+from dem.kernels.neighbours import OVERFLOW_PAIRS, grid_of
+
+#: Starting capacities: partners a sphere is the lower end of (the CPU engine's 16), reverse
+#: partners, spheres a cell (a cell's edge is at least a diameter and a skin).
+START_SLOTS = 16
+START_CELL = 16
+
+
+def _grow(need: int) -> int:
+    return int(need * DEM_GROWTH_FACTOR) + 1
+
+
+class GpuEngine:
+    """Device arrays of one simulation and the host loop that launches the kernels."""
+
+    def __init__(self, sim):
+        from numba import cuda
+
+        from dem.kernels.cuda import forces, neighbours, step
+        from dem.kernels.cuda.forces import law_rows
+
+        if sim.bodies is not None or sim.mesh is not None or sim.feeder is not None:
+            raise ValueError("the GPU engine steps plain spheres with flat walls only")
+        self.cuda, self.forces, self.nb, self.step = cuda, forces, neighbours, step
+        self.rows = law_rows(sim.law.params)
+        self.snapshot = None  # the host arrays as the last call left them
+        self.n = -1
+
+    # --- host <-> device ----------------------------------------------------------------------
+
+    def _stale(self, sim) -> bool:
+        s = sim.spheres
+        if self.snapshot is None or s.n != self.n:
+            return True
+        x, v, omega = self.snapshot
+        return not (
+            np.array_equal(x, s.x) and np.array_equal(v, s.v) and np.array_equal(omega, s.omega)
+        )
+
+    def upload(self, sim) -> None:
+        """Copy the host's state, pair list and history to the device."""
+        from dem.kernels.cuda.forces import compact_to_slots
+
+        cuda = self.cuda
+        s, pairs = sim.spheres, sim.pairs
+        n = self.n = s.n
+        to = cuda.to_device
+        self.x = [to(s.x), cuda.device_array((n, 3))]
+        self.v = [to(s.v), cuda.device_array((n, 3))]
+        self.omega = [to(s.omega), cuda.device_array((n, 3))]
+        self.force, self.torque = to(s.force), to(s.torque)
+        self.radius, self.mass = to(s.radius), to(s.mass)
+        self.inv_mass, self.inv_inertia = to(s.inv_mass), to(s.inv_inertia)
+        self.body = to(s.body)
+        self.wall = [to(s.wall_hist), to(s.wall_hist)]
+        self.x_ref = to(pairs.x_ref)
+        self.width = pairs.hist.shape[1]
+        nbr, count, slot_hist, self.slots = compact_to_slots(
+            pairs.pair_i, pairs.pair_j, pairs.hist, pairs.n_pairs, n, START_SLOTS
+            if pairs.n_pairs == 0 else None,
+        )  # fmt: skip
+        self.nbr = [to(nbr), None]
+        self.count = [to(count), None]
+        self.hist = [to(slot_hist), cuda.device_array_like(slot_hist)]
+        self.rev, self.rev_count = self.nb.reverse_slots(self.nbr[0], self.count[0])
+        self.cell_cap = START_CELL
+        self.cell_count = cuda.device_array(0, dtype=np.int32)
+        self.cell_items = cuda.device_array(0, dtype=np.int32)
+        self.px = cuda.to_device(np.zeros(n))
+        self.flag = cuda.to_device(np.zeros(1, dtype=np.int32))
+        self.status = cuda.to_device(np.zeros(4, dtype=np.int64))
+        self.builds = pairs.builds
+        self.r_max = float(np.max(s.radius))
+
+    def download(self, sim) -> None:
+        """Bring the host's state, pair list (and its CSR index) and history up to date."""
+        from dem.kernels.cuda.forces import slots_to_compact
+
+        s, pairs = sim.spheres, sim.pairs
+        self.x[0].copy_to_host(s.x)
+        self.v[0].copy_to_host(s.v)
+        self.omega[0].copy_to_host(s.omega)
+        self.force.copy_to_host(s.force)
+        self.torque.copy_to_host(s.torque)
+        self.wall[0].copy_to_host(s.wall_hist)
+        pi, pj, hist = slots_to_compact(
+            self.nbr[0].copy_to_host(), self.count[0].copy_to_host(), self.hist[0].copy_to_host(),
+            self.slots,
+        )  # fmt: skip
+        k = pi.shape[0]
+        if k > pairs.capacity:
+            pairs.grow(OVERFLOW_PAIRS, k)
+        pairs.pair_i[:k], pairs.pair_j[:k], pairs.hist[:k] = pi, pj, hist
+        pairs.counters[:] = (k, self.builds)
+        self.x_ref.copy_to_host(pairs.x_ref)
+        _csr(pi, pj, s.n, pairs.part_start, pairs.part_slot)
+        self.snapshot = (s.x.copy(), s.v.copy(), s.omega.copy())
+
+    # --- the build and the step ---------------------------------------------------------------
+
+    def _launch(self, kernel, n):
+        return kernel[self.forces.blocks(n), self.forces.THREADS_PER_BLOCK]
+
+    def build(self, sim) -> None:
+        """Rebuild the pair slots at the current positions, carrying the history over."""
+        cuda, nb, n, geom = self.cuda, self.nb, self.n, sim.geom
+        x = self.x[0]
+        zrange = cuda.to_device(np.array([math.inf, -math.inf]))
+        self._launch(nb.wrap_kernel, n)(x, geom.length, zrange)
+        zmin, zmax = zrange.copy_to_host()
+        if not (math.isfinite(zmin) and math.isfinite(zmax)):
+            raise FloatingPointError("a sphere's height is not finite at a neighbour build")
+        grid = grid_of(zmin, zmax, 2.0 * self.r_max + geom.skin, geom.length, geom.width)
+        ncx, ncy, ncz = grid[0], grid[1], grid[2]
+        n_cells = ncx * ncy * ncz
+        while True:
+            if self.cell_count.shape[0] < n_cells:
+                self.cell_count = cuda.device_array(_grow(n_cells), dtype=np.int32)
+            if self.cell_items.shape[0] < n_cells * self.cell_cap:
+                self.cell_items = cuda.device_array(
+                    self.cell_count.shape[0] * self.cell_cap, dtype=np.int32
+                )
+            if self.nbr[1] is None or self.nbr[1].shape[0] != n * self.slots:
+                self.nbr[1] = cuda.device_array(n * self.slots, dtype=np.int32)
+                self.count[1] = cuda.device_array(n, dtype=np.int32)
+            if self.hist[1].shape[0] != n * self.slots:
+                self.hist[1] = cuda.device_array((n * self.slots, self.width))
+            self.status.copy_to_device(np.zeros(4, dtype=np.int64))
+            self._launch(nb.fill_int_kernel, n_cells)(self.cell_count[:n_cells], 0)
+            self._launch(nb.bin_kernel, n)(
+                x, ncx, ncy, ncz, grid[3], grid[4], grid[5], grid[6], geom.width,
+                self.cell_count, self.cell_items, self.cell_cap, self.status,
+            )  # fmt: skip
+            self._launch(nb.scan_kernel, n)(
+                x, self.radius, self.body, geom.skin, geom.length, geom.width, ncx, ncy, ncz,
+                grid[3], grid[4], grid[5], grid[6], self.cell_count, self.cell_items,
+                self.cell_cap, self.nbr[0], self.count[0], self.hist[0], self.nbr[1],
+                self.count[1], self.hist[1], self.x_ref, self.status,
+            )  # fmt: skip
+            need = self.status.copy_to_host()
+            if need[nb.NEED_CELL] > self.cell_cap:
+                self.cell_cap = _grow(int(need[nb.NEED_CELL]))
+                continue
+            if need[nb.NEED_SLOTS] > self.slots:
+                self.slots = _grow(int(need[nb.NEED_SLOTS]))
+                continue
+            break
+        self.nbr.reverse()
+        self.count.reverse()
+        self.hist.reverse()
+        if self.hist[1].shape[0] != self.hist[0].shape[0]:
+            self.hist[1] = cuda.device_array_like(self.hist[0])
+        self.rev, self.rev_count = nb.reverse_slots(self.nbr[0], self.count[0],
+                                                    self.rev.shape[0] // n)  # fmt: skip
+        self.builds += 1
+
+    def _step(self, sim, t: float, drive, kick: bool, next_drift: bool) -> None:
+        geom = sim.geom
+        ax, ay, az = body_acceleration(t, sim.gravity, drive)
+        p, pw = self.rows
+        x, v, om = self.x, self.v, self.omega
+        self._launch(self.step.step_kernel, self.n)(
+            sim.law.model_id, p, pw, x[0], v[0], om[0], x[1], v[1], om[1], self.radius,
+            self.mass, self.inv_mass, self.inv_inertia, self.nbr[0], self.count[0], self.rev,
+            self.rev_count, self.hist[0], self.hist[1], self.wall[0], self.wall[1], geom.length,
+            0.5 * geom.width, geom.back, geom.dt, ax, ay, az, sim.rotation, kick, next_drift,
+            self.x_ref, 0.25 * geom.skin * geom.skin, self.flag, self.force, self.torque,
+            self.px,
+        )  # fmt: skip
+        self.hist.reverse()
+        self.wall.reverse()
+        if kick:
+            x.reverse()
+            v.reverse()
+            om.reverse()
+
+    def _moved(self) -> bool:
+        flag = self.flag.copy_to_host()
+        if flag[0]:
+            self.flag.copy_to_device(np.zeros(1, dtype=np.int32))
+            return True
+        return False
+
+    def compute_forces(self, sim, drive) -> None:
+        """Rebuild and evaluate forces at the current state (no kick), as the CPU engine does.
+
+        ``drive``: :meth:`dem.physics.drive.Motion.kernel_array` (zeros: drive off).
+        """
+        if self._stale(sim):
+            self.upload(sim)
+        self.build(sim)
+        self._step(sim, sim.drive_time, drive, False, False)
+        self.download(sim)
+
+    def advance(self, sim, n_steps: int, step0: int, drive) -> float:
+        """``n_steps`` steps from step index ``step0``: the sum over the steps of sum m_i v_x,i.
+
+        t = step dt; ``drive`` as :meth:`compute_forces`. Returns kg m/s.
+        """
+        if self._stale(sim):
+            self.upload(sim)
+        if not sim.forces_valid:
+            self.build(sim)
+            self._step(sim, sim.drive_time, drive, False, False)
+            sim.forces_valid = True
+        geom = sim.geom
+        dt = geom.dt
+        self.px.copy_to_device(np.zeros(self.n))
+        self._launch(self.step.kick_drift_kernel, self.n)(
+            dt, self.x[0], self.v[0], self.omega[0], self.force, self.torque, self.inv_mass,
+            self.inv_inertia, sim.rotation, self.x_ref, geom.length,
+            0.25 * geom.skin * geom.skin, self.flag,
+        )  # fmt: skip
+        for s in range(n_steps):
+            if self._moved():
+                self.build(sim)
+            self._step(sim, (step0 + s + 1) * dt, drive, True, s < n_steps - 1)
+        self.download(sim)
+        return float(np.sum(self.px.copy_to_host()))
+
+
+def _csr(pair_i, pair_j, n, part_start, part_slot) -> None:
+    """The CPU engine's index sphere -> its pair ends (:func:`dem.kernels.neighbours.rebuild`)."""
+    k = pair_i.shape[0]
+    ends = np.empty(2 * k, dtype=np.int64)
+    ends[0::2], ends[1::2] = pair_i, pair_j
+    part_start[0] = 0
+    np.cumsum(np.bincount(ends, minlength=n), out=part_start[1 : n + 1])
+    order = np.argsort(ends, kind="stable")  # each sphere's ends in increasing pair index
+    slot = np.empty(2 * k, dtype=np.int64)
+    slot[order] = np.arange(2 * k)
+    part_slot[: 2 * k] = slot

@@ -1,0 +1,207 @@
+"""Neighbour search on the GPU: cells -> fixed pair slots per sphere, history carried by partner.
+
+The CPU engine's build (:mod:`dem.kernels.neighbours`) with the same grid, the same cut-off and
+the same pairs, but no global compaction: sphere a keeps its partners b > a in its own S slots,
+``nbr[a S : a S + count[a]]``, sorted by b, so the slots in order are the CPU's key order a N + b.
+A build is five kernels and two small reads back:
+
+1. :func:`wrap_kernel`: x wrapped into [0, length); the lowest and highest centre (atomics),
+   read back for the grid (:func:`dem.kernels.neighbours.grid_of`, the CPU's arithmetic);
+2. :func:`bin_kernel`: each sphere into a cell of at most C spheres (an atomic count per cell;
+   the order within a cell does not matter, the partners are sorted next);
+3. :func:`scan_kernel`: sphere i's partners j > i within r_i + r_j + skin in the 27 cells
+   around it, sorted by j (insertion sort, as the CPU), and each new pair's history copied from
+   the same partner among i's old slots: the old partners are sorted too, so one merge pass of
+   O(S) finds them (history keyed by the partner's index, which does not change: spheres are not
+   reordered). Pairs not found start from zero. Positions at the build go to ``x_ref``;
+4. :func:`reverse_kernel` and :func:`sort_reverse_kernel`: the reverse slots, the pairs each
+   sphere is the upper end of, sorted by slot (an atomic count per sphere, then a sort).
+
+Capacities are fixed per build (C spheres a cell, S slots and R reverse slots a sphere); a build
+that overflows writes what it needs to ``status`` and the host regrows and builds again. The old
+slots stay untouched until the new ones are complete, so the history survives a regrow.
+"""
+
+import numpy as np
+from numba import cuda
+
+from dem.kernels.cuda.forces import THREADS_PER_BLOCK, blocks
+from dem.kernels.neighbours import cell_coords
+from dem.kernels.periodic import minimum_image, wrap
+
+#: ``status`` entries: most partners of a sphere, most reverse partners, most spheres a cell.
+NEED_SLOTS = 0
+NEED_REVERSE = 1
+NEED_CELL = 2
+
+
+@cuda.jit
+def fill_int_kernel(a, value):
+    """a[:] = value."""
+    i = cuda.grid(1)
+    if i < a.shape[0]:
+        a[i] = value
+
+
+@cuda.jit
+def wrap_kernel(x, length, zrange):
+    """Wrap x into [0, length); zrange[0] = min z, zrange[1] = max z (atomics)."""
+    i = cuda.grid(1)
+    if i >= x.shape[0]:
+        return
+    x[i, 0] = wrap(x[i, 0], length)
+    cuda.atomic.min(zrange, 0, x[i, 2])
+    cuda.atomic.max(zrange, 1, x[i, 2])
+
+
+@cuda.jit
+def bin_kernel(x, ncx, ncy, ncz, sx, sy, sz, zmin, width, cell_count, cell_items, cap, status):
+    """Sphere i into its cell's list ``cell_items[c cap : c cap + cap]``; overflow: ``status``."""
+    i = cuda.grid(1)
+    if i >= x.shape[0]:
+        return
+    cx, cy, cz = cell_coords(x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, sx, sy, sz, zmin, width)
+    c = (cz * ncy + cy) * ncx + cx
+    pos = cuda.atomic.add(cell_count, c, 1)
+    if pos < cap:
+        cell_items[c * cap + pos] = i
+    else:
+        cuda.atomic.max(status, NEED_CELL, pos + 1)
+
+
+@cuda.jit
+def scan_kernel(
+    x, radius, body, skin, length, width, ncx, ncy, ncz, sx, sy, sz, zmin, cell_count, cell_items,
+    cap, nbr_old, count_old, hist_old, nbr, count, hist, x_ref, status,
+):  # fmt: skip
+    """Sphere i's partners j > i into its slots, sorted; their history from i's old slots."""
+    i = cuda.grid(1)
+    n = x.shape[0]
+    if i >= n:
+        return
+    slots = nbr.shape[0] // n
+    old_slots = nbr_old.shape[0] // n
+    width_h = hist.shape[1]
+    half = 0.5 * length
+    dxs = 3 if ncx >= 3 else 1
+    cx, cy, cz = cell_coords(x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, sx, sy, sz, zmin, width)
+    found = 0
+    base = i * slots
+    xi = x[i, 0]
+    yi = x[i, 1]
+    zi = x[i, 2]
+    ri = radius[i] + skin
+    bi = body[i]
+    for oz in range(-1, 2):
+        iz = cz + oz
+        if iz < 0 or iz >= ncz:
+            continue
+        for oy in range(-1, 2):
+            iy = cy + oy
+            if iy < 0 or iy >= ncy:
+                continue
+            row = (iz * ncy + iy) * ncx
+            for ox in range(dxs):
+                ix = cx + ox - 1 if dxs == 3 else 0
+                if ix < 0:
+                    ix += ncx
+                elif ix >= ncx:
+                    ix -= ncx
+                c = row + ix
+                for m in range(min(cell_count[c], cap)):
+                    j = cell_items[c * cap + m]
+                    if j <= i or body[j] == bi:
+                        continue
+                    dx = minimum_image(xi - x[j, 0], length, half)
+                    dy = yi - x[j, 1]
+                    dz = zi - x[j, 2]
+                    cut = ri + radius[j]
+                    if dx * dx + dy * dy + dz * dz < cut * cut:
+                        if found < slots:
+                            nbr[base + found] = j
+                        found += 1
+    count[i] = found
+    if found > slots:
+        cuda.atomic.max(status, NEED_SLOTS, found)
+        return
+    # insertion sort by j: the slots in order are the CPU engine's keys i n + j
+    for a in range(base + 1, base + found):
+        v = nbr[a]
+        b = a - 1
+        while b >= base and nbr[b] > v:
+            nbr[b + 1] = nbr[b]
+            b -= 1
+        nbr[b + 1] = v
+    # history by partner: one merge of the new and the old sorted partners
+    m = 0
+    old_base = i * old_slots
+    old_n = count_old[i]
+    for s in range(found):
+        j = nbr[base + s]
+        while m < old_n and nbr_old[old_base + m] < j:
+            m += 1
+        if m < old_n and nbr_old[old_base + m] == j:
+            for c in range(width_h):
+                hist[base + s, c] = hist_old[old_base + m, c]
+        else:
+            for c in range(width_h):
+                hist[base + s, c] = 0.0
+    x_ref[i, 0] = xi
+    x_ref[i, 1] = yi
+    x_ref[i, 2] = zi
+
+
+@cuda.jit
+def reverse_kernel(nbr, count, rev, rev_count, status):
+    """Each pair slot k = a S + s into its upper end's reverse slots (unsorted)."""
+    a = cuda.grid(1)
+    n = count.shape[0]
+    if a >= n:
+        return
+    slots = nbr.shape[0] // n
+    rslots = rev.shape[0] // n
+    for s in range(count[a]):
+        k = a * slots + s
+        b = nbr[k]
+        pos = cuda.atomic.add(rev_count, b, 1)
+        if pos < rslots:
+            rev[b * rslots + pos] = k
+        else:
+            cuda.atomic.max(status, NEED_REVERSE, pos + 1)
+
+
+@cuda.jit
+def sort_reverse_kernel(rev, rev_count):
+    """Sort each sphere's reverse slots (pair slots a S + s, hence by the lower end a)."""
+    b = cuda.grid(1)
+    n = rev_count.shape[0]
+    if b >= n:
+        return
+    rslots = rev.shape[0] // n
+    base = b * rslots
+    for a in range(base + 1, base + min(rev_count[b], rslots)):
+        v = rev[a]
+        c = a - 1
+        while c >= base and rev[c] > v:
+            rev[c + 1] = rev[c]
+            c -= 1
+        rev[c + 1] = v
+
+
+def reverse_slots(d_nbr, d_count, rslots: int = 16):
+    """The reverse slots of the device slots ``d_nbr``/``d_count``: (d_rev, d_rev_count).
+
+    Regrows ``rslots`` until every sphere's reverse partners fit.
+    """
+    n = d_count.shape[0]
+    while True:
+        d_rev = cuda.device_array(n * rslots, dtype=np.int32)
+        d_rev_count = cuda.device_array(n, dtype=np.int32)
+        d_status = cuda.to_device(np.zeros(4, dtype=np.int64))
+        fill_int_kernel[blocks(n), THREADS_PER_BLOCK](d_rev_count, 0)
+        reverse_kernel[blocks(n), THREADS_PER_BLOCK](d_nbr, d_count, d_rev, d_rev_count, d_status)
+        need = int(d_status.copy_to_host()[NEED_REVERSE])
+        if need <= rslots:
+            sort_reverse_kernel[blocks(n), THREADS_PER_BLOCK](d_rev, d_rev_count)
+            return d_rev, d_rev_count
+        rslots = int(need * 1.5) + 1
