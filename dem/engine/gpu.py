@@ -217,10 +217,17 @@ class GpuEngine:
         self.download(sim)
 
     def advance(self, sim, n_steps: int, step0: int, drive) -> float:
-        """``n_steps`` steps from step index ``step0``: the sum over the steps of sum m_i v_x,i.
+        """``n_steps`` steps from step index ``step0``, then the host's arrays brought up to date.
 
-        t = step dt; ``drive`` as :meth:`compute_forces`. Returns kg m/s.
+        t = step dt; ``drive`` as :meth:`compute_forces`. Returns the sum over the steps of
+        sum_i m_i v_x,i, kg m/s.
         """
+        px = self.steps(sim, n_steps, step0, drive)
+        self.download(sim)
+        return px
+
+    def steps(self, sim, n_steps: int, step0: int, drive) -> float:
+        """The steps of :meth:`advance` alone: the state stays on the device."""
         if self._stale(sim):
             self.upload(sim)
         if not sim.forces_valid:
@@ -239,7 +246,6 @@ class GpuEngine:
             if self._moved():
                 self.build(sim)
             self._step(sim, (step0 + s + 1) * dt, drive, True, s < n_steps - 1)
-        self.download(sim)
         return float(np.sum(self.px.copy_to_host()))
 
 

@@ -1,0 +1,324 @@
+"""The GPU engine's speed against the CPU engine's, and the bed's velocity on both (issue 29).
+
+Three jobs, meant to run together on a machine with a GPU and many cores (``run_device.sh``
+starts them), each writing one JSON:
+
+``--gpu``   sphere-steps/s of the GPU engine at several sizes (``--sizes``), the sphere-bed
+            case's material, law, step and drive, on a wider and longer periodic section of the
+            same depth: a bed of N spheres on a loose cubic lattice (spacing 2.05 r, jittered),
+            driven from the start, so contacts, tangential springs, walls and the drive are all
+            in the timing. Each size: a warm-up call, then a timed call of many steps (the copy of
+            the state back to the host at its end included). With the registers and local memory
+            (spills) of every kernel, and a roofline estimate (bytes a sphere-step must move
+            against the memory bandwidth).
+``--cpu``   the CPU engine on the same lattices at 1, 4 and 16 threads (``--threads``).
+``--bed``   the sphere-bed case itself (1500 spheres): filled and settled on the CPU, then the
+            same state measured ``--cycles`` cycles on the CPU and on the GPU: the conveying
+            velocity of each with its standard error.
+
+Usage: python validation/performance/gpu_bench.py --gpu --out gpu.json [--sizes 1e4 1e5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import pickle
+import platform
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+CASE = ROOT / "cases" / "sphere-bed"
+#: The lattice's depth in layers (the sphere-bed case: 1500 spheres of r = 2 mm on 0.10 x 0.04 m
+#: are about 7 layers) and its width in spheres.
+LAYERS = 7
+ACROSS = 48
+
+
+def load_loadavg() -> list[float]:
+    return [round(v, 2) for v in os.getloadavg()]
+
+
+def lattice_sim(n: int, device: str, seed: int = 1):
+    """The sphere-bed case's spheres on a jittered cubic lattice of about n spheres."""
+    from dem.engine.setup import from_grains
+    from dem.scene.case import load_case
+
+    r = 0.002
+    a = 2.0 * r * (1.0 - 1.0e-3)  # touching, 4 um overlaps: the bed's contacts from the start
+    rows = max(1, round(n / (ACROSS * LAYERS)))
+    width = ACROSS * a
+    length = rows * a
+    case = load_case(CASE, {"trough.length": length, "trough.width": width})
+    i, j, k = np.meshgrid(np.arange(rows), np.arange(ACROSS), np.arange(LAYERS), indexing="ij")
+    rng = np.random.default_rng(seed)
+    x = np.column_stack(
+        [(i.ravel() + 0.5) * a, (j.ravel() + 0.5) * a - width / 2, 0.5 * a + k.ravel() * a]
+    )
+    x[:, :2] += rng.uniform(-1e-4 * r, 1e-4 * r, (x.shape[0], 2))
+    sim = from_grains(case, x, timestep=4.0e-6)
+    sim.device = device
+    sim.start_drive()
+    return sim
+
+
+def kernel_resources() -> dict:
+    """Registers and local memory (spills) per thread of every compiled GPU kernel."""
+    from dem.kernels.cuda import forces, neighbours, step
+
+    out = {}
+    for mod in (forces, neighbours, step):
+        for name in dir(mod):
+            k = getattr(mod, name)
+            if not name.endswith("_kernel") or not hasattr(k, "overloads"):
+                continue
+            for sig in list(k.overloads)[:1]:
+                key = f"{mod.__name__.rsplit('.', 1)[-1]}.{name}"
+                try:
+                    out[key] = {
+                        "registers": int(k.get_regs_per_thread(sig)),
+                        "local_bytes": int(k.get_local_mem_per_thread(sig)),
+                        "shared_bytes": int(k.get_shared_mem_per_block(sig)),
+                    }
+                except Exception as exc:  # noqa: BLE001  (a report, not a check)
+                    out[key] = {"error": repr(exc)}
+    return out
+
+
+def gpu_job(args) -> dict:
+    import numba
+    from numba import cuda
+
+    out = {"device": "numba's CUDA simulator"}
+    total = 0
+    if os.environ.get("NUMBA_ENABLE_CUDASIM") != "1":
+        dev = cuda.get_current_device()
+        total = cuda.current_context().get_memory_info()[1]
+        out = {
+            "device": dev.name.decode() if isinstance(dev.name, bytes) else str(dev.name),
+            "compute_capability": list(dev.compute_capability),
+            "memory_GiB": round(total / 2**30, 1),
+        }
+    out.update({
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "python": platform.python_version(),
+        "loadavg_start": load_loadavg(),
+        "sizes": [],
+    })  # fmt: skip
+    try:
+        import numba_cuda
+
+        out["numba_cuda"] = numba_cuda.__version__
+    except ImportError:
+        out["numba_cuda"] = "bundled"
+    for n in args.sizes:
+        n = int(float(n))
+        row = {"spheres_asked": n}
+        try:
+            t0 = time.perf_counter()
+            sim = lattice_sim(n, "cuda")
+            row["spheres"] = sim.spheres.n
+            row["setup_s"] = round(time.perf_counter() - t0, 2)
+            t0 = time.perf_counter()
+            sim._advance(20)  # compile (first size), upload, first build
+            row["first_call_s"] = round(time.perf_counter() - t0, 2)
+            sim._advance(200)  # the bed starts to sit
+            steps = int(max(200, min(4000, args.work / sim.spheres.n)))
+            eng = sim._gpu_engine
+            builds = eng.builds
+            cuda.synchronize()
+            t0 = time.perf_counter()
+            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim._drive())
+            cuda.synchronize()
+            wall = time.perf_counter() - t0
+            sim.step_index += steps
+            t0 = time.perf_counter()
+            eng.download(sim)
+            row["download_s"] = round(time.perf_counter() - t0, 3)
+            t0 = time.perf_counter()
+            eng.steps(sim, 1, sim.step_index - sim.drive_start_step, sim._drive())
+            cuda.synchronize()
+            row["one_step_call_s"] = round(time.perf_counter() - t0, 5)
+            sim.step_index += 1
+            counts = eng.count[0].copy_to_host()
+            k = sim.pairs.n_pairs
+            x = sim.spheres.x
+            pi, pj = sim.pairs.pair_i[:k], sim.pairs.pair_j[:k]
+            d = x[pi] - x[pj]
+            d[:, 0] -= sim.trough.length * np.round(d[:, 0] / sim.trough.length)
+            touching = int(np.sum(np.linalg.norm(d, axis=1) < 2 * 0.002))
+            width = eng.width
+            pairs_per = float(np.mean(counts))
+            # bytes a sphere-step must move (each array read or written once, partners' state
+            # from cache): own state and constants, the new state, force and torque, px, the
+            # wall rows, the slot and reverse indices, the history of its own pairs (read and
+            # written)
+            bytes_per = (
+                72 + 32 + 72 + 48 + 16 + 2 * 4 * width * 8 + 4 * (eng.slots + eng.rev.shape[0]
+                // eng.n) + 2 * pairs_per * width * 8
+            )  # fmt: skip
+            row.update(
+                steps=steps, wall_s=round(wall, 3),
+                sphere_steps_per_s=sim.spheres.n * steps / wall,
+                builds=eng.builds - builds, pairs_per_sphere=pairs_per,
+                contacts_per_sphere=2 * touching / sim.spheres.n, slots=eng.slots,
+                history_width=width, bytes_per_sphere_step=bytes_per,
+                max_abs_v=float(np.max(np.abs(sim.spheres.v))),
+                finite=bool(np.all(np.isfinite(sim.spheres.x))),
+                gpu_memory_used_GiB=round(
+                    (total - cuda.current_context().get_memory_info()[0]) / 2**30, 2
+                ) if total else None,
+                loadavg=load_loadavg(),
+            )  # fmt: skip
+            rate = row["sphere_steps_per_s"]
+            print(f"GPU {sim.spheres.n}: {rate:.3g} sphere-steps/s", flush=True)
+            del sim, eng
+        except Exception:  # noqa: BLE001  (the next size may still run)
+            row["error"] = traceback.format_exc()
+            print(row["error"], flush=True)
+        out["sizes"].append(row)
+        Path(args.out).write_text(json.dumps(out, indent=1))
+    for regs in args.max_registers:
+        # the step kernel compiled with fewer registers (more threads resident), at one size
+        import types as pytypes
+
+        from dem.kernels.cuda import step
+
+        row = {"spheres_asked": int(float(args.sizes[-2])), "max_registers": regs}
+        try:
+            sim = lattice_sim(row["spheres_asked"], "cuda")
+            sim._advance(20)
+            eng = sim._gpu_engine
+            alt = cuda.jit(max_registers=regs)(step.step_kernel.py_func)
+            eng.step = pytypes.SimpleNamespace(
+                step_kernel=alt, kick_drift_kernel=step.kick_drift_kernel
+            )
+            t0 = time.perf_counter()
+            sim._advance(200)
+            row["compile_and_200_steps_s"] = round(time.perf_counter() - t0, 2)
+            steps = int(max(200, min(4000, args.work / sim.spheres.n)))
+            cuda.synchronize()
+            t0 = time.perf_counter()
+            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim._drive())
+            cuda.synchronize()
+            wall = time.perf_counter() - t0
+            sig = list(alt.overloads)[0]
+            row.update(steps=steps, wall_s=round(wall, 3),
+                       sphere_steps_per_s=sim.spheres.n * steps / wall,
+                       registers=int(alt.get_regs_per_thread(sig)),
+                       local_bytes=int(alt.get_local_mem_per_thread(sig)))  # fmt: skip
+            print(f"GPU max_registers={regs}: {row['sphere_steps_per_s']:.3g}", flush=True)
+            del sim, eng
+        except Exception:  # noqa: BLE001
+            row["error"] = traceback.format_exc()
+            print(row["error"], flush=True)
+        out.setdefault("register_variants", []).append(row)
+        Path(args.out).write_text(json.dumps(out, indent=1))
+    try:
+        out["kernels"] = kernel_resources()
+    except Exception:  # noqa: BLE001
+        out["kernels_error"] = traceback.format_exc()
+    Path(args.out).write_text(json.dumps(out, indent=1))
+    return out
+
+
+def cpu_job(args) -> dict:
+    import numba
+
+    out = {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
+           "numba": numba.__version__, "sizes": []}  # fmt: skip
+    for n in args.sizes:
+        n = int(float(n))
+        sim = lattice_sim(n, "cpu")
+        numba.set_num_threads(max(args.threads))
+        sim._advance(220)
+        for threads in args.threads:
+            numba.set_num_threads(threads)
+            sim._advance(5)
+            steps = int(max(10, min(2000, args.work / 10 / sim.spheres.n * threads)))
+            t0 = time.perf_counter()
+            sim._advance(steps)
+            wall = time.perf_counter() - t0
+            row = {"spheres": sim.spheres.n, "threads": threads, "steps": steps,
+                   "wall_s": round(wall, 3), "sphere_steps_per_s": sim.spheres.n * steps / wall,
+                   "loadavg": load_loadavg()}  # fmt: skip
+            print(f"CPU {sim.spheres.n} x{threads}: {row['sphere_steps_per_s']:.3g}", flush=True)
+            out["sizes"].append(row)
+            Path(args.out).write_text(json.dumps(out, indent=1))
+    return out
+
+
+def bed_state(path: Path, threads: int) -> None:
+    """The sphere-bed case filled, settled and driven for 3 cycles on the CPU, pickled."""
+    import numba
+
+    from dem.engine.setup import from_case
+    from dem.engine.simulation import measure_cycles
+    from dem.scene.case import load_case
+
+    numba.set_num_threads(threads)
+    sim = from_case(load_case(CASE))
+    sim.settle()
+    measure_cycles(sim, 3)
+    path.write_bytes(pickle.dumps(sim))
+
+
+def bed_job(args) -> dict:
+    import numba
+
+    from dem.engine.simulation import measure_cycles
+
+    numba.set_num_threads(max(args.threads))
+    sim = pickle.loads(Path(args.state).read_bytes())
+    sim.device = args.device
+    t0 = time.perf_counter()
+    v = measure_cycles(sim, args.cycles)
+    wall = time.perf_counter() - t0
+    se = float(np.std(v, ddof=1) / math.sqrt(len(v)))
+    out = {"device": args.device, "cycles": args.cycles, "velocity_m_s": float(np.mean(v)),
+           "standard_error_m_s": se, "per_cycle": v.tolist(), "wall_s": round(wall, 2),
+           "spheres": sim.spheres.n, "dt": sim.dt, "loadavg": load_loadavg()}  # fmt: skip
+    print(f"bed on {args.device}: {out['velocity_m_s']:.5f} +- {se:.5f} m/s", flush=True)
+    Path(args.out).write_text(json.dumps(out, indent=1))
+    return out
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--gpu", action="store_true")
+    p.add_argument("--cpu", action="store_true")
+    p.add_argument("--bed-state", metavar="PKL", help="fill and settle the sphere-bed, pickle it")
+    p.add_argument("--bed", action="store_true", help="measure the pickled bed (--state)")
+    p.add_argument("--state", default="/tmp/bed.pkl")
+    p.add_argument("--device", default="cuda", choices=["cpu", "cuda"])
+    p.add_argument("--sizes", nargs="+", default=["1e4", "1e5", "1e6", "4e6"])
+    p.add_argument("--threads", nargs="+", type=int, default=[1, 4, 16])
+    p.add_argument("--work", type=float, default=2e9, help="sphere-steps a timed GPU call")
+    p.add_argument("--cycles", type=int, default=20)
+    p.add_argument("--max-registers", nargs="*", type=int, default=[],
+                   help="also time the step kernel compiled with at most this many registers, "
+                   "at the second-largest size")  # fmt: skip
+    p.add_argument("--out", default="gpu_bench.json")
+    args = p.parse_args()
+    if args.gpu:
+        gpu_job(args)
+    if args.cpu:
+        cpu_job(args)
+    if args.bed_state:
+        bed_state(Path(args.bed_state), max(args.threads))
+    if args.bed:
+        bed_job(args)
+
+
+if __name__ == "__main__":
+    main()
