@@ -10,3 +10,11 @@ nothing in dem imports: importing dem, or this package, needs no CUDA. Without a
 CUDA simulator runs the kernels (``NUMBA_ENABLE_CUDASIM=1``, set before numba.cuda is first
 imported).
 """
+
+import numpy as _np
+
+# numba-cuda 0.30.4 (pinned: its successors drop the simulator the tests run in) types arrays
+# through ``np.row_stack``, which numpy 2.5 removed: the kernels then fail to compile on a GPU
+# (seen on an H200 with numpy 2.5.2). ``row_stack`` was an alias of ``vstack``; put it back.
+if not hasattr(_np, "row_stack"):
+    _np.row_stack = _np.vstack
