@@ -92,6 +92,8 @@ def cmd_run(args) -> int:
     overrides = set_overrides(args.set)
     if args.replicas is not None:
         overrides["run.replicas"] = args.replicas
+    if args.device is not None:
+        overrides["run.device"] = args.device
     case = load_case(args.case_dir, overrides)
     out = writable_path("--out", args.out or case.directory / "output", folder=True)
     try:
@@ -114,7 +116,8 @@ def resume_command(args, case, out: Path) -> str:
     """The ``dem run`` line that resumes this run: every option a resume must repeat.
 
     The folder, the ``--set`` keys, the measured cycles (a resume is refused with others) and
-    the frames setting (``--no-frames``, ``--lab-frame``), and the threads if they were given.
+    the frames setting (``--no-frames``, ``--lab-frame``), and the threads and device if they
+    were given.
     """
     import shlex
 
@@ -128,6 +131,8 @@ def resume_command(args, case, out: Path) -> str:
         parts.append("--lab-frame")
     if args.threads is not None:
         parts += ["--threads", str(args.threads)]
+    if args.device is not None:
+        parts += ["--device", args.device]
     if args.replicas is not None:
         parts += ["--replicas", str(args.replicas)]
     if args.all_replicas:
@@ -137,10 +142,15 @@ def resume_command(args, case, out: Path) -> str:
 
 def cmd_plan(args) -> int:
     """``dem plan``: cost, memory and expected error of a case before it runs."""
+    from dem.engine.device import check_device
     from dem.run.plan import plan
     from dem.scene.case import load_case
 
     overrides = set_overrides(args.set)
+    if args.device is not None:
+        overrides["run.device"] = args.device
+    case = load_case(args.case_dir, overrides)
+    check_device(case.run.device, case)
     if args.suggest:
         from dem.run.plan import suggest
 
@@ -153,7 +163,6 @@ def cmd_plan(args) -> int:
         else:
             print(done.text())
         return 0
-    case = load_case(args.case_dir, overrides)
     result = plan(case, threads=args.threads, cycles=args.cycles)
     if args.json:
         print_json(result.as_dict())
@@ -171,7 +180,7 @@ def cmd_dem_sweep(args) -> int:
     out = writable_path("--out", args.out or Path(args.case_dir) / "sweep", folder=True)
     result = run_sweep(
         args.case_dir, sets, out, scheduler=args.scheduler, workers=args.workers,
-        threads=args.threads or 1, cycles=args.cycles, frames=args.frames,
+        threads=args.threads or 1, cycles=args.cycles, frames=args.frames, device=args.device,
     )  # fmt: skip
     if args.json:
         print_json(result)

@@ -8,6 +8,11 @@ from dem.cli.options import ALLOWED, WHOLE, WHOLE_FROM_0, Parser, number
 from dem.config import DEM_EXPORT_SETTLE_CYCLES
 from dem.quantities import QUANTITIES
 
+#: ``--device`` choices: :data:`dem.scene.schema.DEVICES`, written out here because importing the
+#: schema imports numba, which would slow every command's start (tests/engine/test_device.py
+#: checks that the two agree).
+DEVICES = ("cpu", "cuda")
+
 
 def add_material(p: argparse.ArgumentParser, *, angle_required: bool = True) -> None:
     """The material options every point-mass command takes (mu, phi, alpha)."""
@@ -33,6 +38,15 @@ def add_impact(p: argparse.ArgumentParser) -> None:
         help="landing law: 'paper' (Eq. 12: v_t times eps_t) or 'coulomb' (that change capped "
         "at mu (1 + eps_n) v_n, as any friction contact: the DEM's reference)",
     )
+
+
+def add_device(p: argparse.ArgumentParser) -> None:
+    """The engine option of the commands that run or plan DEM (beside ``--threads``)."""
+    p.add_argument(
+        "--device", choices=DEVICES,
+        help="engine: cpu (numba, the default) or cuda (numba.cuda on a GPU); overrides "
+        "run.device",
+    )  # fmt: skip
 
 
 def pointmass_parser(sub) -> None:
@@ -122,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument("--cycles", type=WHOLE, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=WHOLE, help="numba threads (default: all cores)")
+    add_device(p)
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
     mode.add_argument("--resume", action="store_true", help="continue an interrupted run")
@@ -148,6 +163,7 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     p.add_argument("--cycles", type=WHOLE, help="measured cycles (overrides run.cycles)")
     p.add_argument("--threads", type=WHOLE, help="numba threads (default: all cores)")
+    add_device(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
         "--suggest", metavar="OUT_DIR",
@@ -167,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: local)")
     p.add_argument("--workers", type=WHOLE, help="local workers (default: one per core)")
     p.add_argument("--threads", type=WHOLE, help="numba threads per point (default 1)")
+    add_device(p)
     p.add_argument("--cycles", type=WHOLE, help="measured cycles (overrides run.cycles)")
     p.add_argument("--frames", action="store_true", help="write VTK/HDF5 frames for every point")
     p.add_argument("--json", action="store_true", help="print one JSON object")

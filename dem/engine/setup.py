@@ -131,7 +131,7 @@ def _build(
     return Simulation(
         spheres, trough, scene.law, step.dt,
         rotation=pt.rotation, reference_speed=reference_speed, bodies=bodies,
-        timestep_limit=step.limit, mesh=mesh, feeder=feeder,
+        timestep_limit=step.limit, mesh=mesh, feeder=feeder, device=case.run.device,
     )  # fmt: skip
 
 

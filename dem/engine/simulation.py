@@ -78,6 +78,8 @@ class Simulation(InstabilityChecks):
         are
             removed and new ones fed at the back while the drive is on; None for a periodic
             section.
+        device: The engine that steps: ``"cpu"`` (numba) or ``"cuda"`` (numba.cuda on a GPU;
+            :func:`dem.engine.device.check_device` says what it refuses). ValueError otherwise.
 
     """
 
@@ -95,7 +97,11 @@ class Simulation(InstabilityChecks):
         timestep_limit: float = math.nan,
         mesh: TriangleMesh | None = None,
         feeder=None,
+        device: str = "cpu",
     ):
+        if device not in ("cpu", "cuda"):  # dem.scene.schema.DEVICES
+            raise ValueError(f"device = {device!r}: 'cpu' or 'cuda'")
+        self.device = device
         self.spheres = spheres
         self.bodies = bodies
         self.trough = trough

@@ -32,6 +32,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from dem import config
+from dem.engine.device import check_device
 from dem.io.files import json_text, replace_text
 from dem.physics import measure
 
@@ -108,6 +109,7 @@ def run_replicas(
                         overwrite=overwrite, resume=resume, frames=frames,
                         lab_frame=lab_frame)  # fmt: skip
     out_dir = Path(out_dir)
+    check_device(case.run.device, case)  # at the door, not in each worker after the spawn
     if not resume:
         _check_outputs(out_dir, n, overwrite)
     cores = _cores(threads)

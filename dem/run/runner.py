@@ -2,9 +2,10 @@
 
 What one run does, in order:
 
-1. at the door, once: resolve the case, plan it (:func:`dem.run.plan.plan`) and refuse what the
-   machine cannot hold or finish (:mod:`dem.run.checks`); then lock the output folder and
-   refuse one that holds an earlier run, unless ``overwrite`` or ``resume``
+1. at the door, once: resolve the case, refuse a ``run.device`` this machine or the GPU engine
+   cannot do (:func:`dem.engine.device.check_device`), plan it (:func:`dem.run.plan.plan`) and
+   refuse what the machine cannot hold or finish (:mod:`dem.run.checks`); then lock the output
+   folder and refuse one that holds an earlier run, unless ``overwrite`` or ``resume``
    (:mod:`dem.run.output`);
 2. fill and settle (:class:`dem.engine.simulation.Simulation`), then switch the drive on at phase 0;
 3. for each cycle (``settle_cycles`` unmeasured, or with "auto" until the per-cycle velocity's
@@ -39,6 +40,7 @@ import numba
 
 from dem import config
 from dem.engine import setup
+from dem.engine.device import check_device
 from dem.engine.threads import ThreadGuard, starting_threads
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
@@ -103,6 +105,7 @@ def run_case(
         prepare_output(out_dir, overwrite=False, resume=True)
     n_threads = _set_threads(threads)
     scene = resolve(case)
+    check_device(scene.case.run.device, scene)
     cycles = scene.case.run.cycles if cycles is None else int(cycles)
     if cycles < 1:
         raise InputError("--cycles", cycles, "a whole number >= 1")

@@ -190,6 +190,9 @@ def wall_summary(case) -> dict:
 
 #: Case keys a resumed run may change: how long it runs and where its name comes from.
 RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
+#: Case keys added after checkpoints (and sweep records) were first written, with the value
+#: every older record ran with: an older record without the key is taken to hold that value.
+ADDED_KEYS = {"run.device": "cpu"}
 
 
 def fingerprint(case) -> dict:
@@ -213,6 +216,7 @@ def fingerprint_changes(before: dict | None, now: dict) -> list[str]:
     """Each key that differs, as "key = old (now new)"; none for a checkpoint without a record."""
     if before is None:
         return []
+    before = ADDED_KEYS | before
     keys = sorted(set(before) | set(now))
     return [
         f"{k} = {before.get(k)!r} (now {now.get(k)!r})" for k in keys if before.get(k) != now.get(k)

@@ -241,6 +241,7 @@ def _read_run(t: Table) -> RunSpec:
         timestep=dt,
         seed=seed,
         replicas=replicas,
+        device=t.read("device"),
     )
 
 

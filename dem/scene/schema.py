@@ -29,6 +29,9 @@ SLIP_LEVER_ARMS = ("contact", "radius")
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
 DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
+#: Engines a run can step on (``run.device``): numba on the CPU, or numba.cuda on a GPU
+#: (:mod:`dem.engine.device` says what the GPU engine refuses).
+DEVICES = ("cpu", "cuda")
 #: Screw resolution when ``particles.max_bumpiness`` is omitted (:func:`dem.scene.shapes.screw`).
 DEFAULT_MAX_BUMPINESS = 0.25
 
@@ -123,6 +126,7 @@ RUN = (
     _number("timestep", None, auto=True),  # None: from the stiffest contact
     _whole("seed", 1),
     _whole("replicas", 1),
+    Key("device", "choice", default="cpu", choices=DEVICES),
 )
 OUTPUT = (_whole("frames_per_cycle", 4),)
 #: [feeder]: its presence makes the trough finite.

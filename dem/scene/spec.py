@@ -298,6 +298,9 @@ class RunSpec:
         replicas: Independent fills run and pooled (seeds ``seed``, ``seed + 1``, ...;
             :func:`dem.physics.measure.pooled`); 1: one run, whose error bar excludes the
             fill-to-fill spread.
+        device: The engine that steps the grains: ``"cpu"`` (numba, the default) or ``"cuda"``
+            (numba.cuda on a GPU; :func:`dem.engine.device.check_device` refuses what it cannot
+            run yet).
 
     """
 
@@ -306,6 +309,7 @@ class RunSpec:
     timestep: float | None = None
     seed: int = 1
     replicas: int = 1
+    device: str = "cpu"
 
 
 @dataclass(frozen=True)

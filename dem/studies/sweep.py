@@ -141,20 +141,35 @@ def _fmt(value) -> str:
 
 
 def plan_points(case_dir: Path, sets: list[tuple[str, list]], out: Path, *,
-                cycles: int | None = None, frames: bool = False) -> list[SweepPoint]:  # fmt: skip
-    """The points, each checked by loading its case (an error names the point and the key)."""
+                cycles: int | None = None, frames: bool = False,
+                device: str | None = None) -> list[SweepPoint]:  # fmt: skip
+    """The points, each checked by loading its case (an error names the point and the key).
+
+    ``device`` (``--device``) overrides every point's ``run.device``; each point's device is
+    checked against its case (:func:`dem.engine.device.check_device`) here, before any runs.
+    """
+    from dem.engine.device import check_device
     from dem.scene.case import load_case
 
     points = []
     for i, overrides in enumerate(grid(sets)):
         try:
-            case = load_case(case_dir, overrides)
+            case = load_case(case_dir, overrides | device_override(device))
+            check_device(case.run.device, case)
         except InputError as err:
             raise InputError(err.key, err.value, f"{err.allowed} (sweep point {overrides})",
                              err.source) from None  # fmt: skip
         points.append(SweepPoint(i, overrides, out / folder_name(i, overrides),
                                  record(case, cycles, frames)))  # fmt: skip
     return points
+
+
+def device_override(device: str | None) -> dict:
+    """``--device`` as a load_case override of every point (none when it is not given).
+
+    Kept apart from a point's own overrides, which name its folder and its row of the table.
+    """
+    return {} if device is None else {"run.device": device}
 
 
 def record(case, cycles: int | None, frames: bool) -> dict:
@@ -222,18 +237,19 @@ def status(point: SweepPoint) -> str:
 
 
 def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
-              frames: bool) -> dict:  # fmt: skip
+              frames: bool, device: str | None = None) -> dict:  # fmt: skip
     """Run one point (a Dask task; also callable directly); returns its summary.
 
     The point's :data:`RECORD` is removed before the run and written after it finished, so a
-    summary.json beside a record is always the record's.
+    summary.json beside a record is always the record's. ``device``: ``--device``, over the
+    case's ``run.device``.
     """
     from dem.io.files import replace_text
     from dem.run.plan import PlanWarning
     from dem.run.runner import run_case
     from dem.scene.case import load_case
 
-    case = load_case(case_dir, overrides)
+    case = load_case(case_dir, overrides | device_override(device))
     point = SweepPoint(0, overrides, Path(folder))
     resume = status(point) == "interrupted"
     (point.folder / RECORD).unlink(missing_ok=True)
@@ -257,10 +273,14 @@ def run_sweep(
     cycles: int | None = None,
     frames: bool = False,
     progress: bool = True,
+    device: str | None = None,
 ) -> dict:
-    """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``."""
+    """Run a sweep; returns ``{"points", "done", "skipped", "failed": {name: error}, "csv"}``.
+
+    ``device``: ``"cpu"`` or ``"cuda"`` over every point's ``run.device`` (``--device``).
+    """
     case_dir, out = Path(case_dir), Path(out)
-    points = plan_points(case_dir, sets, out, cycles=cycles, frames=frames)
+    points = plan_points(case_dir, sets, out, cycles=cycles, frames=frames, device=device)
     check_finished(points, out)
     todo = [p for p in points if status(p) != "done"]
     skipped = len(points) - len(todo)
@@ -274,10 +294,11 @@ def run_sweep(
         client, cluster = dask_client(scheduler, min(n, len(todo)), "dem sweep")
         try:
             out.mkdir(parents=True, exist_ok=True)
-            _warn_plan(case_dir, todo[0], threads, cycles)
+            _warn_plan(case_dir, todo[0], threads, cycles, device)
             futures = {
                 client.submit(run_point, str(case_dir), p.overrides, str(p.folder), cycles,
-                              threads, frames, key=f"dem-sweep-{p.name}", pure=False): p
+                              threads, frames, device, key=f"dem-sweep-{p.name}",
+                              pure=False): p
                 for p in todo
             }  # fmt: skip
             bar = None
@@ -332,12 +353,13 @@ def dask_client(scheduler: str | None, workers: int, command: str):
     return Client(cluster), cluster
 
 
-def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles) -> None:
+def _warn_plan(case_dir: Path, point: SweepPoint, threads: int, cycles, device) -> None:
     """The plan's warnings for one point, once (``dem run`` would give them for every point)."""
     from dem.run import plan
     from dem.scene.case import load_case
 
-    estimate = plan.plan(load_case(case_dir, point.overrides), threads=threads, cycles=cycles)
+    case = load_case(case_dir, point.overrides | device_override(device))
+    estimate = plan.plan(case, threads=threads, cycles=cycles)
     for a in estimate.warnings():
         warnings.warn(f"sweep point {point.name}: {a.key}: {a.text}", plan.PlanWarning,
                       stacklevel=3)  # fmt: skip
