@@ -17,6 +17,8 @@ meshes and feeders are refused before a run starts.
 from __future__ import annotations
 
 import math
+import os
+import warnings
 
 import numpy as np
 
@@ -28,6 +30,10 @@ from dem.kernels.neighbours import OVERFLOW_PAIRS, grid_of
 #: partners, spheres a cell (a cell's edge is at least a diameter and a skin).
 START_SLOTS = 16
 START_CELL = 16
+#: numba's CUDA simulator runs the kernels as Python: launches go the ordinary way there.
+SIMULATOR = os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
+#: Arguments of :func:`dem.kernels.cuda.step.step_kernel` that change from step to step.
+_AX, _AY, _AZ, _NEXT_DRIFT = 25, 26, 27, 30
 
 
 def _grow(need: int) -> int:
@@ -47,6 +53,11 @@ class GpuEngine:
             raise ValueError("the GPU engine steps plain spheres with flat walls only")
         self.cuda, self.forces, self.nb, self.step = cuda, forces, neighbours, step
         self.rows = law_rows(sim.law.params)
+        #: Launch the step through :class:`dem.kernels.cuda.launch.PreparedLaunch` (on a GPU).
+        self.fast = not SIMULATOR
+        self._prepared = {}
+        # a small scene's grid is below numba's occupancy rule of thumb: no warning every step
+        warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
         self.snapshot = None  # the host arrays as the last call left them
         self.n = -1
 
@@ -91,7 +102,13 @@ class GpuEngine:
         self.cell_count = cuda.device_array(0, dtype=np.int32)
         self.cell_items = cuda.device_array(0, dtype=np.int32)
         self.px = cuda.to_device(np.zeros(n))
-        self.flag = cuda.to_device(np.zeros(1, dtype=np.int32))
+        # the rebuild flag: mapped host memory on a GPU (read without a copy after each step)
+        if SIMULATOR:
+            self.flag = cuda.to_device(np.zeros(1, dtype=np.int32))
+        else:
+            self.flag = cuda.mapped_array(1, dtype=np.int32)
+            self.flag[0] = 0
+        self._prepared.clear()
         self.status = cuda.to_device(np.zeros(4, dtype=np.int64))
         self.builds = pairs.builds
         self.r_max = float(np.max(s.radius))
@@ -177,13 +194,14 @@ class GpuEngine:
         self.rev, self.rev_count = nb.reverse_slots(self.nbr[0], self.count[0],
                                                     self.rev.shape[0] // n)  # fmt: skip
         self.builds += 1
+        self._prepared.clear()  # new slot arrays
 
     def _step(self, sim, t: float, drive, kick: bool, next_drift: bool) -> None:
         geom = sim.geom
         ax, ay, az = body_acceleration(t, sim.gravity, drive)
         p, pw = self.rows
         x, v, om = self.x, self.v, self.omega
-        self._launch(self.step.step_kernel, self.n)(
+        args = (
             sim.law.model_id, p, pw, x[0], v[0], om[0], x[1], v[1], om[1], self.radius,
             self.mass, self.inv_mass, self.inv_inertia, self.nbr[0], self.count[0], self.rev,
             self.rev_count, self.hist[0], self.hist[1], self.wall[0], self.wall[1], geom.length,
@@ -191,6 +209,15 @@ class GpuEngine:
             self.x_ref, 0.25 * geom.skin * geom.skin, self.flag, self.force, self.torque,
             self.px,
         )  # fmt: skip
+        launch = self._prepared_step(args) if self.fast and kick else None
+        if launch is None:
+            self._launch(self.step.step_kernel, self.n)(*args)
+        else:
+            launch.set_float(_AX, ax)
+            launch.set_float(_AY, ay)
+            launch.set_float(_AZ, az)
+            launch.set_bool(_NEXT_DRIFT, next_drift)
+            launch()
         self.hist.reverse()
         self.wall.reverse()
         if kick:
@@ -198,10 +225,34 @@ class GpuEngine:
             v.reverse()
             om.reverse()
 
+    def _prepared_step(self, args):
+        """The step's launch for the current buffers, prepared once (None: not possible)."""
+        from dem.kernels.cuda.launch import prepare
+
+        key = (id(self.x[0]), id(self.hist[0]), id(self.wall[0]), args[1:3], args[21:25])
+        launch = self._prepared.get(key)
+        if launch is None:
+            launch = prepare(
+                self.step.step_kernel, self.forces.blocks(self.n),
+                self.forces.THREADS_PER_BLOCK, args,
+            )  # fmt: skip
+            if launch is None:
+                self.fast = False
+                return None
+            self._prepared[key] = launch
+        return launch
+
     def _moved(self) -> bool:
-        flag = self.flag.copy_to_host()
-        if flag[0]:
-            self.flag.copy_to_device(np.zeros(1, dtype=np.int32))
+        """Whether the last kick and drift moved a sphere past skin/2; resets the flag."""
+        if SIMULATOR:
+            flag = self.flag.copy_to_host()
+            if flag[0]:
+                self.flag.copy_to_device(np.zeros(1, dtype=np.int32))
+                return True
+            return False
+        self.cuda.synchronize()
+        if self.flag[0]:
+            self.flag[0] = 0
             return True
         return False
 

@@ -71,6 +71,11 @@ def lattice_sim(n: int, device: str, seed: int = 1):
     return sim
 
 
+def _first(value) -> int:
+    """One figure of numba-cuda's per-signature dict (or the figure itself)."""
+    return int(next(iter(value.values())) if isinstance(value, dict) else value)
+
+
 def kernel_resources() -> dict:
     """Registers and local memory (spills) per thread of every compiled GPU kernel."""
     from dem.kernels.cuda import forces, neighbours, step
@@ -81,16 +86,36 @@ def kernel_resources() -> dict:
             k = getattr(mod, name)
             if not name.endswith("_kernel") or not hasattr(k, "overloads"):
                 continue
-            for sig in list(k.overloads)[:1]:
-                key = f"{mod.__name__.rsplit('.', 1)[-1]}.{name}"
-                try:
-                    out[key] = {
-                        "registers": int(k.get_regs_per_thread(sig)),
-                        "local_bytes": int(k.get_local_mem_per_thread(sig)),
-                        "shared_bytes": int(k.get_shared_mem_per_block(sig)),
-                    }
-                except Exception as exc:  # noqa: BLE001  (a report, not a check)
-                    out[key] = {"error": repr(exc)}
+            if not k.overloads:
+                continue
+            key = f"{mod.__name__.rsplit('.', 1)[-1]}.{name}"
+            try:
+                out[key] = {
+                    "registers": _first(k.get_regs_per_thread()),
+                    "local_bytes": _first(k.get_local_mem_per_thread()),
+                }
+            except Exception as exc:  # noqa: BLE001  (a report, not a check)
+                out[key] = {"error": repr(exc)}
+    return out
+
+
+def prepared_vs_ordinary(n: int = 10000, steps: int = 300) -> dict:
+    """The same lattice stepped with prepared launches and with numba-cuda's ordinary ones."""
+    sims = [lattice_sim(n, "cuda") for _ in range(2)]
+    for sim in sims:
+        sim._advance(20)
+    sims[1]._gpu_engine.fast = False
+    walls = []
+    for sim in sims:
+        t0 = time.perf_counter()
+        sim._advance(steps)
+        walls.append(time.perf_counter() - t0)
+    a, b = (sim.spheres for sim in sims)
+    same = all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ("x", "v", "omega", "force"))
+    out = {"spheres": sims[0].spheres.n, "steps": steps, "used": sims[0]._gpu_engine.fast,
+           "same_bits": bool(same), "prepared_s_per_step": walls[0] / steps,
+           "ordinary_s_per_step": walls[1] / steps}  # fmt: skip
+    print(f"prepared launch: {out}", flush=True)
     return out
 
 
@@ -121,6 +146,11 @@ def gpu_job(args) -> dict:
         out["numba_cuda"] = numba_cuda.__version__
     except ImportError:
         out["numba_cuda"] = "bundled"
+    try:
+        out["prepared_launch"] = prepared_vs_ordinary()
+    except Exception:  # noqa: BLE001
+        out["prepared_launch"] = {"error": traceback.format_exc()}
+        print(out["prepared_launch"]["error"], flush=True)
     for n in args.sizes:
         n = int(float(n))
         row = {"spheres_asked": n}
@@ -203,6 +233,7 @@ def gpu_job(args) -> dict:
             eng.step = pytypes.SimpleNamespace(
                 step_kernel=alt, kick_drift_kernel=step.kick_drift_kernel
             )
+            eng._prepared.clear()
             t0 = time.perf_counter()
             sim._advance(200)
             row["compile_and_200_steps_s"] = round(time.perf_counter() - t0, 2)
@@ -212,11 +243,10 @@ def gpu_job(args) -> dict:
             eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim._drive())
             cuda.synchronize()
             wall = time.perf_counter() - t0
-            sig = list(alt.overloads)[0]
             row.update(steps=steps, wall_s=round(wall, 3),
                        sphere_steps_per_s=sim.spheres.n * steps / wall,
-                       registers=int(alt.get_regs_per_thread(sig)),
-                       local_bytes=int(alt.get_local_mem_per_thread(sig)))  # fmt: skip
+                       registers=_first(alt.get_regs_per_thread()),
+                       local_bytes=_first(alt.get_local_mem_per_thread()))  # fmt: skip
             print(f"GPU max_registers={regs}: {row['sphere_steps_per_s']:.3g}", flush=True)
             del sim, eng
         except Exception:  # noqa: BLE001

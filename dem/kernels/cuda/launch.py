@@ -1,0 +1,64 @@
+"""Kernel launches with their arguments converted once, for the launch every step makes.
+
+numba-cuda converts every argument of every launch in Python (an array is seven numbers, a tuple
+of 24 floats 24 ctypes objects): for :func:`dem.kernels.cuda.step.step_kernel`'s 37 arguments
+that cost about 0.55 ms a launch on an H200 host (measured: 1e4 and 1e5 spheres stepped at the
+same 0.56-0.62 ms a step), more than the kernel itself below a million spheres. A
+:class:`PreparedLaunch` converts the arguments once, as numba-cuda would (its own
+``_Kernel._prepare_args``), keeps the converted list, and launches through the same
+``cuda.core.launch`` call; a launch then only changes the scalars that change between steps.
+The arrays must be the same objects at every launch: the caller prepares one launch per set of
+buffers and prepares again after a rebuild replaces them.
+
+This uses numba-cuda internals (pinned at 0.30.4 by the ``cuda`` extra); where they differ,
+:func:`prepare` returns None and the caller launches the ordinary way.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+
+class PreparedLaunch:
+    """One kernel with one set of arguments, launchable many times with new scalars."""
+
+    def __init__(self, dispatcher, griddim, blockdim, args):
+        from cuda.core import LaunchConfig
+        from numba.cuda._compat import CUDA_CORE_GE_1_0
+
+        cfg = dispatcher[griddim, blockdim]
+        self.stream = cfg.stream
+        argtypes = tuple(dispatcher.typeof_pyval(a) for a in args)
+        kernel = dispatcher.compile(argtypes)
+        self.positions = []
+        self.kernelargs = []
+        for t, v in zip(kernel.argument_types, args, strict=True):
+            self.positions.append(len(self.kernelargs))
+            kernel._prepare_args(t, v, self.stream, [], self.kernelargs)
+        coop = "is_cooperative" if CUDA_CORE_GE_1_0 else "cooperative_launch"
+        self.config = LaunchConfig(
+            grid=cfg.griddim, block=cfg.blockdim, shmem_size=0, **{coop: False}
+        )
+        self.function = kernel._codelibrary.get_cufunc().kernel
+
+    def set_float(self, index: int, value: float) -> None:
+        """Argument ``index`` (a float64) takes ``value`` at the next launch."""
+        self.kernelargs[self.positions[index]] = ctypes.c_double(value)
+
+    def set_bool(self, index: int, value: bool) -> None:
+        """Argument ``index`` (a boolean) takes ``value`` at the next launch."""
+        self.kernelargs[self.positions[index]] = bool(value)
+
+    def __call__(self) -> None:
+        """Launch the kernel with the arguments as they stand."""
+        from cuda.core import launch
+
+        launch(self.stream, self.config, self.function, *self.kernelargs)
+
+
+def prepare(dispatcher, griddim, blockdim, args) -> PreparedLaunch | None:
+    """A :class:`PreparedLaunch`, or None where numba-cuda's internals are not as expected."""
+    try:
+        return PreparedLaunch(dispatcher, griddim, blockdim, args)
+    except (ImportError, AttributeError, TypeError):
+        return None
