@@ -1,12 +1,14 @@
 """The GPU engine: a :class:`~dem.engine.simulation.Simulation`'s spheres stepped on numba.cuda.
 
-The state lives on the device between calls; the host's arrays (``sim.spheres``, ``sim.pairs``)
-are brought up to date after every call of :meth:`GpuEngine.advance`, so the instability checks,
-checkpoints and writers read the same arrays whichever engine ran. Before a call the host's
+The state lives on the device between calls; the host's spheres (``sim.spheres``) are brought up
+to date after every call of :meth:`GpuEngine.advance`, and the pair list (``sim.pairs``) when it
+is read, so the instability checks, checkpoints and writers read the same arrays whichever engine
+ran. Before a call the host's
 positions, velocities and spins are compared with what the last call left there: anything that
 changed them in between (a fill, a restart, a replaced grain) makes the engine upload the host's
-state again, pair list and history included. A call costs two copies of the state across the bus
-(about 120 bytes a sphere each way and 30 bytes a pair) besides the steps.
+state again, pair list and history included. A call costs a copy of the spheres across the bus
+(about 280 bytes a sphere) besides the steps; the pairs (16 slots of 4 + 8 w bytes a sphere)
+cross only when read (a checkpoint, the summary) and then cost a sort on the host, O(P log P).
 
 The step is the CPU engine's (:mod:`dem.kernels.cuda.step`), the pair list the CPU engine's in
 per-sphere slots (:mod:`dem.kernels.cuda.neighbours`), the force the CPU engine's contact law
@@ -60,6 +62,8 @@ class GpuEngine:
         warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
         self.snapshot = None  # the host arrays as the last call left them
         self.n = -1
+        #: The device's pair list is newer than the host's (:meth:`download_pairs` on demand).
+        self.pairs_on_device = False
 
     # --- host <-> device ----------------------------------------------------------------------
 
@@ -77,7 +81,8 @@ class GpuEngine:
         from dem.kernels.cuda.forces import compact_to_slots
 
         cuda = self.cuda
-        s, pairs = sim.spheres, sim.pairs
+        s, pairs = sim.spheres, sim.pairs  # the pairs first come back if the device's are newer
+        self.pairs_on_device = False
         n = self.n = s.n
         to = cuda.to_device
         self.x = [to(s.x), cuda.device_array((n, 3))]
@@ -114,16 +119,24 @@ class GpuEngine:
         self.r_max = float(np.max(s.radius))
 
     def download(self, sim) -> None:
-        """Bring the host's state, pair list (and its CSR index) and history up to date."""
-        from dem.kernels.cuda.forces import slots_to_compact
+        """Bring the host's spheres up to date; the pairs stay on the device until asked for.
 
-        s, pairs = sim.spheres, sim.pairs
+        (:attr:`dem.engine.simulation.Simulation.pairs` calls :meth:`download_pairs`.)
+        """
+        s = sim.spheres
         self.x[0].copy_to_host(s.x)
         self.v[0].copy_to_host(s.v)
         self.omega[0].copy_to_host(s.omega)
         self.force.copy_to_host(s.force)
         self.torque.copy_to_host(s.torque)
         self.wall[0].copy_to_host(s.wall_hist)
+        self.pairs_on_device = True
+        self.snapshot = (s.x.copy(), s.v.copy(), s.omega.copy())
+
+    def download_pairs(self, pairs) -> None:
+        """Copy the pair list, its springs, x_ref and the CPU's CSR index into ``pairs``."""
+        from dem.kernels.cuda.forces import slots_to_compact
+
         pi, pj, hist = slots_to_compact(
             self.nbr[0].copy_to_host(), self.count[0].copy_to_host(), self.hist[0].copy_to_host(),
             self.slots,
@@ -134,8 +147,8 @@ class GpuEngine:
         pairs.pair_i[:k], pairs.pair_j[:k], pairs.hist[:k] = pi, pj, hist
         pairs.counters[:] = (k, self.builds)
         self.x_ref.copy_to_host(pairs.x_ref)
-        _csr(pi, pj, s.n, pairs.part_start, pairs.part_slot)
-        self.snapshot = (s.x.copy(), s.v.copy(), s.omega.copy())
+        _csr(pi, pj, self.n, pairs.part_start, pairs.part_slot)
+        self.pairs_on_device = False
 
     # --- the build and the step ---------------------------------------------------------------
 

@@ -159,6 +159,26 @@ class Simulation(InstabilityChecks):
         self.guard = None
         self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
+    @property
+    def pairs(self) -> PairList:
+        """The pair list and its springs; after GPU steps, brought to the host when asked for.
+
+        The GPU engine keeps the pairs on the device (copying them back costs more than 500 steps
+        of a million spheres); reading this attribute copies them into the host's list first.
+        """
+        gpu = getattr(self, "_gpu_engine", None)
+        if gpu is not None and gpu.pairs_on_device:
+            gpu.download_pairs(self._pairs)
+        return self._pairs
+
+    @pairs.setter
+    def pairs(self, value: PairList) -> None:
+        gpu = getattr(self, "_gpu_engine", None)
+        if gpu is not None:  # the host's list is the one now: the engine takes it up again
+            gpu.pairs_on_device = False
+            gpu.snapshot = None
+        self._pairs = value
+
     # --- stepping ---------------------------------------------------------------------------
 
     @property
