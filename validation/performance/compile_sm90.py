@@ -66,23 +66,25 @@ def signatures() -> dict:
 
 
 def find_ptxas() -> str | None:
-    """ptxas on PATH, under CUDA_HOME, or in the nvidia-cuda-nvcc wheel."""
-    found = shutil.which("ptxas")
-    if found:
-        return found
+    """ptxas of this environment's CUDA wheels first, else CUDA_HOME's, else on PATH."""
+    for p in sorted(Path(sys.prefix).rglob("bin/ptxas")):
+        return str(p)
     for base in (os.environ.get("CUDA_HOME"), "/usr/local/cuda"):
         if base and (Path(base) / "bin" / "ptxas").exists():
             return str(Path(base) / "bin" / "ptxas")
-    try:
-        import nvidia.cuda_nvcc as wheel  # the nvidia-cuda-nvcc wheel
+    return shutil.which("ptxas")
 
-        for p in Path(wheel.__path__[0]).rglob("ptxas"):
-            return str(p)
-    except ImportError:
-        pass
-    for p in Path(sys.prefix).rglob("bin/ptxas"):
-        return str(p)
-    return None
+
+def read_report(report: str, returncode: int) -> tuple[str, bool]:
+    """ptxas -v's report in a few words, and whether it fails the check (a spill, an error)."""
+    regs = re.search(r"Used (\d+) registers", report)
+    spills = [int(v) for v in re.findall(r"(\d+) bytes spill (?:stores|loads)", report)]
+    if returncode != 0:
+        return "ptxas FAILED", True
+    used = regs.group(1) if regs else "?"
+    if any(spills):
+        return f"{used} registers, SPILLS ({max(spills)} bytes)", True
+    return f"{used} registers, no spills", False
 
 
 def _ptxas(ptxas: str, path: Path):
@@ -127,12 +129,9 @@ def main() -> int:
             res = _ptxas(ptxas, path)
             report = (res.stdout + res.stderr).strip()
             report = f"(PTX {older[1]} assembled as {older[2]}, this ptxas's version)\n{report}"
-        regs = re.search(r"Used (\d+) registers", report)
-        spills = [int(v) for v in re.findall(r"(\d+) bytes spill (?:stores|loads)", report)]
-        spilled = any(spills)
-        failed |= spilled or res.returncode != 0
-        verdict = "ptxas FAILED" if res.returncode != 0 else "SPILLS" if spilled else "no spills"
-        head += f"; {regs.group(1) if regs else '?'} registers, {verdict}"
+        verdict, bad = read_report(report, res.returncode)
+        failed |= bad
+        head += f"; {verdict}"
         print(head)
         lines += [head, report, ""]
     if ptxas is None:
