@@ -45,7 +45,12 @@ def _grow(need: int) -> int:
 class GpuEngine:
     """Device arrays of one simulation and the host loop that launches the kernels."""
 
-    def __init__(self, sim):
+    def __init__(self, sim, scene=None):
+        """Engine for ``sim``; ``scene``: each sphere's scene, int (n,), or None for one.
+
+        Scenes are independent copies of one trough stepped together
+        (:mod:`dem.engine.gpu_replicas`): each has a cell grid of its own, so none touches another.
+        """
         from numba import cuda
 
         from dem.kernels.cuda import forces, neighbours, step
@@ -60,6 +65,9 @@ class GpuEngine:
         self._prepared = {}
         # a small scene's grid is below numba's occupancy rule of thumb: no warning every step
         warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
+        self.scene_host = None if scene is None else np.asarray(scene, dtype=np.int32)
+        self.scenes = 1 if scene is None else int(self.scene_host.max()) + 1
+        self.last_px = None  # sum over the last call's steps of m_i v_x,i per sphere, kg m/s
         self.snapshot = None  # the host arrays as the last call left them
         self.n = -1
         #: The device's pair list is newer than the host's (:meth:`download_pairs` on demand).
@@ -92,6 +100,10 @@ class GpuEngine:
         self.radius, self.mass = to(s.radius), to(s.mass)
         self.inv_mass, self.inv_inertia = to(s.inv_mass), to(s.inv_inertia)
         self.body = to(s.body)
+        scene = np.zeros(n, dtype=np.int32) if self.scene_host is None else self.scene_host
+        if scene.shape != (n,):
+            raise ValueError(f"{scene.shape[0]} scene numbers for {n} spheres")
+        self.scene = to(scene)
         self.wall = [to(s.wall_hist), to(s.wall_hist)]
         self.x_ref = to(pairs.x_ref)
         self.width = pairs.hist.shape[1]
@@ -166,7 +178,7 @@ class GpuEngine:
             raise FloatingPointError("a sphere's height is not finite at a neighbour build")
         grid = grid_of(zmin, zmax, 2.0 * self.r_max + geom.skin, geom.length, geom.width)
         ncx, ncy, ncz = grid[0], grid[1], grid[2]
-        n_cells = ncx * ncy * ncz
+        n_cells = ncx * ncy * ncz * self.scenes
         while True:
             if self.cell_count.shape[0] < n_cells:
                 self.cell_count = cuda.device_array(_grow(n_cells), dtype=np.int32)
@@ -182,11 +194,12 @@ class GpuEngine:
             self.status.copy_to_device(np.zeros(4, dtype=np.int64))
             self._launch(nb.fill_int_kernel, n_cells)(self.cell_count[:n_cells], 0)
             self._launch(nb.bin_kernel, n)(
-                x, ncx, ncy, ncz, grid[3], grid[4], grid[5], grid[6], geom.width,
+                x, self.scene, ncx, ncy, ncz, grid[3], grid[4], grid[5], grid[6], geom.width,
                 self.cell_count, self.cell_items, self.cell_cap, self.status,
             )  # fmt: skip
             self._launch(nb.scan_kernel, n)(
-                x, self.radius, self.body, geom.skin, geom.length, geom.width, ncx, ncy, ncz,
+                x, self.radius, self.body, self.scene, geom.skin, geom.length, geom.width, ncx,
+                ncy, ncz,
                 grid[3], grid[4], grid[5], grid[6], self.cell_count, self.cell_items,
                 self.cell_cap, self.nbr[0], self.count[0], self.hist[0], self.nbr[1],
                 self.count[1], self.hist[1], self.x_ref, self.status,
@@ -310,7 +323,8 @@ class GpuEngine:
             if self._moved():
                 self.build(sim)
             self._step(sim, (step0 + s + 1) * dt, drive, True, s < n_steps - 1)
-        return float(np.sum(self.px.copy_to_host()))
+        self.last_px = self.px.copy_to_host()
+        return float(np.sum(self.last_px))
 
 
 def _csr(pair_i, pair_j, n, part_start, part_slot) -> None:

@@ -335,10 +335,23 @@ class Simulation(InstabilityChecks):
         if getattr(self, "device", "cpu") != "cuda":
             return None
         if getattr(self, "_gpu_engine", None) is None:
-            from dem.engine.gpu import GpuEngine
-
-            self._gpu_engine = GpuEngine(self)
+            self.use_gpu()
         return self._gpu_engine
+
+    def use_gpu(self, scene=None):
+        """Step on the GPU from now on; ``scene`` as :class:`dem.engine.gpu.GpuEngine`'s.
+
+        Returns the engine.
+        """
+        from dem.engine.gpu import GpuEngine
+
+        self.device = "cuda"
+        self._gpu_engine = GpuEngine(self, scene)
+        return self._gpu_engine
+
+    def drive_array(self) -> np.ndarray:
+        """The drive as the kernels take it (:meth:`dem.physics.drive.Motion.kernel_array`)."""
+        return self._drive()
 
     def _advance_steps(self, n_steps: int) -> None:
         gpu = self._gpu()

@@ -33,7 +33,9 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
 
 def _drop_stale_cache() -> None:
     here = Path(__file__).resolve().parent
-    sources = sorted(here.rglob("*.py")) + [here.parent / "config.py"]
+    # the GPU kernels (cuda/) are compiled at run time, never cached: they stamp nothing here
+    sources = sorted(p for p in here.rglob("*.py") if "cuda" not in p.relative_to(here).parts)
+    sources.append(here.parent / "config.py")
     digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
     cache = here / "__pycache__"
     stamp = cache / "dem-kernels-source.sha256"

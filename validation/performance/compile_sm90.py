@@ -52,9 +52,10 @@ def signatures() -> dict:
             f8, f8, f8, f8, f8, f8, f8, a2, a2)),
         "fill_int_kernel": (neighbours.fill_int_kernel, (i4a, i8)),
         "wrap_kernel": (neighbours.wrap_kernel, (a2, f8, a1)),
-        "bin_kernel": (neighbours.bin_kernel, (a2, *grid, f8, i4a, i4a, i8, i8a)),
+        "bin_kernel": (neighbours.bin_kernel, (a2, i4a, *grid, f8, i4a, i4a, i8, i8a)),
         "scan_kernel": (neighbours.scan_kernel, (
-            a2, a1, i8a, f8, f8, f8, *grid, i4a, i4a, i8, i4a, i4a, a2, i4a, i4a, a2, a2, i8a)),
+            a2, a1, i8a, i4a, f8, f8, f8, *grid, i4a, i4a, i8, i4a, i4a, a2, i4a, i4a, a2, a2,
+            i8a)),
         "reverse_kernel": (neighbours.reverse_kernel, (i4a, i4a, i4a, i4a, i8a)),
         "sort_reverse_kernel": (neighbours.sort_reverse_kernel, (i4a, i4a)),
         "kick_drift_kernel": (step.kick_drift_kernel, (

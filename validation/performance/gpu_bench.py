@@ -323,6 +323,47 @@ def bed_job(args) -> dict:
     return out
 
 
+def batch_job(args) -> dict:
+    """R replicas of the pickled bed in one GPU job (dem.engine.gpu_replicas), timed."""
+    from dem.engine.gpu_replicas import GpuReplicas
+
+    blob = Path(args.state).read_bytes()
+    out = {"runs": [], "loadavg_start": load_loadavg()}
+    for reps, cycles in zip(args.batch, args.batch_cycles, strict=True):
+        rng = np.random.default_rng(reps)
+        sims = []
+        for r in range(reps):
+            sim = pickle.loads(blob)
+            if (
+                r
+            ):  # a replica: the same bed, every velocity nudged by 1e-9 m/s (chaos does the rest)
+                sim.spheres.v += rng.normal(0.0, 1e-9, sim.spheres.v.shape)
+            sims.append(sim)
+        t0 = time.perf_counter()
+        batch = GpuReplicas(sims)
+        setup = time.perf_counter() - t0
+        batch.advance(10)  # compile, upload, first build
+        t0 = time.perf_counter()
+        v = batch.measure(cycles)
+        wall = time.perf_counter() - t0
+        means = v.mean(axis=0)
+        row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
+               "wall_s": round(wall, 2), "setup_s": round(setup, 2),
+               "replica_means_m_s": means.tolist(), "ensemble_mean_m_s": float(means.mean()),
+               "ensemble_standard_error_m_s": float(means.std(ddof=1) / np.sqrt(reps))
+               if reps > 1 else None, "builds": batch.engine.builds,
+               "loadavg": load_loadavg()}  # fmt: skip
+        n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
+        row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
+        print(f"batch {reps} x {cycles} cycles: {wall:.1f} s, "
+              f"{row['sphere_steps_per_s']:.3g} sphere-steps/s, "
+              f"v = {row['ensemble_mean_m_s']:.5f}", flush=True)  # fmt: skip
+        out["runs"].append(row)
+        Path(args.out).write_text(json.dumps(out, indent=1))
+        del batch, sims
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--gpu", action="store_true")
@@ -335,6 +376,20 @@ def main() -> None:
     p.add_argument("--threads", nargs="+", type=int, default=[1, 4, 16])
     p.add_argument("--work", type=float, default=2e9, help="sphere-steps a timed GPU call")
     p.add_argument("--cycles", type=int, default=20)
+    p.add_argument(
+        "--batch",
+        nargs="*",
+        type=int,
+        default=[],
+        help="replica counts: the pickled bed (--state) R times in one GPU job",
+    )
+    p.add_argument(
+        "--batch-cycles",
+        nargs="*",
+        type=int,
+        default=[],
+        help="cycles measured for each --batch count",
+    )
     p.add_argument("--max-registers", nargs="*", type=int, default=[],
                    help="also time the step kernel compiled with at most this many registers, "
                    "at the second-largest size")  # fmt: skip
@@ -348,6 +403,8 @@ def main() -> None:
         bed_state(Path(args.bed_state), max(args.threads))
     if args.bed:
         bed_job(args)
+    if args.batch:
+        batch_job(args)
 
 
 if __name__ == "__main__":

@@ -55,13 +55,19 @@ def wrap_kernel(x, length, zrange):
 
 
 @cuda.jit
-def bin_kernel(x, ncx, ncy, ncz, sx, sy, sz, zmin, width, cell_count, cell_items, cap, status):
-    """Sphere i into its cell's list ``cell_items[c cap : c cap + cap]``; overflow: ``status``."""
+def bin_kernel(
+    x, scene, ncx, ncy, ncz, sx, sy, sz, zmin, width, cell_count, cell_items, cap, status,
+):  # fmt: skip
+    """Sphere i into its cell's list ``cell_items[c cap : c cap + cap]``; overflow: ``status``.
+
+    Each scene (``scene[i]``, :mod:`dem.engine.gpu_replicas`) has a grid of its own, the cells
+    ncx ncy ncz scene[i] onwards: spheres of two scenes are never neighbours.
+    """
     i = cuda.grid(1)
     if i >= x.shape[0]:
         return
     cx, cy, cz = cell_coords(x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, sx, sy, sz, zmin, width)
-    c = (cz * ncy + cy) * ncx + cx
+    c = ((scene[i] * ncz + cz) * ncy + cy) * ncx + cx
     pos = cuda.atomic.add(cell_count, c, 1)
     if pos < cap:
         cell_items[c * cap + pos] = i
@@ -71,10 +77,13 @@ def bin_kernel(x, ncx, ncy, ncz, sx, sy, sz, zmin, width, cell_count, cell_items
 
 @cuda.jit
 def scan_kernel(
-    x, radius, body, skin, length, width, ncx, ncy, ncz, sx, sy, sz, zmin, cell_count, cell_items,
-    cap, nbr_old, count_old, hist_old, nbr, count, hist, x_ref, status,
+    x, radius, body, scene, skin, length, width, ncx, ncy, ncz, sx, sy, sz, zmin, cell_count,
+    cell_items, cap, nbr_old, count_old, hist_old, nbr, count, hist, x_ref, status,
 ):  # fmt: skip
-    """Sphere i's partners j > i into its slots, sorted; their history from i's old slots."""
+    """Sphere i's partners j > i into its slots, sorted; their history from i's old slots.
+
+    Only the cells of sphere i's own scene are searched (:func:`bin_kernel`).
+    """
     i = cuda.grid(1)
     n = x.shape[0]
     if i >= n:
@@ -92,6 +101,7 @@ def scan_kernel(
     zi = x[i, 2]
     ri = radius[i] + skin
     bi = body[i]
+    first_z = scene[i] * ncz
     for oz in range(-1, 2):
         iz = cz + oz
         if iz < 0 or iz >= ncz:
@@ -100,7 +110,7 @@ def scan_kernel(
             iy = cy + oy
             if iy < 0 or iy >= ncy:
                 continue
-            row = (iz * ncy + iy) * ncx
+            row = ((first_z + iz) * ncy + iy) * ncx
             for ox in range(dxs):
                 ix = cx + ox - 1 if dxs == 3 else 0
                 if ix < 0:
