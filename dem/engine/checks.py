@@ -40,12 +40,16 @@ class InstabilityChecks:
         ``what`` is ``"grain K"`` or a wall's name, ``point`` the contact point (3,), m (against
         a trough mesh, the grain's centre); (0, -1, "", nan) if nothing touches. O(spheres + pairs).
         """
-        s, p = self.spheres, self.pairs
+        s = self.spheres
         r = s.radius
         worst, sphere, other, point = 0.0, -1, "", np.full(3, np.nan)
-        k = p.n_pairs
-        if k:
-            i, j = p.pair_i[:k], p.pair_j[:k]
+        gpu = getattr(self, "_gpu_engine", None)
+        if gpu is not None and gpu.pairs_on_device:  # the GPU's deepest pair: no list to copy
+            i, j = gpu.deepest_pair()
+        else:
+            p = self.pairs
+            i, j = p.pair_i[: p.n_pairs], p.pair_j[: p.n_pairs]
+        if i.shape[0]:
             d = self.trough.minimum_image(s.x[i] - s.x[j])
             dist = np.sqrt(np.einsum("ij,ij->i", d, d))
             frac = (r[i] + r[j] - dist) / np.minimum(r[i], r[j])

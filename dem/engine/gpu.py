@@ -129,6 +129,7 @@ class GpuEngine:
         self.status = cuda.to_device(np.zeros(4, dtype=np.int64))
         self.builds = pairs.builds
         self.r_max = float(np.max(s.radius))
+        self.length = float(sim.geom.length)
 
     def download(self, sim) -> None:
         """Bring the host's spheres up to date; the pairs stay on the device until asked for.
@@ -161,6 +162,25 @@ class GpuEngine:
         self.x_ref.copy_to_host(pairs.x_ref)
         _csr(pi, pj, self.n, pairs.part_start, pairs.part_slot)
         self.pairs_on_device = False
+
+    def deepest_pair(self) -> tuple[np.ndarray, np.ndarray]:
+        """The deepest pair overlap now, found on the device: ([a], [b]), or two empty arrays.
+
+        For the instability check, which otherwise reads the whole pair list: O(N) on the
+        device and 12 bytes a sphere across the bus (:func:`dem.kernels.cuda.neighbours.
+        deepest_kernel`). The positions are the last call's (the host's, after a download).
+        """
+        cuda, n = self.cuda, self.n
+        frac = cuda.device_array(n)
+        partner = cuda.device_array(n, dtype=np.int32)
+        self._launch(self.nb.deepest_kernel, n)(
+            self.x[0], self.radius, self.nbr[0], self.count[0], self.length, frac, partner
+        )  # fmt: skip
+        frac, partner = frac.copy_to_host(), partner.copy_to_host()
+        a = int(np.argmax(frac)) if n else 0
+        if not n or partner[a] < 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        return np.array([a]), np.array([int(partner[a])])
 
     # --- the build and the step ---------------------------------------------------------------
 

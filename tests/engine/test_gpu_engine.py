@@ -103,6 +103,13 @@ def test_gpu_steps_equal_the_cpu_engine(model, e, mu, mu_roll, limit, tangential
     for _ in range(3):
         cpu._advance(steps)
         gpu._advance(steps)
+        # the instability check's deepest overlap, from the pairs kept on the GPU
+        assert gpu._gpu_engine.pairs_on_device
+        deep_gpu, deep_cpu = gpu._deepest(), cpu._deepest()
+        assert gpu._gpu_engine.pairs_on_device  # the check did not copy the pairs back
+        assert deep_gpu[1:3] == deep_cpu[1:3]
+        _same(np.array(deep_gpu[0]), np.array(deep_cpu[0]))
+        _same(deep_gpu[3], deep_cpu[3])
         _compare(cpu, gpu)
     assert cpu.pairs.builds >= 3  # the history went through rebuilds
     assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)

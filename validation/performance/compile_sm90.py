@@ -58,6 +58,7 @@ def signatures() -> dict:
             i8a)),
         "reverse_kernel": (neighbours.reverse_kernel, (i4a, i4a, i4a, i4a, i8a)),
         "sort_reverse_kernel": (neighbours.sort_reverse_kernel, (i4a, i4a)),
+        "deepest_kernel": (neighbours.deepest_kernel, (a2, a1, i4a, i4a, f8, a1, i4a)),
         "kick_drift_kernel": (step.kick_drift_kernel, (
             f8, a2, a2, a2, a2, a2, a1, a1, b1, a2, f8, f8, i4a)),
         "step_kernel": (step.step_kernel, (

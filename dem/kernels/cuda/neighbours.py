@@ -22,6 +22,8 @@ that overflows writes what it needs to ``status`` and the host regrows and build
 slots stay untouched until the new ones are complete, so the history survives a regrow.
 """
 
+import math
+
 import numpy as np
 from numba import cuda
 
@@ -215,3 +217,35 @@ def reverse_slots(d_nbr, d_count, rslots: int = 16):
             sort_reverse_kernel[blocks(n), THREADS_PER_BLOCK](d_rev, d_rev_count)
             return d_rev, d_rev_count
         rslots = int(need * 1.5) + 1
+
+
+@cuda.jit
+def deepest_kernel(x, radius, nbr, count, length, frac, partner):
+    """Sphere i's deepest pair among its own slots: overlap over the smaller radius, partner.
+
+    ``frac[i]`` = max over i's partners j of (r_i + r_j - |x_i - x_j|) / min(r_i, r_j) (negative
+    where none touches; -inf without partners), ``partner[i]`` the first j reaching it: the
+    instability check's deepest pair (:meth:`dem.engine.checks.InstabilityChecks.check`) without
+    copying the pair list back.
+    """
+    i = cuda.grid(1)
+    n = x.shape[0]
+    if i >= n:
+        return
+    slots = nbr.shape[0] // n
+    half = 0.5 * length
+    best = -math.inf
+    who = -1
+    for s in range(count[i]):
+        j = nbr[i * slots + s]
+        dx = minimum_image(x[i, 0] - x[j, 0], length, half)
+        dy = x[i, 1] - x[j, 1]
+        dz = x[i, 2] - x[j, 2]
+        f = (radius[i] + radius[j] - math.sqrt(dx * dx + dy * dy + dz * dz)) / min(
+            radius[i], radius[j]
+        )
+        if f > best:
+            best = f
+            who = j
+    frac[i] = best
+    partner[i] = who
