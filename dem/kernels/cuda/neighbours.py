@@ -37,6 +37,18 @@ NEED_REVERSE = 1
 NEED_CELL = 2
 
 
+@cuda.jit(device=True)
+def _sort(a, lo, hi):
+    """Insertion sort of a[lo:hi] (a few dozen entries), as the CPU engine sorts its slots."""
+    for k in range(lo + 1, hi):
+        v = a[k]
+        m = k - 1
+        while m >= lo and a[m] > v:
+            a[m + 1] = a[m]
+            m -= 1
+        a[m + 1] = v
+
+
 @cuda.jit
 def fill_int_kernel(a, value):
     """a[:] = value."""
@@ -136,14 +148,7 @@ def scan_kernel(
     if found > slots:
         cuda.atomic.max(status, NEED_SLOTS, found)
         return
-    # insertion sort by j: the slots in order are the CPU engine's keys i n + j
-    for a in range(base + 1, base + found):
-        v = nbr[a]
-        b = a - 1
-        while b >= base and nbr[b] > v:
-            nbr[b + 1] = nbr[b]
-            b -= 1
-        nbr[b + 1] = v
+    _sort(nbr, base, base + found)  # by j: the slots in order are the CPU engine's keys i n + j
     # history by partner: one merge of the new and the old sorted partners
     m = 0
     old_base = i * old_slots
@@ -190,14 +195,7 @@ def sort_reverse_kernel(rev, rev_count):
     if b >= n:
         return
     rslots = rev.shape[0] // n
-    base = b * rslots
-    for a in range(base + 1, base + min(rev_count[b], rslots)):
-        v = rev[a]
-        c = a - 1
-        while c >= base and rev[c] > v:
-            rev[c + 1] = rev[c]
-            c -= 1
-        rev[c + 1] = v
+    _sort(rev, b * rslots, b * rslots + min(rev_count[b], rslots))
 
 
 def reverse_slots(d_nbr, d_count, rslots: int = 16):
