@@ -3,10 +3,10 @@
 ``device = "cpu"`` (the default) runs everywhere. ``device = "cuda"`` needs numba's CUDA target
 to work on this machine: a GPU and its driver with numba-cuda (``pip install -e '.[cuda]'``), or
 numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, set before numba is imported; slow, for
-tests). The GPU engine steps plain spheres between flat walls in a periodic section, under the
-drive and every contact law; it does not have rigid clumps, trough meshes or the finite feeder
-yet, and a case that asks for one of them with ``device = "cuda"`` is refused here, naming the
-key that asks for it. :func:`check_device` runs at the door of ``dem run``, ``dem plan`` and
+tests). The GPU engine steps spheres and rigid clumps between flat walls in a periodic section,
+under the drive and every contact law; it does not have trough meshes or the finite feeder yet,
+and a case that asks for one of them with ``device = "cuda"`` is refused here, naming the key
+that asks for it. :func:`check_device` runs at the door of ``dem run``, ``dem plan`` and
 ``dem sweep``, before anything is filled or written; its errors are
 :class:`dem.errors.InputError`, which the command line ends with exit status 2.
 """
@@ -30,10 +30,10 @@ def check_device(device: str, scene) -> None:
             :class:`dem.scene.case.Case`.
 
     Raises:
-        InputError: for ``"cuda"``: naming ``particles.shape`` (rigid clumps), ``trough.mesh``
-            (a U or V pan) or ``feeder`` (a finite trough) in the case file, which the GPU
-            engine does not have yet; or naming ``run.device`` when numba's CUDA cannot run
-            here (numba-cuda missing, or no GPU or driver: numba's reason is quoted).
+        InputError: for ``"cuda"``: naming ``trough.mesh`` (a U or V pan) or ``feeder`` (a
+            finite trough) in the case file, which the GPU engine does not have yet; or naming
+            ``run.device`` when numba's CUDA cannot run here (numba-cuda missing, or no GPU or
+            driver: numba's reason is quoted).
             For a device other than ``"cpu"`` and ``"cuda"``, naming ``run.device``.
 
     """
@@ -50,12 +50,6 @@ def _check_features(case) -> None:
     """Refuse the features the GPU engine lacks, each by the key that asks for it."""
     source = str(case.source)
     gpu = 'under run.device = "cuda"'
-    if case.particles.shape != "sphere":
-        raise InputError(
-            "particles.shape", case.particles.shape,
-            f'"sphere" {gpu}: the GPU engine has no rigid clumps (screws, clumps) yet; '
-            f"{USE_CPU}", source,
-        )  # fmt: skip
     if case.trough.mesh is not None:
         raise InputError(
             "trough.mesh", str(case.trough.mesh),

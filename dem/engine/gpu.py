@@ -12,12 +12,21 @@ cross only when read (a checkpoint, the summary) and then cost a sort on the hos
 
 The step is the CPU engine's (:mod:`dem.kernels.cuda.step`), the pair list the CPU engine's in
 per-sphere slots (:mod:`dem.kernels.cuda.neighbours`), the force the CPU engine's contact law
-compiled for the GPU (:mod:`dem.kernels.cuda.forces`). Plain spheres with flat walls only: clumps,
-meshes and feeders are refused before a run starts.
+compiled for the GPU (:mod:`dem.kernels.cuda.forces`), rigid clumps the CPU engine's clump step
+(:mod:`dem.kernels.cuda.bodies`). Flat walls only: meshes and feeders are refused before a run
+starts.
+
+The host does not wait for each step: it queues up to :attr:`GpuEngine.chunk` step launches and
+then reads the rebuild trip once (:mod:`dem.kernels.cuda.step`). The launches queued after the
+step that tripped do nothing; the host rebuilds and relaunches from there. The chunk follows the
+steps between the last two rebuilds (half of them, 2 to :data:`MAX_CHUNK`), so that few launches
+are wasted and the GPU is not kept waiting for the host.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import os
 import warnings
@@ -34,12 +43,18 @@ START_SLOTS = 16
 START_CELL = 16
 #: numba's CUDA simulator runs the kernels as Python: launches go the ordinary way there.
 SIMULATOR = os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
-#: Arguments of :func:`dem.kernels.cuda.step.step_kernel` that change from step to step.
-_AX, _AY, _AZ, _NEXT_DRIFT = 25, 26, 27, 30
+#: The most step launches queued before the host reads the rebuild trip.
+MAX_CHUNK = 64
 
 
 def _grow(need: int) -> int:
     return int(need * DEM_GROWTH_FACTOR) + 1
+
+
+@functools.cache
+def _position(kernel, name: str) -> int:
+    """The position of argument ``name`` of a numba.cuda kernel."""
+    return list(inspect.signature(kernel.py_func).parameters).index(name)
 
 
 class GpuEngine:
@@ -53,12 +68,18 @@ class GpuEngine:
         """
         from numba import cuda
 
-        from dem.kernels.cuda import forces, neighbours, step
+        from dem.kernels.cuda import bodies, forces, neighbours, step
         from dem.kernels.cuda.forces import law_rows
 
-        if sim.bodies is not None or sim.mesh is not None or sim.feeder is not None:
-            raise ValueError("the GPU engine steps plain spheres with flat walls only")
+        if sim.mesh is not None or sim.feeder is not None:
+            raise ValueError("the GPU engine steps spheres and clumps with flat walls only")
         self.cuda, self.forces, self.nb, self.step = cuda, forces, neighbours, step
+        self.bodies = bodies
+        self.NO_TRIP = step.NO_TRIP
+        #: The step launches queued before the trip is read; it follows the rebuild interval.
+        self.chunk = 4
+        self.skipped = 0  # launches queued after a trip (done nothing), in all
+        self._since_build = 0  # steps since the last build
         self.rows = law_rows(sim.law.params)
         #: Launch the step through :class:`dem.kernels.cuda.launch.PreparedLaunch` (on a GPU).
         self.fast = not SIMULATOR
@@ -75,13 +96,21 @@ class GpuEngine:
 
     # --- host <-> device ----------------------------------------------------------------------
 
+    @staticmethod
+    def _state(sim) -> tuple:
+        """The host arrays a step starts from (the bodies' too); :meth:`_stale` compares them."""
+        s, b = sim.spheres, sim.bodies
+        arrays = (s.x, s.v, s.omega)
+        if b is not None:
+            arrays += (b.x, b.v, b.q, b.ang_mom)
+        return arrays
+
     def _stale(self, sim) -> bool:
-        s = sim.spheres
-        if self.snapshot is None or s.n != self.n:
+        if self.snapshot is None or sim.spheres.n != self.n:
             return True
-        x, v, omega = self.snapshot
-        return not (
-            np.array_equal(x, s.x) and np.array_equal(v, s.v) and np.array_equal(omega, s.omega)
+        now = self._state(sim)
+        return len(now) != len(self.snapshot) or not all(
+            np.array_equal(a, b) for a, b in zip(now, self.snapshot, strict=True)
         )
 
     def upload(self, sim) -> None:
@@ -118,13 +147,24 @@ class GpuEngine:
         self.cell_cap = START_CELL
         self.cell_count = cuda.device_array(0, dtype=np.int32)
         self.cell_items = cuda.device_array(0, dtype=np.int32)
-        self.px = cuda.to_device(np.zeros(n))
-        # the rebuild flag: mapped host memory on a GPU (read without a copy after each step)
+        b = sim.bodies
+        self.n_bodies = 0 if b is None else b.n
+        if b is not None:
+            self.body_x, self.body_v, self.q = to(b.x), to(b.v), to(b.q)
+            self.ang_mom, self.body_omega = to(b.ang_mom), to(b.omega)
+            self.body_force, self.body_torque = to(b.force), to(b.torque)
+            self.body_mass, self.body_inv_mass, self.moments = (
+                to(b.mass), to(b.inv_mass), to(b.moments),
+            )  # fmt: skip
+            self.start, self.members, self.offsets = to(b.start), to(b.members), to(b.offsets)
+        self.px = cuda.to_device(np.zeros(max(n, self.n_bodies)))
+        # the rebuild trip: mapped host memory on a GPU (read without a copy)
+        none = np.full(1, self.NO_TRIP, dtype=np.int64)
         if SIMULATOR:
-            self.flag = cuda.to_device(np.zeros(1, dtype=np.int32))
+            self.trip = cuda.to_device(none)
         else:
-            self.flag = cuda.mapped_array(1, dtype=np.int32)
-            self.flag[0] = 0
+            self.trip = cuda.mapped_array(1, dtype=np.int64)
+            self.trip[0] = self.NO_TRIP
         self._prepared.clear()
         self.status = cuda.to_device(np.zeros(4, dtype=np.int64))
         self.builds = pairs.builds
@@ -143,8 +183,15 @@ class GpuEngine:
         self.force.copy_to_host(s.force)
         self.torque.copy_to_host(s.torque)
         self.wall[0].copy_to_host(s.wall_hist)
+        b = sim.bodies
+        if b is not None:
+            for name, array in (
+                ("body_x", b.x), ("body_v", b.v), ("q", b.q), ("ang_mom", b.ang_mom),
+                ("body_omega", b.omega), ("body_force", b.force), ("body_torque", b.torque),
+            ):  # fmt: skip
+                getattr(self, name).copy_to_host(array)
         self.pairs_on_device = True
-        self.snapshot = (s.x.copy(), s.v.copy(), s.omega.copy())
+        self.snapshot = tuple(a.copy() for a in self._state(sim))
 
     def download_pairs(self, pairs) -> None:
         """Copy the pair list, its springs, x_ref and the CPU's CSR index into ``pairs``."""
@@ -241,66 +288,127 @@ class GpuEngine:
                                                     self.rev.shape[0] // n)  # fmt: skip
         self.builds += 1
         self._prepared.clear()  # new slot arrays
+        self.chunk = max(2, min(MAX_CHUNK, self._since_build // 2))
+        self._since_build = 0
 
-    def _step(self, sim, t: float, drive, kick: bool, next_drift: bool) -> None:
+    def _sphere_args(self, sim, seq, ax, ay, az, kick, next_drift) -> tuple:
+        """The arguments of :func:`dem.kernels.cuda.step.step_kernel` for the buffers now."""
         geom = sim.geom
-        ax, ay, az = body_acceleration(t, sim.gravity, drive)
         p, pw = self.rows
         x, v, om = self.x, self.v, self.omega
-        args = (
-            sim.law.model_id, p, pw, x[0], v[0], om[0], x[1], v[1], om[1], self.radius,
-            self.mass, self.inv_mass, self.inv_inertia, self.nbr[0], self.count[0], self.rev,
-            self.rev_count, self.hist[0], self.hist[1], self.wall[0], self.wall[1], geom.length,
-            0.5 * geom.width, geom.back, geom.dt, ax, ay, az, sim.rotation, kick, next_drift,
-            self.x_ref, 0.25 * geom.skin * geom.skin, self.flag, self.force, self.torque,
+        return (
+            seq, self.trip, sim.law.model_id, p, pw, x[0], v[0], om[0], x[1], v[1], om[1],
+            self.radius, self.mass, self.inv_mass, self.inv_inertia, self.nbr[0], self.count[0],
+            self.rev, self.rev_count, self.hist[0], self.hist[1], self.wall[0], self.wall[1],
+            geom.length, 0.5 * geom.width, geom.back, geom.dt, ax, ay, az, sim.rotation, kick,
+            next_drift, self.x_ref, 0.25 * geom.skin * geom.skin, self.force, self.torque,
             self.px,
         )  # fmt: skip
-        launch = self._prepared_step(args) if self.fast and kick else None
+
+    def _body_args(self, sim, seq, ax, ay, az, next_drift) -> tuple:
+        """The arguments of :func:`dem.kernels.cuda.bodies.bodies_kernel`."""
+        geom = sim.geom
+        return (
+            seq, self.trip, geom.dt, ax, ay, az, sim.rotation, next_drift, self.force,
+            self.torque, self.x[0], self.v[0], self.omega[0], self.body_x, self.body_v, self.q,
+            self.ang_mom, self.body_force, self.body_torque, self.body_omega, self.body_inv_mass,
+            self.body_mass, self.moments, self.offsets, self.start, self.members, self.x_ref,
+            geom.length, 0.25 * geom.skin * geom.skin, self.px,
+        )  # fmt: skip
+
+    def _run(self, kernel, n, key, args, changing) -> None:
+        """Launch ``kernel`` over n threads with ``args``.
+
+        On a GPU the launch is prepared once per ``key`` and only the arguments named in
+        ``changing`` are set anew.
+        """
+        launch = self._prepared_launch(kernel, n, key, args) if self.fast else None
         if launch is None:
-            self._launch(self.step.step_kernel, self.n)(*args)
+            self._launch(kernel, n)(*args)
+            return
+        for name in changing:
+            i = _position(kernel, name)
+            value = args[i]
+            if isinstance(value, bool):
+                launch.set_bool(i, value)
+            elif isinstance(value, int):
+                launch.set_int(i, value)
+            else:
+                launch.set_float(i, value)
+        launch()
+
+    def _step(self, sim, seq: int, t: float, drive, kick: bool, next_drift: bool) -> None:
+        """Launch step ``seq`` at time t.
+
+        Spheres: the step kernel. Clumps: the members' forces, then the bodies' step. With
+        ``kick`` False the forces alone (for clumps reduced to the bodies).
+        """
+        ax, ay, az = body_acceleration(t, sim.gravity, drive)
+        clumps = self.n_bodies > 0
+        step = self.step.step_kernel
+        if clumps:
+            args = self._sphere_args(sim, seq, 0.0, 0.0, 0.0, False, False)
+            key = ("forces", id(self.hist[0]), id(self.wall[0]))
+            self._run(step, self.n, key, args, ("seq",))
         else:
-            launch.set_float(_AX, ax)
-            launch.set_float(_AY, ay)
-            launch.set_float(_AZ, az)
-            launch.set_bool(_NEXT_DRIFT, next_drift)
-            launch()
+            args = self._sphere_args(sim, seq, ax, ay, az, kick, next_drift)
+            key = ("step", kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
+            self._run(step, self.n, key, args, ("seq", "ax", "ay", "az", "next_drift"))
+        self._swap(kick and not clumps)
+        if not clumps:
+            return
+        if kick:
+            self._run(
+                self.bodies.bodies_kernel, self.n_bodies, ("bodies",),
+                self._body_args(sim, seq, ax, ay, az, next_drift),
+                ("seq", "ax", "ay", "az", "next_drift"),
+            )  # fmt: skip
+        else:
+            self._launch(self.bodies.reduce_kernel, self.n_bodies)(
+                self.force, self.torque, self.x[0], self.body_x, self.start, self.members,
+                sim.geom.length, self.body_mass, ax, ay, az, self.body_force, self.body_torque,
+            )  # fmt: skip
+
+    def _swap(self, state: bool) -> None:
+        """The other history buffers (and with ``state``, the other sphere buffers) are current."""
         self.hist.reverse()
         self.wall.reverse()
-        if kick:
-            x.reverse()
-            v.reverse()
-            om.reverse()
+        if state:
+            self.x.reverse()
+            self.v.reverse()
+            self.omega.reverse()
 
-    def _prepared_step(self, args):
-        """The step's launch for the current buffers, prepared once (None: not possible)."""
+    def _prepared_launch(self, kernel, n, key, args):
+        """The launch of ``kernel`` for ``key``'s buffers, prepared once (None: not possible)."""
         from dem.kernels.cuda.launch import prepare
 
-        key = (id(self.x[0]), id(self.hist[0]), id(self.wall[0]), args[1:3], args[21:25])
         launch = self._prepared.get(key)
         if launch is None:
-            launch = prepare(
-                self.step.step_kernel, self.forces.blocks(self.n),
-                self.forces.THREADS_PER_BLOCK, args,
-            )  # fmt: skip
+            launch = prepare(kernel, self.forces.blocks(n), self.forces.THREADS_PER_BLOCK, args)
             if launch is None:
                 self.fast = False
                 return None
             self._prepared[key] = launch
         return launch
 
-    def _moved(self) -> bool:
-        """Whether the last kick and drift moved a sphere past skin/2; resets the flag."""
+    def _read_trip(self) -> int:
+        """The ``seq`` of the launch that tripped a rebuild, or ``NO_TRIP``; waits for the queue."""
         if SIMULATOR:
-            flag = self.flag.copy_to_host()
-            if flag[0]:
-                self.flag.copy_to_device(np.zeros(1, dtype=np.int32))
-                return True
-            return False
+            return int(self.trip.copy_to_host()[0])
         self.cuda.synchronize()
-        if self.flag[0]:
-            self.flag[0] = 0
-            return True
-        return False
+        return int(self.trip[0])
+
+    def _reset_trip(self) -> None:
+        if SIMULATOR:
+            self.trip.copy_to_device(np.full(1, self.NO_TRIP, dtype=np.int64))
+        else:
+            self.trip[0] = self.NO_TRIP
+
+    def _evaluate(self, sim, drive) -> None:
+        """Rebuild and evaluate the forces at the current state, no kick."""
+        self._reset_trip()
+        self.build(sim)
+        self._step(sim, 0, sim.drive_time, drive, False, False)
 
     def compute_forces(self, sim, drive) -> None:
         """Rebuild and evaluate forces at the current state (no kick), as the CPU engine does.
@@ -309,15 +417,14 @@ class GpuEngine:
         """
         if self._stale(sim):
             self.upload(sim)
-        self.build(sim)
-        self._step(sim, sim.drive_time, drive, False, False)
+        self._evaluate(sim, drive)
         self.download(sim)
 
     def advance(self, sim, n_steps: int, step0: int, drive) -> float:
         """``n_steps`` steps from step index ``step0``, then the host's arrays brought up to date.
 
         t = step dt; ``drive`` as :meth:`compute_forces`. Returns the sum over the steps of
-        sum_i m_i v_x,i, kg m/s.
+        sum_i m_i v_x,i (over the bodies for clumps), kg m/s.
         """
         px = self.steps(sim, n_steps, step0, drive)
         self.download(sim)
@@ -328,21 +435,40 @@ class GpuEngine:
         if self._stale(sim):
             self.upload(sim)
         if not sim.forces_valid:
-            self.build(sim)
-            self._step(sim, sim.drive_time, drive, False, False)
+            self._evaluate(sim, drive)
             sim.forces_valid = True
         geom = sim.geom
-        dt = geom.dt
-        self.px.copy_to_device(np.zeros(self.n))
-        self._launch(self.step.kick_drift_kernel, self.n)(
-            dt, self.x[0], self.v[0], self.omega[0], self.force, self.torque, self.inv_mass,
-            self.inv_inertia, sim.rotation, self.x_ref, geom.length,
-            0.25 * geom.skin * geom.skin, self.flag,
-        )  # fmt: skip
-        for s in range(n_steps):
-            if self._moved():
+        dt, limit = geom.dt, 0.25 * geom.skin * geom.skin
+        self.px.copy_to_device(np.zeros(self.px.shape[0]))
+        self._reset_trip()
+        if self.n_bodies:
+            self._launch(self.bodies.half_step_kernel, self.n_bodies)(
+                0, self.trip, dt, sim.rotation, self.body_x, self.body_v, self.q, self.ang_mom,
+                self.body_force, self.body_torque, self.body_inv_mass, self.moments,
+                self.body_omega, self.offsets, self.start, self.members, self.x[0], self.v[0],
+                self.omega[0], self.x_ref, geom.length, limit,
+            )  # fmt: skip
+        else:
+            self._launch(self.step.kick_drift_kernel, self.n)(
+                0, self.trip, dt, self.x[0], self.v[0], self.omega[0], self.force, self.torque,
+                self.inv_mass, self.inv_inertia, sim.rotation, self.x_ref, geom.length, limit,
+            )  # fmt: skip
+        trip = self._read_trip()
+        s = 0
+        while s < n_steps:
+            if trip != self.NO_TRIP:
+                self._reset_trip()
                 self.build(sim)
-            self._step(sim, (step0 + s + 1) * dt, drive, True, s < n_steps - 1)
+            chunk = min(self.chunk, n_steps - s)
+            for k in range(s, s + chunk):
+                self._step(sim, k + 1, (step0 + k + 1) * dt, drive, True, k < n_steps - 1)
+            trip = self._read_trip()
+            done = chunk if trip == self.NO_TRIP else trip - s
+            if (chunk - done) % 2:  # the skipped launches swapped no buffers
+                self._swap(self.n_bodies == 0)
+            self.skipped += chunk - done
+            self._since_build += done
+            s += done
         self.last_px = self.px.copy_to_host()
         return float(np.sum(self.last_px))
 

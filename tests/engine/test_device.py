@@ -19,7 +19,6 @@ U_PAN = {"trough.length": 0.12, "trough.width": 0.06,
          "trough.mesh": str(CASES / "geometry" / "u_trough.stl")}  # fmt: skip
 #: What the GPU engine lacks: (the case, its overrides, the key a refusal names).
 REFUSED = [
-    ("screws", {}, "particles.shape"),
     ("mesh", U_PAN, "trough.mesh"),
     ("feeder", {"feeder.feed_rate": 0.0}, "feeder"),
 ]
@@ -155,20 +154,20 @@ def test_cpu_is_never_refused(tmp_path, no_gpu):
     check_device("cpu", load_case(CASES / "screw-trough"))
 
 
-def test_plain_spheres_pass_where_numba_cuda_works(tmp_path, gpu):
+def test_spheres_and_clumps_pass_where_numba_cuda_works(tmp_path, gpu):
     case = load_case(write_case(tmp_path), {"run.device": "cuda"})
     check_device("cuda", case)
     from dem.scene.resolved import resolve
 
     check_device("cuda", resolve(case))  # a resolved scene as well as a case
+    check_device("cuda", load_case(CASES / "screw-trough", {"run.device": "cuda"}))
 
 
 @pytest.mark.parametrize("name, overrides, key", REFUSED)
 def test_what_the_gpu_engine_lacks_is_refused_naming_its_key(
     capsys, tmp_path, gpu, name, overrides, key
 ):
-    case_dir = CASES / "screw-trough" if name == "screws" else write_case(tmp_path / name)
-    case = load_case(case_dir, overrides | {"run.device": "cuda"})
+    case = load_case(write_case(tmp_path / name), overrides | {"run.device": "cuda"})
     with pytest.raises(InputError) as info:
         check_device("cuda", case)
     err = info.value
@@ -180,7 +179,7 @@ def test_what_the_gpu_engine_lacks_is_refused_naming_its_key(
 @pytest.mark.integration
 def test_dem_run_refuses_them_with_exit_2_naming_the_key(capsys, tmp_path, gpu):
     for name, overrides, key in REFUSED:
-        case_dir = CASES / "screw-trough" if name == "screws" else write_case(tmp_path / name)
+        case_dir = write_case(tmp_path / name)
         sets = [a for k, v in overrides.items() for a in ("--set", f"{k}={v}")]
         code, _, text = run_cli(capsys, "run", case_dir, "--out", tmp_path / "out", "--device",
                                 "cuda", *sets)  # fmt: skip

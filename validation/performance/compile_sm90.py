@@ -37,7 +37,7 @@ def signatures() -> dict:
     from numba import types
 
     from dem.kernels.contact import N_PARAMS
-    from dem.kernels.cuda import forces, neighbours, step
+    from dem.kernels.cuda import bodies, forces, neighbours, step
 
     f8, i8, b1 = types.float64, types.int64, types.boolean
     a2 = types.Array(f8, 2, "C")
@@ -60,10 +60,18 @@ def signatures() -> dict:
         "sort_reverse_kernel": (neighbours.sort_reverse_kernel, (i4a, i4a)),
         "deepest_kernel": (neighbours.deepest_kernel, (a2, a1, i4a, i4a, f8, a1, i4a)),
         "kick_drift_kernel": (step.kick_drift_kernel, (
-            f8, a2, a2, a2, a2, a2, a1, a1, b1, a2, f8, f8, i4a)),
+            i8, i8a, f8, a2, a2, a2, a2, a2, a1, a1, b1, a2, f8, f8)),
         "step_kernel": (step.step_kernel, (
-            i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a, a2, a2,
-            a2, a2, f8, f8, f8, f8, f8, f8, f8, b1, b1, b1, a2, f8, i4a, a2, a2, a1)),
+            i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a,
+            a2, a2, a2, a2, f8, f8, f8, f8, f8, f8, f8, b1, b1, b1, a2, f8, a2, a2, a1)),
+        "reduce_kernel": (bodies.reduce_kernel, (
+            a2, a2, a2, a2, i8a, i8a, f8, a1, f8, f8, f8, a2, a2)),
+        "half_step_kernel": (bodies.half_step_kernel, (
+            i8, i8a, f8, b1, a2, a2, a2, a2, a2, a2, a1, a2, a2, a2, i8a, i8a, a2, a2, a2, a2,
+            f8, f8)),
+        "bodies_kernel": (bodies.bodies_kernel, (
+            i8, i8a, f8, f8, f8, f8, b1, b1, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a1,
+            a1, a2, a2, i8a, i8a, a2, f8, f8, a1)),
     }  # fmt: skip
 
 

@@ -15,6 +15,9 @@ starts them), each writing one JSON:
 ``--bed``   the sphere-bed case itself (1500 spheres): filled and settled on the CPU, then the
             same state measured ``--cycles`` cycles on the CPU and on the GPU: the conveying
             velocity of each with its standard error.
+``--clumps`` clump-steps/s of the screw-trough case's screws (8-sphere rigid clumps) on a
+            lattice of ``--clump-sizes`` screws, ``--device`` cuda or cpu (at each of
+            ``--threads``), the case's law, step and drive.
 
 Usage: python validation/performance/gpu_bench.py --gpu --out gpu.json [--sizes 1e4 1e5]
 """
@@ -38,6 +41,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 CASE = ROOT / "cases" / "sphere-bed"
+SCREWS = ROOT / "cases" / "screw-trough"
 #: The lattice's depth in layers (the sphere-bed case: 1500 spheres of r = 2 mm on 0.10 x 0.04 m
 #: are about 7 layers) and its width in spheres.
 LAYERS = 7
@@ -71,6 +75,74 @@ def lattice_sim(n: int, device: str, seed: int = 1):
     return sim
 
 
+def screw_lattice_sim(n: int, device: str, seed: int = 1):
+    """The screw-trough case's screws on a jittered lattice of about n, lying along the axes."""
+    from dem.engine.setup import from_grains
+    from dem.scene.case import load_case
+
+    case = load_case(SCREWS)
+    one = from_grains(case, [[0.05, 0.0, 0.01]])
+    x = one.spheres.x - one.bodies.x[0]
+    r = one.spheres.radius[:, None]
+    lo, hi = (x - r).min(axis=0), (x + r).max(axis=0)
+    a = (hi - lo) * (1.0 - 1.0e-3)  # boxes touching: contacts from the start
+    across = int(case.trough.width * 2 / a[1])
+    rows = max(2, round(n / (across * LAYERS)))  # a period of 2 screws at least
+    length, width = rows * a[0], across * a[1]
+    case = load_case(SCREWS, {"trough.length": length, "trough.width": width})
+    i, j, k = np.meshgrid(np.arange(rows), np.arange(across), np.arange(LAYERS), indexing="ij")
+    rng = np.random.default_rng(seed)
+    centre = np.column_stack(
+        [(i.ravel() + 0.5) * a[0], (j.ravel() + 0.5) * a[1] - width / 2, k.ravel() * a[2]]
+    ) - lo - 0.5 * a + np.array([0.0, 0.0, 0.5 * a[2]])  # fmt: skip
+    centre[:, :2] += rng.uniform(-0.002, 0.002, (centre.shape[0], 2)) * a[:2]
+    sim = from_grains(case, centre, timestep=case.run.timestep)
+    sim.device = device
+    sim.start_drive()
+    return sim
+
+
+def clumps_job(args) -> dict:
+    """Clump-steps/s of screw lattices on ``args.device`` (CPU: at each thread count)."""
+    import numba
+
+    out = {"device": args.device, "sizes": [], "loadavg_start": load_loadavg()}
+    for n in args.clump_sizes:
+        n = int(float(n))
+        threads = args.threads if args.device == "cpu" else [None]
+        try:
+            sim = screw_lattice_sim(n, args.device)
+            if args.device == "cpu":
+                numba.set_num_threads(max(threads))
+            sim._advance(200)  # compile, upload, the lattice starts to shake
+            for t in threads:
+                if t is not None:
+                    numba.set_num_threads(t)
+                sim._advance(5)
+                steps = int(max(50, min(4000, args.work / 8 / sim.bodies.n * (t or 50))))
+                t0 = time.perf_counter()
+                sim._advance(steps)
+                wall = time.perf_counter() - t0
+                row = {"screws": sim.bodies.n, "spheres": sim.spheres.n, "threads": t,
+                       "steps": steps, "wall_s": round(wall, 3),
+                       "clump_steps_per_s": sim.bodies.n * steps / wall,
+                       "contacts": int(sim.contact_counts().sum()),
+                       "finite": bool(np.all(np.isfinite(sim.bodies.x))),
+                       "loadavg": load_loadavg()}  # fmt: skip
+                if args.device == "cuda":
+                    eng = sim._gpu_engine
+                    row.update(builds=eng.builds, skipped_launches=eng.skipped, chunk=eng.chunk)
+                print(f"{args.device} {sim.bodies.n} screws x{t}: "
+                      f"{row['clump_steps_per_s']:.3g} clump-steps/s", flush=True)  # fmt: skip
+                out["sizes"].append(row)
+            del sim
+        except Exception:  # noqa: BLE001  (the next size may still run)
+            out["sizes"].append({"screws_asked": n, "error": traceback.format_exc()})
+            print(out["sizes"][-1]["error"], flush=True)
+        Path(args.out).write_text(json.dumps(out, indent=1))
+    return out
+
+
 def _first(value) -> int:
     """One figure of numba-cuda's per-signature dict (or the figure itself)."""
     return int(next(iter(value.values())) if isinstance(value, dict) else value)
@@ -78,10 +150,10 @@ def _first(value) -> int:
 
 def kernel_resources() -> dict:
     """Registers and local memory (spills) per thread of every compiled GPU kernel."""
-    from dem.kernels.cuda import forces, neighbours, step
+    from dem.kernels.cuda import bodies, forces, neighbours, step
 
     out = {}
-    for mod in (forces, neighbours, step):
+    for mod in (forces, neighbours, step, bodies):
         for name in dir(mod):
             k = getattr(mod, name)
             if not name.endswith("_kernel") or not hasattr(k, "overloads"):
@@ -368,6 +440,8 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--gpu", action="store_true")
     p.add_argument("--cpu", action="store_true")
+    p.add_argument("--clumps", action="store_true", help="screw lattices on --device")
+    p.add_argument("--clump-sizes", nargs="+", default=["1e4", "1e5"])
     p.add_argument("--bed-state", metavar="PKL", help="fill and settle the sphere-bed, pickle it")
     p.add_argument("--bed", action="store_true", help="measure the pickled bed (--state)")
     p.add_argument("--state", default="/tmp/bed.pkl")
@@ -405,6 +479,8 @@ def main() -> None:
         bed_job(args)
     if args.batch:
         batch_job(args)
+    if args.clumps:
+        clumps_job(args)
 
 
 if __name__ == "__main__":

@@ -45,12 +45,19 @@ class PreparedLaunch:
         """Argument ``index`` (a float64) takes ``value`` at the next launch."""
         self.kernelargs[self.positions[index]] = ctypes.c_double(value)
 
+    def set_int(self, index: int, value: int) -> None:
+        """Argument ``index`` (an int64) takes ``value`` at the next launch."""
+        self.kernelargs[self.positions[index]] = ctypes.c_int64(value)
+
     def set_bool(self, index: int, value: bool) -> None:
         """Argument ``index`` (a boolean) takes ``value`` at the next launch."""
         self.kernelargs[self.positions[index]] = bool(value)
 
     def __call__(self) -> None:
-        """Launch the kernel with the arguments as they stand."""
+        """Launch the kernel with the arguments as they stand.
+
+        The driver copies them at the call: they may change before the launch runs.
+        """
         from cuda.core import launch
 
         launch(self.stream, self.config, self.function, *self.kernelargs)

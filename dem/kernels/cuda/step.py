@@ -11,14 +11,22 @@ so that in numba's CUDA simulator the trajectories are the CPU engine's to the b
   ``x2, v2, omega2``: nothing a thread writes is read by another within the launch. The host
   swaps the buffers after each launch.
 
-Both flag a rebuild (``flag[0] = 1``) when sphere i has moved more than skin/2 since the last
-build, the CPU engine's criterion (any sphere past it rebuilds them all).
+Both flag a rebuild when sphere i has moved more than skin/2 since the last build, the CPU
+engine's criterion (any sphere past it rebuilds them all), by writing their launch's number
+``seq`` into ``trip[0]`` (:data:`NO_TRIP`: none yet). A launch whose ``seq`` is above
+``trip[0]`` does nothing: the host queues several steps without waiting for each one's flag,
+and the steps queued after the one that flagged are no-ops, relaunched after the rebuild
+(:meth:`dem.engine.gpu.GpuEngine.steps`). The kick-drift launch is ``seq`` 0, step k of a call
+``seq`` k + 1.
 """
 
 from numba import cuda
 
 from dem.kernels.cuda.forces import sphere_force
 from dem.kernels.periodic import minimum_image
+
+#: ``trip[0]`` when no sphere has moved past skin/2 (above every launch's ``seq``).
+NO_TRIP = 1 << 62
 
 
 @cuda.jit(device=True)
@@ -32,11 +40,12 @@ def _moved_past(x, x_ref, i, length, limit):
 
 @cuda.jit
 def kick_drift_kernel(
-    dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation, x_ref, length, limit, flag,
+    seq, trip, dt, x, v, omega, force, torque, inv_mass, inv_inertia, rotation, x_ref, length,
+    limit,
 ):  # fmt: skip
-    """Half kick of v (and omega if ``rotation``) with the stored force, then drift x; flag."""
+    """Half kick of v (and omega if ``rotation``) with the stored force, then drift x; trip."""
     i = cuda.grid(1)
-    if i >= x.shape[0]:
+    if i >= x.shape[0] or trip[0] < seq:
         return
     h = 0.5 * dt
     a = h * inv_mass[i]
@@ -48,24 +57,24 @@ def kick_drift_kernel(
         for c in range(3):
             omega[i, c] += b * torque[i, c]
     if _moved_past(x, x_ref, i, length, limit):
-        flag[0] = 1
+        trip[0] = seq
 
 
 @cuda.jit
 def step_kernel(
-    model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia, nbr, count,
-    rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back, dt, ax, ay,
-    az, rotation, kick, next_drift, x_ref, limit, flag, force, torque, px,
+    seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
+    nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back,
+    dt, ax, ay, az, rotation, kick, next_drift, x_ref, limit, force, torque, px,
 ):  # fmt: skip
     """Thread i: the force on sphere i, then its kicks and drift into the other buffers.
 
     With ``kick`` the second half kick goes into ``v2``, ``omega2`` (and ``px[i] += m_i v_x,i``),
     with ``next_drift`` the next step's half kick and drift into ``x2``, ``v2``, ``omega2`` and
-    the rebuild flag. Without ``kick`` only the force, torque and history are written (an
+    the rebuild trip. Without ``kick`` only the force, torque and history are written (an
     evaluation at rest, :meth:`dem.engine.simulation.Simulation.compute_forces`).
     """
     i = cuda.grid(1)
-    if i >= x.shape[0]:
+    if i >= x.shape[0] or trip[0] < seq:
         return
     f = sphere_force(
         i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
@@ -112,4 +121,4 @@ def step_kernel(
     omega2[i, 1] = wy
     omega2[i, 2] = wz
     if next_drift and _moved_past(x2, x_ref, i, length, limit):
-        flag[0] = 1
+        trip[0] = seq

@@ -1,0 +1,199 @@
+"""Rigid clumps on the GPU: one thread per body reduces, kicks, rotates and places its members.
+
+The CPU engine's clump step (:func:`dem.kernels.integrate.advance_clumps`) in two launches:
+
+1. :func:`dem.kernels.cuda.step.step_kernel` without its kick, one thread per member sphere:
+   the contact forces on the member (pairs and walls, no body force: ``a_body`` = 0), its
+   torque about its own centre, the history;
+2. :func:`bodies_kernel`, one thread per body, as
+   :func:`dem.kernels.integrate.bodies_forces_kick` does it for body b: the members' forces
+   and torques reduced to F_b and T_b about the centre of mass X_b (members in their CSR order,
+   the same sums in the same order), plus M a_body; the closing half kick V += dt/2 F/M,
+   L += dt/2 T, omega = R I^-1 R^T L; M V_x added to the body's momentum sum; with
+   ``next_drift`` the next step's half kick, drift, free rotation and wrap of X_x; then the
+   members placed (x = X + R d, v = V + omega x R d, spin omega) and the rebuild trip written
+   where a member moved past skin/2 (:mod:`dem.kernels.cuda.step`).
+
+Each body writes only its own rows and its members' rows. The free rotation is the CPU
+engine's scalar :func:`dem.kernels.rigid._free_rotation_one` (the symmetric Lie-Poisson
+splitting) compiled as a device function, the quaternion rotation its ``_rotate``: the rigid
+body's physics is written once. The glue here (kick, drift, reduce, place) repeats the CPU
+kernels' few lines on arrays because a device function taking arrays does not run in numba's
+CUDA simulator; the simulator tests (tests/engine/test_gpu_engine.py) hold the two to the bit.
+"""
+
+from numba import cuda
+
+from dem.kernels.cuda.step import _moved_past
+from dem.kernels.periodic import nearest_image, wrap
+from dem.kernels.rigid import _free_rotation_one, _omega_one, _rotate
+
+
+@cuda.jit(device=True)
+def _kick_drift(
+    b, dt, drift, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass, inertia,
+    out_omega,
+):  # fmt: skip
+    """:func:`dem.kernels.rigid.kick_drift_one` for body b (the same operations in order)."""
+    h = 0.5 * dt
+    a = h * inv_mass[b]
+    for c in range(3):
+        body_v[b, c] += a * body_force[b, c]
+        if rotation:
+            ang_mom[b, c] += h * body_torque[b, c]
+    if drift:
+        for c in range(3):
+            body_x[b, c] += dt * body_v[b, c]
+        w, qx, qy, qz = _free_rotation_one(
+            q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
+            inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
+        )  # fmt: skip
+        q[b, 0] = w
+        q[b, 1] = qx
+        q[b, 2] = qy
+        q[b, 3] = qz
+    o0, o1, o2 = _omega_one(
+        q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
+        inertia[b, 0], inertia[b, 1], inertia[b, 2],
+    )  # fmt: skip
+    out_omega[b, 0] = o0
+    out_omega[b, 1] = o1
+    out_omega[b, 2] = o2
+
+
+@cuda.jit(device=True)
+def _place_members(
+    b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
+    length, limit, check,
+):  # fmt: skip
+    """Members of body b placed (:func:`dem.kernels.rigid.place_members_of`).
+
+    With ``check``, a member that moved past skin/2 trips a rebuild.
+    """
+    ox = body_omega[b, 0]
+    oy = body_omega[b, 1]
+    oz = body_omega[b, 2]
+    for e in range(start[b], start[b + 1]):
+        s = members[e]
+        rx, ry, rz = _rotate(
+            q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
+        )
+        x[s, 0] = body_x[b, 0] + rx
+        x[s, 1] = body_x[b, 1] + ry
+        x[s, 2] = body_x[b, 2] + rz
+        v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
+        v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
+        v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
+        omega[s, 0] = ox
+        omega[s, 1] = oy
+        omega[s, 2] = oz
+        if check and _moved_past(x, x_ref, s, length, limit):
+            trip[0] = seq
+
+
+@cuda.jit(device=True)
+def _reduce(b, force, torque, x, body_x, start, members, length):
+    """F_b and T_b about X_b from the members (:func:`dem.kernels.rigid.reduce_to_bodies`)."""
+    fx = fy = fz = 0.0
+    tx = ty = tz = 0.0
+    for e in range(start[b], start[b + 1]):
+        s = members[e]
+        rx = x[s, 0] - body_x[b, 0]
+        if length > 0.0:
+            rx = nearest_image(rx, length)
+        ry = x[s, 1] - body_x[b, 1]
+        rz = x[s, 2] - body_x[b, 2]
+        f0 = force[s, 0]
+        f1 = force[s, 1]
+        f2 = force[s, 2]
+        fx += f0
+        fy += f1
+        fz += f2
+        tx += torque[s, 0] + ry * f2 - rz * f1
+        ty += torque[s, 1] + rz * f0 - rx * f2
+        tz += torque[s, 2] + rx * f1 - ry * f0
+    return fx, fy, fz, tx, ty, tz
+
+
+@cuda.jit
+def reduce_kernel(
+    force, torque, x, body_x, start, members, length, body_mass, ax, ay, az, body_force,
+    body_torque,
+):  # fmt: skip
+    """Thread b: F_b = sum F_s + M a_body and T_b about X_b, no kick.
+
+    A force evaluation at rest (:func:`dem.kernels.integrate.evaluate_forces_clumps`).
+    """
+    b = cuda.grid(1)
+    if b >= body_x.shape[0]:
+        return
+    fx, fy, fz, tx, ty, tz = _reduce(b, force, torque, x, body_x, start, members, length)
+    m = body_mass[b]
+    body_force[b, 0] = fx + m * ax
+    body_force[b, 1] = fy + m * ay
+    body_force[b, 2] = fz + m * az
+    body_torque[b, 0] = tx
+    body_torque[b, 1] = ty
+    body_torque[b, 2] = tz
+
+
+@cuda.jit
+def half_step_kernel(
+    seq, trip, dt, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+    inertia, body_omega, offsets, start, members, x, v, omega, x_ref, length, limit,
+):  # fmt: skip
+    """Thread b: a call's first half kick, drift, free rotation and wrap; members placed.
+
+    As :func:`dem.kernels.integrate._bodies_half_step`; a member past skin/2 trips a rebuild.
+    """
+    b = cuda.grid(1)
+    if b >= body_x.shape[0] or trip[0] < seq:
+        return
+    _kick_drift(
+        b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+        inertia, body_omega,
+    )  # fmt: skip
+    body_x[b, 0] = wrap(body_x[b, 0], length)
+    _place_members(
+        b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
+        length, limit, True,
+    )  # fmt: skip
+
+
+@cuda.jit
+def bodies_kernel(
+    seq, trip, dt, ax, ay, az, rotation, next_drift, force, torque, x, v, omega, body_x, body_v,
+    q, ang_mom, body_force, body_torque, body_omega, inv_mass, body_mass, inertia, offsets, start,
+    members, x_ref, length, limit, px,
+):  # fmt: skip
+    """Thread b: reduce, M a_body, closing kick, momentum, next drift, members placed.
+
+    As the module docstring says. ``px[b] += M V_x``; ``force``/``torque``: the members'
+    contact forces of :func:`dem.kernels.cuda.step.step_kernel` in the same step.
+    """
+    b = cuda.grid(1)
+    if b >= body_x.shape[0] or trip[0] < seq:
+        return
+    fx, fy, fz, tx, ty, tz = _reduce(b, force, torque, x, body_x, start, members, length)
+    m = body_mass[b]
+    body_force[b, 0] = fx + m * ax
+    body_force[b, 1] = fy + m * ay
+    body_force[b, 2] = fz + m * az
+    body_torque[b, 0] = tx
+    body_torque[b, 1] = ty
+    body_torque[b, 2] = tz
+    _kick_drift(
+        b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+        inertia, body_omega,
+    )  # fmt: skip
+    px[b] += m * body_v[b, 0]
+    if next_drift:
+        _kick_drift(
+            b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+            inertia, body_omega,
+        )  # fmt: skip
+        body_x[b, 0] = wrap(body_x[b, 0], length)
+    _place_members(
+        b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
+        length, limit, next_drift,
+    )  # fmt: skip
