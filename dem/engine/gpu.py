@@ -89,6 +89,8 @@ class GpuEngine:
         self.scene_host = None if scene is None else np.asarray(scene, dtype=np.int32)
         self.scenes = 1 if scene is None else int(self.scene_host.max()) + 1
         self.last_px = None  # sum over the last call's steps of m_i v_x,i per sphere, kg m/s
+        #: Where set (an array like ``last_px``), every call's ``last_px`` is added to it.
+        self.px_sum = None
         self.snapshot = None  # the host arrays as the last call left them
         self.n = -1
         #: The device's pair list is newer than the host's (:meth:`download_pairs` on demand).
@@ -207,7 +209,7 @@ class GpuEngine:
         pairs.pair_i[:k], pairs.pair_j[:k], pairs.hist[:k] = pi, pj, hist
         pairs.counters[:] = (k, self.builds)
         self.x_ref.copy_to_host(pairs.x_ref)
-        _csr(pi, pj, self.n, pairs.part_start, pairs.part_slot)
+        csr_index(pi, pj, self.n, pairs.part_start, pairs.part_slot)
         self.pairs_on_device = False
 
     def deepest_pair(self) -> tuple[np.ndarray, np.ndarray]:
@@ -470,10 +472,12 @@ class GpuEngine:
             self._since_build += done
             s += done
         self.last_px = self.px.copy_to_host()
+        if self.px_sum is not None:
+            self.px_sum += self.last_px
         return float(np.sum(self.last_px))
 
 
-def _csr(pair_i, pair_j, n, part_start, part_slot) -> None:
+def csr_index(pair_i, pair_j, n, part_start, part_slot) -> None:
     """The CPU engine's index sphere -> its pair ends (:func:`dem.kernels.neighbours.rebuild`)."""
     k = pair_i.shape[0]
     ends = np.empty(2 * k, dtype=np.int64)

@@ -13,17 +13,29 @@ single run's bits (tests/engine/test_gpu_replicas.py).
 
 What all replicas must share: the contact law, time step, trough (length, width, inclination,
 drive), rotation and the step count (the drive's phase); the batch takes the largest of their
-Verlet skins (which changes when lists are rebuilt, never a force). Plain spheres only, as the GPU
-engine. The instability checks run on the whole batch once a cycle (a replica that blows up stops
-them all, naming its grain); each replica's velocity is measured on its own.
+Verlet skins (which changes when lists are rebuilt, never a force). Plain spheres only. The
+instability checks run on the whole batch (a replica that blows up stops them all, naming its
+grain); each replica's velocity is measured on its own.
+
+Two ways to use it: :meth:`GpuReplicas.measure` (velocities of whole cycles, nothing else), or
+:meth:`GpuReplicas.settle` and :meth:`GpuReplicas.run`, after which every replica's own
+:class:`~dem.engine.simulation.Simulation` holds its state, pair list and momentum sums as if it
+had run alone (:meth:`GpuReplicas.scatter`), so the run's writers, checks and summary work on it
+unchanged (``dem run --replicas N --device cuda``, :mod:`dem.run.batch`).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from dem import config
+from dem.engine.gpu import csr_index
 from dem.engine.simulation import Simulation
 from dem.engine.state import PairList, Spheres
+from dem.errors import SimulationError
+from dem.kernels.forces import N_WALLS
 from dem.kernels.neighbours import OVERFLOW_PAIRS
 from dem.physics.drive import cycle_edge
 
@@ -91,8 +103,11 @@ class GpuReplicas:
         sim.forces_valid = all(s.forces_valid for s in sims)
         self.scene = np.repeat(np.arange(len(sims)), self.counts)
         self.mass = np.bincount(self.scene, weights=spheres.mass)
+        sim.reference_speed = max(s.reference_speed for s in sims)
         self.sim = sim
+        self.sims = sims
         self.engine = sim.use_gpu(self.scene)
+        self.engine.px_sum = np.zeros(self.start[-1])
 
     @property
     def replicas(self) -> int:
@@ -112,8 +127,94 @@ class GpuReplicas:
         )  # fmt: skip
         sim.stats[1] += n_steps
         sim.step_index += n_steps
-        px = np.bincount(self.scene, weights=self.engine.last_px, minlength=self.replicas)
+        px = np.bincount(self.scene, weights=self.engine.px_sum, minlength=self.replicas)
+        self.engine.px_sum[:] = 0.0
         return px / (n_steps * self.mass)
+
+    def run(self, n_steps: int, stop=None) -> int:
+        """``n_steps`` steps of the batch with the instability checks, then :meth:`scatter`.
+
+        As :meth:`dem.engine.simulation.Simulation.run` (``stop`` asked after every chunk);
+        returns the steps advanced.
+        """
+        done = self.sim.run(n_steps, stop=stop)
+        self.scatter(done)
+        return done
+
+    def scatter(self, steps: int = 0) -> None:
+        """Every replica's Simulation brought up to the batch, ``steps`` after the last scatter.
+
+        Its spheres, pair list and springs, step index and drive; its momentum sums ``stats``
+        grow by its own share of those steps. O(spheres + pairs log pairs) (the pairs sorted
+        once on the host).
+        """
+        sim, engine = self.sim, self.engine
+        s, pairs = sim.spheres, sim.pairs
+        px = np.bincount(self.scene, weights=engine.px_sum, minlength=self.replicas)
+        engine.px_sum[:] = 0.0
+        k = pairs.n_pairs
+        cut = np.searchsorted(pairs.pair_i[:k], self.start)
+        for r, rs in enumerate(self.sims):
+            a, b = int(self.start[r]), int(self.start[r + 1])
+            for name in ("x", "v", "omega", "force", "torque"):
+                getattr(rs.spheres, name)[:] = getattr(s, name)[a:b]
+            rs.spheres.wall_hist[:] = s.wall_hist[N_WALLS * a : N_WALLS * b]
+            own = rs.pairs
+            lo, hi = int(cut[r]), int(cut[r + 1])
+            m = hi - lo
+            if m > own.capacity:
+                own.grow(OVERFLOW_PAIRS, m)
+            own.pair_i[:m] = pairs.pair_i[lo:hi] - a
+            own.pair_j[:m] = pairs.pair_j[lo:hi] - a
+            own.hist[:m] = pairs.hist[lo:hi]
+            own.counters[:] = (m, pairs.builds)
+            own.x_ref[:] = pairs.x_ref[a:b]
+            csr_index(own.pair_i[:m], own.pair_j[:m], b - a, own.part_start, own.part_slot)
+            rs.stats[0] += px[r]
+            rs.stats[1] += steps
+            rs.step_index, rs.drive_start_step, rs.drive_on = (
+                sim.step_index, sim.drive_start_step, sim.drive_on,
+            )  # fmt: skip
+            rs.forces_valid = True
+
+    def start_drive(self) -> None:
+        """The drive on with phase 0 now, for the batch and every replica."""
+        self.sim.start_drive()
+        for rs in self.sims:
+            rs.start_drive()
+
+    def settle(self, *, max_time: float | None = None, chunk_time: float = 0.005,
+               progress=None) -> float:  # fmt: skip
+        """All replicas with the drive off until every one is at rest.
+
+        As :meth:`dem.engine.simulation.Simulation.settle`, each replica by its own rms speed;
+        the batch rests until the last replica is at rest, so every replica rests that long.
+        Returns the simulated time; raises SimulationError after ``max_time`` naming the
+        replicas still moving.
+        """
+        max_time = config.DEM_SETTLE_MAX_TIME if max_time is None else max_time
+        sim = self.sim
+        sim.drive_on = False
+        for rs in self.sims:
+            rs.drive_on = False
+        r = float(np.mean(sim.spheres.radius))
+        threshold = config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * r)
+        chunk = max(1, int(round(chunk_time / sim.dt)))
+        start = sim.time
+        while sim.time - start < max_time:
+            self.run(chunk)
+            rms = np.array([rs.rms_speed() for rs in self.sims])
+            done = bool(np.all(rms < threshold))
+            if progress is not None:
+                progress(sim.time - start, float(rms.max()), threshold, done)
+            if done:
+                return sim.time - start
+        moving = np.flatnonzero(rms >= threshold)
+        raise SimulationError(
+            f"replicas {moving.tolist()} did not come to rest within {max_time} s of simulated "
+            f"time (rms speed up to {rms.max():.3g} m/s > {threshold:.3g} m/s): run one of them "
+            "alone (--replicas 1) to see why"
+        )
 
     def measure(self, cycles: int, *, settle_cycles: int = 0, progress=None) -> np.ndarray:
         """Per-cycle velocities of whole drive cycles, (cycles, replicas), m/s.

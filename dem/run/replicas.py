@@ -16,6 +16,8 @@ the pooled one, with the per-replica values under ``per_replica``. ``resume`` re
 replicas without a summary, continuing any that left a checkpoint.
 
 Cost: N runs of the case; on C cores, about ceil(N / C) times one single-threaded run's wall time.
+On a GPU (``device = "cuda"``, spheres) the N replicas run as one batch (:mod:`dem.run.batch`):
+one launch a step for all of them; a resumed batch continues its replicas one by one.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from dem import config
 from dem.engine.device import check_device
 from dem.io.files import json_text, replace_text
 from dem.physics import measure
+from dem.run.batch import batchable, run_batch
 
 #: Folder of the replicas' own outputs, inside the run's output folder.
 REPLICAS_DIR = "replicas"
@@ -132,13 +135,26 @@ def run_replicas(
             "lab_frame": lab_frame,
         }  # fmt: skip
         jobs.append((replica_case(case, k), k, str(run_dir), kwargs))
-    if progress:
+    if progress and not (jobs and not resume and batchable(case) is None):
         print(
             f"dem: {n} replicas (seeds {case.run.seed}..{case.run.seed + n - 1}), "
             f"{len(jobs)} to run on {workers} process(es) x {per_worker} thread(s)",
             file=sys.stderr, flush=True,
         )  # fmt: skip
     interrupted = []
+    batched = jobs and not resume and batchable(case) is None
+    if batched:
+        if progress:
+            print(f"dem: the {n} replicas run as one GPU batch (dem.run.batch)", file=sys.stderr,
+                  flush=True)  # fmt: skip
+        run_dirs = [out_dir if k == 0 else replica_dir(out_dir, k) for k in range(n)]
+        done = run_batch(case, out_dir, run_dirs, cycles=cycles, progress=progress,
+                         overwrite=overwrite, frames=frames, lab_frame=lab_frame,
+                         all_replicas=all_replicas)  # fmt: skip
+        for k, summary in done.items():
+            summaries[k] = summary
+            _keep_own_summary(out_dir, k, summary)
+        jobs = []
     if jobs:
         context = multiprocessing.get_context("spawn")  # fork after numba's threads is unsafe
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # the workers checkpoint
@@ -174,7 +190,7 @@ def run_replicas(
         raise RunInterrupted(first["interrupted"], None if checkpoint is None else
                              Path(checkpoint), -1, f"replica {first['k']}")  # fmt: skip
     summary = pool_summaries([summaries[k] for k in range(n)], time.perf_counter() - started,
-                             processes=workers)  # fmt: skip
+                             processes=1 if batched else workers)  # fmt: skip
     summary["replica_outputs"] = "all" if all_replicas else "replica 0 (frames, results.h5)"
     if not all_replicas:
         for k in range(1, n):

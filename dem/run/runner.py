@@ -259,13 +259,16 @@ def _write_frame(writers: list[Writer], sim, progress: Progress) -> None:
     progress.frames_wall_time_s += time.perf_counter() - t0
 
 
-def _finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers) -> dict:
+def _finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers,
+            extra: dict | None = None) -> dict:  # fmt: skip
     """Write summary.json (strict JSON, whole or not at all), then close the writers.
 
-    Returns the summary as a dict (an undefined value NaN, where the file has null).
+    ``extra``: more fields of the summary. Returns the summary as a dict (an undefined value
+    NaN, where the file has null).
     """
     case = scene.case
     summary = summarize(case, sim, progress, cycles, n_threads)
+    summary.update(extra or {})
     summary["plan"] = estimate.as_dict()
     # the bed's stiffness against the bulk study's rule: how far this answer may be from the
     # rigid material's (validation/bulk-convergence)

@@ -15,6 +15,7 @@ import pytest
 from test_gpu_engine import _pair
 
 from dem.engine.gpu_replicas import GpuReplicas
+from dem.errors import SimulationError
 
 SIMULATOR = os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
 pytestmark = pytest.mark.cuda
@@ -85,3 +86,68 @@ def test_replicas_must_share_the_scene():
     b = _pair(*LAW[:-1], 1e-5)[1]
     with pytest.raises(ValueError, match="replica 1 differs from replica 0 in its time step"):
         GpuReplicas([a, b])
+
+
+def test_run_scatters_each_replica_into_its_own_simulation():
+    """``run`` (with the checks) leaves every replica's Simulation as if it had run alone: its
+    spheres, pair list, springs, CSR index, step and momentum sums (the sums in another order:
+    1e-12)."""
+    alone = _pair(*LAW)[1]
+    copies = [_pair(*LAW)[1] for _ in range(2)]
+    batch = GpuReplicas(copies)
+    for _ in range(2):
+        assert batch.run(30) == 30
+        alone.run(30)
+        for rs in copies:
+            _close(rs.spheres, alone.spheres, exact=True)
+            k = alone.pairs.n_pairs
+            assert rs.pairs.n_pairs == k and rs.pairs.builds == alone.pairs.builds
+            for name in ("pair_i", "pair_j", "hist", "part_slot"):
+                np.testing.assert_array_equal(
+                    getattr(rs.pairs, name)[:k], getattr(alone.pairs, name)[:k]
+                )
+            np.testing.assert_array_equal(rs.pairs.part_start, alone.pairs.part_start)
+            np.testing.assert_array_equal(rs.pairs.x_ref, alone.pairs.x_ref)
+            assert rs.step_index == alone.step_index
+            np.testing.assert_allclose(rs.stats[:2], alone.stats[:2], rtol=1e-12)
+            assert rs.cycle_velocity() == pytest.approx(alone.cycle_velocity(), rel=1e-12)
+
+
+def _resting(seed, speed):
+    """Four spheres apart on the floor of a still trough, sliding at ``speed`` along x (rolling
+    friction stops them once they roll)."""
+    from test_contacts import LENGTH, WIDTH, _coefficients, _law
+
+    from dem.engine.simulation import Simulation
+    from dem.engine.state import Spheres
+    from dem.scene.trough import Trough
+
+    rng = np.random.default_rng(seed)
+    r = np.full(4, 1.0e-3)
+    x = np.column_stack([(np.arange(4) + 0.5) * LENGTH / 4, rng.uniform(-0.003, 0.003, 4), r])
+    spheres = Spheres.create(x, r, 2500.0)
+    spheres.v[:, 0] = speed
+    law = _law("linear", _coefficients("linear", 0.3, 0.5, 0.3, False, "coulomb", "surface"))
+    return Simulation(spheres, Trough(LENGTH, WIDTH), law, 2e-5)
+
+
+def test_settle_rests_every_replica_and_starts_the_drive_together():
+    """The batch settles until its last replica rests (friction stops the slower replica
+    first), then starts the drive in all at once; a replica that does not rest in time is
+    named."""
+    import math
+
+    from dem import config
+
+    copies = [_resting(1, 0.002), _resting(2, 0.01)]
+    batch = GpuReplicas(copies)
+    threshold = config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * 1.0e-3)
+    assert copies[1].rms_speed() > threshold
+    rested = batch.settle(chunk_time=2e-4, max_time=0.05)
+    assert 0 < rested < 0.05
+    assert all(rs.rms_speed() < threshold for rs in copies)
+    batch.start_drive()
+    assert all(rs.drive_on and rs.drive_start_step == batch.sim.step_index for rs in copies)
+    moving = GpuReplicas([_resting(1, 0.0), _resting(2, 0.5)])
+    with pytest.raises(SimulationError, match=r"replicas \[1\] did not come to rest"):
+        moving.settle(chunk_time=2e-4, max_time=4e-4)
