@@ -1,4 +1,4 @@
-"""The GPU engine: a :class:`~dem.engine.simulation.Simulation`'s spheres stepped on numba.cuda.
+"""The GPU engine: a :class:`~dem.engine.simulation.Simulation`'s spheres and clumps on numba.cuda.
 
 The state lives on the device between calls; the host's spheres (``sim.spheres``) are brought up
 to date after every call of :meth:`GpuEngine.advance`, and the pair list (``sim.pairs``) when it
@@ -434,6 +434,9 @@ class GpuEngine:
 
     def steps(self, sim, n_steps: int, step0: int, drive) -> float:
         """The steps of :meth:`advance` alone: the state stays on the device."""
+        if n_steps <= 0:  # as the CPU engine: not even the first half kick
+            self.last_px = np.zeros(max(self.n, 0))
+            return 0.0
         if self._stale(sim):
             self.upload(sim)
         if not sim.forces_valid:
