@@ -13,7 +13,8 @@ single run's bits (tests/engine/test_gpu_replicas.py).
 
 What all replicas must share: the contact law, time step, trough (length, width, inclination,
 drive), rotation and the step count (the drive's phase); the batch takes the largest of their
-Verlet skins (which changes when lists are rebuilt, never a force). Plain spheres only. The
+Verlet skins (which changes when lists are rebuilt, never a force). Spheres or clumps (all
+replicas the same), flat walls, periodic. The
 instability checks run on the whole batch (a replica that blows up stops them all, naming its
 grain); each replica's velocity is measured on its own.
 
@@ -26,14 +27,12 @@ unchanged (``dem run --replicas N --device cuda``, :mod:`dem.run.batch`).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from dem import config
 from dem.engine.gpu import csr_index
-from dem.engine.simulation import Simulation
-from dem.engine.state import PairList, Spheres
+from dem.engine.simulation import Simulation, rest_speed
+from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.forces import N_WALLS
 from dem.kernels.neighbours import OVERFLOW_PAIRS
@@ -53,8 +52,8 @@ class GpuReplicas:
     """R simulations of one scene as one GPU job.
 
     Args:
-        sims: The replicas (:class:`~dem.engine.simulation.Simulation`, plain spheres, flat walls,
-            periodic), at the same step with the same law, step, trough, drive and skin.
+        sims: The replicas (:class:`~dem.engine.simulation.Simulation`, spheres or clumps, flat
+            walls, periodic), at the same step with the same law, step, trough and drive.
 
     """
 
@@ -62,9 +61,12 @@ class GpuReplicas:
         sims = list(sims)
         if not sims:
             raise ValueError("no replicas")
+        clumps = sims[0].bodies is not None
         for r, sim in enumerate(sims):
-            if sim.bodies is not None or sim.mesh is not None or sim.feeder is not None:
-                raise ValueError(f"replica {r}: the GPU batches plain spheres in a periodic trough")
+            if sim.mesh is not None or sim.feeder is not None:
+                raise ValueError(f"replica {r}: the GPU batches flat periodic troughs only")
+            if (sim.bodies is not None) != clumps:
+                raise ValueError(f"replica {r} differs from replica 0 in its grains' shape")
         _same(sims, "contact law", lambda s: s.law.params)
         _same(sims, "time step", lambda s: s.dt)
         _same(sims, "rotation", lambda s: s.rotation)
@@ -91,10 +93,17 @@ class GpuReplicas:
             },  # fmt: skip
             body=np.arange(self.start[-1], dtype=np.int64),
         )
+        bodies = None
+        if clumps:
+            bodies = _stacked_bodies([s.bodies for s in sims])
+            spheres.body = bodies.body_of
+            self.bcounts = np.array([s.bodies.n for s in sims])
+            self.bstart = np.concatenate([[0], np.cumsum(self.bcounts)])
         sim = Simulation(
             spheres, first.trough, first.law, first.dt, rotation=first.rotation,
             skin=max(s.skin for s in sims),
             reference_speed=first.reference_speed, timestep_limit=first.timestep_limit,
+            bodies=bodies,
         )  # fmt: skip
         sim.pairs = _stacked_pairs([s.pairs for s in sims], self.start, first.law.history_width)
         sim.step_index, sim.drive_start_step, sim.drive_on = (
@@ -102,7 +111,12 @@ class GpuReplicas:
         )  # fmt: skip
         sim.forces_valid = all(s.forces_valid for s in sims)
         self.scene = np.repeat(np.arange(len(sims)), self.counts)
-        self.mass = np.bincount(self.scene, weights=spheres.mass)
+        # the grains' scene: the momentum sums are per sphere, or per body for clumps
+        self.grain_scene = self.scene if bodies is None else np.repeat(
+            np.arange(len(sims)), self.bcounts
+        )  # fmt: skip
+        grain_mass = spheres.mass if bodies is None else bodies.mass
+        self.mass = np.bincount(self.grain_scene, weights=grain_mass)
         sim.reference_speed = max(s.reference_speed for s in sims)
         self.sim = sim
         self.sims = sims
@@ -127,9 +141,7 @@ class GpuReplicas:
         )  # fmt: skip
         sim.stats[1] += n_steps
         sim.step_index += n_steps
-        px = np.bincount(self.scene, weights=self.engine.px_sum, minlength=self.replicas)
-        self.engine.px_sum[:] = 0.0
-        return px / (n_steps * self.mass)
+        return self._px() / (n_steps * self.mass)
 
     def run(self, n_steps: int, stop=None) -> int:
         """``n_steps`` steps of the batch with the instability checks, then :meth:`scatter`.
@@ -141,6 +153,15 @@ class GpuReplicas:
         self.scatter(done)
         return done
 
+    def _px(self) -> np.ndarray:
+        """Each replica's momentum sum since the last call, kg m/s (and the engine's zeroed)."""
+        engine = self.engine
+        grains = self.grain_scene.shape[0]
+        px = np.bincount(self.grain_scene, weights=engine.px_sum[:grains],
+                         minlength=self.replicas)  # fmt: skip
+        engine.px_sum[:] = 0.0
+        return px
+
     def scatter(self, steps: int = 0) -> None:
         """Every replica's Simulation brought up to the batch, ``steps`` after the last scatter.
 
@@ -148,10 +169,9 @@ class GpuReplicas:
         grow by its own share of those steps. O(spheres + pairs log pairs) (the pairs sorted
         once on the host).
         """
-        sim, engine = self.sim, self.engine
+        sim = self.sim
         s, pairs = sim.spheres, sim.pairs
-        px = np.bincount(self.scene, weights=engine.px_sum, minlength=self.replicas)
-        engine.px_sum[:] = 0.0
+        px = self._px()
         k = pairs.n_pairs
         cut = np.searchsorted(pairs.pair_i[:k], self.start)
         for r, rs in enumerate(self.sims):
@@ -159,6 +179,10 @@ class GpuReplicas:
             for name in ("x", "v", "omega", "force", "torque"):
                 getattr(rs.spheres, name)[:] = getattr(s, name)[a:b]
             rs.spheres.wall_hist[:] = s.wall_hist[N_WALLS * a : N_WALLS * b]
+            if sim.bodies is not None:
+                c, d = int(self.bstart[r]), int(self.bstart[r + 1])
+                for name in ("x", "v", "q", "ang_mom", "omega", "force", "torque"):
+                    getattr(rs.bodies, name)[:] = getattr(sim.bodies, name)[c:d]
             own = rs.pairs
             lo, hi = int(cut[r]), int(cut[r + 1])
             m = hi - lo
@@ -197,8 +221,7 @@ class GpuReplicas:
         sim.drive_on = False
         for rs in self.sims:
             rs.drive_on = False
-        r = float(np.mean(sim.spheres.radius))
-        threshold = config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * r)
+        threshold = rest_speed(sim.spheres.radius)
         chunk = max(1, int(round(chunk_time / sim.dt)))
         start = sim.time
         while sim.time - start < max_time:
@@ -240,6 +263,26 @@ class GpuReplicas:
             if progress is not None:
                 progress(k + 1, total)
         return out
+
+
+def _stacked_bodies(parts: list[Bodies]) -> Bodies:
+    """The replicas' clumps as one list: members, bodies and CSR offset (O(total), one copy)."""
+    sphere_base = np.concatenate([[0], np.cumsum([int(b.start[-1]) for b in parts])])
+    body_base = np.concatenate([[0], np.cumsum([b.n for b in parts])])
+    per_body = {
+        name: np.concatenate([getattr(b, name) for b in parts]) for name in Bodies._PER_BODY
+    }
+    start = np.concatenate(
+        [[0]] + [b.start[1:] + base for b, base in zip(parts, sphere_base, strict=False)]
+    )  # fmt: skip
+    return Bodies(
+        **per_body, start=start.astype(np.int64),
+        members=np.concatenate([b.members + base for b, base in zip(
+            parts, sphere_base, strict=False)]).astype(np.int64),
+        offsets=np.concatenate([b.offsets for b in parts]),
+        body_of=np.concatenate([b.body_of + base for b, base in zip(
+            parts, body_base, strict=False)]).astype(np.int64),
+    )  # fmt: skip
 
 
 def _stacked_pairs(lists: list[PairList], start: np.ndarray, width: int) -> PairList:

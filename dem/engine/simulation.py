@@ -469,8 +469,7 @@ class Simulation(InstabilityChecks):
         """
         max_time = config.DEM_SETTLE_MAX_TIME if max_time is None else max_time
         self.drive_on = False
-        r = float(np.mean(self.spheres.radius))
-        threshold = config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * r)
+        threshold = rest_speed(self.spheres.radius)
         chunk = max(1, int(round(chunk_time / self.dt)))
         start = self.time
         while self.time - start < max_time:
@@ -536,6 +535,15 @@ class Simulation(InstabilityChecks):
             self.geom, self.mesh_layout(), count,
         )  # fmt: skip
         return count
+
+
+def rest_speed(radius: np.ndarray) -> float:
+    """The rms speed below which a fill is at rest, m/s.
+
+    DEM_SETTLE_SPEED_FRACTION sqrt(g r), r the mean sphere radius.
+    """
+    r = float(np.mean(radius))
+    return config.DEM_SETTLE_SPEED_FRACTION * math.sqrt(config.GRAVITY * r)
 
 
 def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> np.ndarray:

@@ -59,7 +59,7 @@ from dem.kernels.periodic import nearest_image
 
 # --- quaternion helpers (scalar, inlined into the kernels) ------------------------------------
 @numba.njit(**NUMBA_OPTIONS)
-def _rotate(w, qx, qy, qz, vx, vy, vz):
+def rotate(w, qx, qy, qz, vx, vy, vz):
     """R(q) v for a unit quaternion q = (w, qx, qy, qz): v + 2 w (u x v) + 2 u x (u x v)."""
     tx = 2.0 * (qy * vz - qz * vy)
     ty = 2.0 * (qz * vx - qx * vz)
@@ -74,7 +74,7 @@ def _rotate(w, qx, qy, qz, vx, vy, vz):
 @numba.njit(**NUMBA_OPTIONS)
 def _rotate_t(w, qx, qy, qz, vx, vy, vz):
     """R(q)^T v = R(q*) v (trough frame -> body frame)."""
-    return _rotate(w, -qx, -qy, -qz, vx, vy, vz)
+    return rotate(w, -qx, -qy, -qz, vx, vy, vz)
 
 
 @numba.njit(**NUMBA_OPTIONS)
@@ -133,7 +133,7 @@ def _sorted_axes(i0, i1, i2):
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _free_rotation_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2, dt):
+def free_rotation_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2, dt):
     """One step dt of the free rotation of one body (module docstring); returns the unit q."""
     p0, p1, p2 = _rotate_t(w, qx, qy, qz, lx, ly, lz)
     moments = (i0, i1, i2)
@@ -234,7 +234,7 @@ def member_arm(sphere_x, s, body_x, b, length):
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def _place_member(s, b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega):
     """Member s of body b: x_s = X_b + R d_s, v_s = V_b + omega_b x R d_s, omega_s = omega_b."""
-    rx, ry, rz = _rotate(
+    rx, ry, rz = rotate(
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
     )
     ox, oy, oz = body_omega[b, 0], body_omega[b, 1], body_omega[b, 2]
@@ -327,7 +327,7 @@ def free_rotation(q, ang_mom, inertia, dt, out_q):
 
     """
     for b in numba.prange(q.shape[0]):
-        w, qx, qy, qz = _free_rotation_one(
+        w, qx, qy, qz = free_rotation_one(
             q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
             inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
         )  # fmt: skip
@@ -338,16 +338,16 @@ def free_rotation(q, ang_mom, inertia, dt, out_q):
 
 
 @numba.njit(**NUMBA_OPTIONS)
-def _omega_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2):
+def omega_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2):
     """Angular velocity R I^-1 R^T L of one body (trough frame)."""
     p0, p1, p2 = _rotate_t(w, qx, qy, qz, lx, ly, lz)
-    return _rotate(w, qx, qy, qz, p0 / i0, p1 / i1, p2 / i2)
+    return rotate(w, qx, qy, qz, p0 / i0, p1 / i1, p2 / i2)
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
 def _store_omega(b, q, ang_mom, inertia, out_omega):
     """out_omega[b] = R I^-1 R^T L of body b."""
-    o0, o1, o2 = _omega_one(
+    o0, o1, o2 = omega_one(
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
         inertia[b, 0], inertia[b, 1], inertia[b, 2],
     )  # fmt: skip
@@ -476,7 +476,7 @@ def kick_drift_one(
     if drift:
         for c in range(3):
             body_x[b, c] += dt * body_v[b, c]
-        w, qx, qy, qz = _free_rotation_one(
+        w, qx, qy, qz = free_rotation_one(
             q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
             inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
         )  # fmt: skip

@@ -41,7 +41,7 @@ from dem.run.checks import check_memory, compile_first, warn_plan
 from dem.run.interrupts import RunInterrupted, SignalFlag, StopNow, file_size_limit_as_error
 from dem.run.output import CHECKPOINT, RESULTS, locked, prepare_output
 from dem.run.record import Progress, close_cycle
-from dem.run.runner import _fill_bar, _finish, _phase_bar, _write_frame
+from dem.run.runner import fill_bar, finish, phase_bar, write_frame
 from dem.run.summary import fingerprint
 from dem.run.writers import Checkpoints, HDF5Results, VTKFrames
 from dem.scene.resolved import resolve
@@ -51,8 +51,6 @@ def batchable(case) -> str | None:
     """Why ``case``'s replicas cannot run as one GPU batch, or None when they can."""
     if case.run.device != "cuda":
         return "the case runs on the CPU"
-    if case.particles.shape != "sphere":
-        return "the GPU batches spheres only (clumps run one replica at a time)"
     return None
 
 
@@ -88,7 +86,7 @@ class _Replica:
         self.checkpoints = Checkpoints(self.dir / CHECKPOINT, self.sim)
         self.writers.append(self.checkpoints)
         if self.keep_frames:
-            _write_frame(self.writers, self.sim, self.progress)
+            write_frame(self.writers, self.sim, self.progress)
 
     def close(self) -> None:
         """Unfinished: the writers closed incomplete (the VTK collection lists every frame)."""
@@ -153,7 +151,7 @@ def run_batch(case, out_dir: Path, run_dirs: list[Path], *, cycles: int | None,
             batch = GpuReplicas([r.sim for r in replicas])
             t0 = time.perf_counter()
             stop.phase = "settling"
-            settle_time = batch.settle(progress=_fill_bar(case) if progress else None)
+            settle_time = batch.settle(progress=fill_bar(case) if progress else None)
             batch.start_drive()
             settle_wall = (time.perf_counter() - t0) / n
         for r in replicas:
@@ -173,7 +171,7 @@ def _cycles(batch, replicas, per_frame, estimate, out_dir, show) -> None:
     A progress bar follows replica 0 (settling, then measuring).
     """
     first = replicas[0]
-    bar = [_phase_bar(first.scene.case, first.progress) if show else None]
+    bar = [phase_bar(first.scene.case, first.progress) if show else None]
     try:
         _loop(batch, replicas, per_frame, estimate, out_dir, bar)
     finally:
@@ -209,7 +207,7 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
             for r in live:
                 r.sim.check()  # the replica's own overlaps, speeds and grains
                 if r.keep_frames:
-                    _write_frame(r.writers, r.sim, r.progress)
+                    write_frame(r.writers, r.sim, r.progress)
                 r.progress.chunk += 1
                 if r.progress.chunk == per_frame:
                     measuring = r.progress.measuring
@@ -220,7 +218,7 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
                         bar[0].update(1)
                         if r.progress.measuring != measuring:  # replica 0's settling has ended
                             bar[0].close()
-                            bar[0] = _phase_bar(r.scene.case, r.progress)
+                            bar[0] = phase_bar(r.scene.case, r.progress)
                 if r.progress.finished:
                     if r.k == 0 and bar[0] is not None:
                         bar[0].close()
@@ -229,7 +227,7 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
                         "replicas": len(replicas), "spheres": int(sim.spheres.n),
                         "steps": steps_done, "wall_time_s": time.perf_counter() - started,
                     }}  # fmt: skip
-                    r.summary = _finish(r.scene, r.sim, r.progress, r.cycles, 1, estimate,
+                    r.summary = finish(r.scene, r.sim, r.progress, r.cycles, 1, estimate,
                                         r.dir, r.writers, extra)  # fmt: skip
             if flag.signum is not None and any(not r.progress.finished for r in replicas):
                 for r in replicas:

@@ -16,7 +16,7 @@ the pooled one, with the per-replica values under ``per_replica``. ``resume`` re
 replicas without a summary, continuing any that left a checkpoint.
 
 Cost: N runs of the case; on C cores, about ceil(N / C) times one single-threaded run's wall time.
-On a GPU (``device = "cuda"``, spheres) the N replicas run as one batch (:mod:`dem.run.batch`):
+On a GPU (``device = "cuda"``) the N replicas run as one batch (:mod:`dem.run.batch`):
 one launch a step for all of them; a resumed batch continues its replicas one by one.
 """
 

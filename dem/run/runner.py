@@ -164,7 +164,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
             if show:
                 print("dem: settling the fill (drive off, until at rest)", file=sys.stderr,
                       flush=True)  # fmt: skip
-            settle_time = sim.settle(progress=_fill_bar(case) if show else None)
+            settle_time = sim.settle(progress=fill_bar(case) if show else None)
             sim.start_drive()
         sim.stats[:] = 0.0
         progress = Progress(
@@ -188,10 +188,10 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
     checkpoints = Checkpoints(checkpoint, sim)
     writers.append(checkpoints)
     if frames and not resume:
-        _write_frame(writers, sim, progress)  # frame 0, before the first cycle
+        write_frame(writers, sim, progress)  # frame 0, before the first cycle
 
     period = sim.trough.period
-    bar = _phase_bar(case, progress) if show else None
+    bar = phase_bar(case, progress) if show else None
     summary = None
     # SIGINT/SIGTERM are recorded, not fatal, until summary.json is on disk: the summary's
     # point-mass model compiles for seconds on a fresh machine, and a signal there used to end
@@ -215,7 +215,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
                     checkpoints.save(progress)
                     raise RunInterrupted(flag.signum, checkpoint, progress.cycle)
                 if frames:
-                    _write_frame(writers, sim, progress)
+                    write_frame(writers, sim, progress)
                 progress.chunk = k + 1
                 if progress.chunk == per_frame:
                     measuring = progress.measuring
@@ -226,14 +226,14 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
                         bar.update(1)
                         if progress.measuring != measuring:  # the settling phase has ended
                             bar.close()
-                            bar = _phase_bar(case, progress)
+                            bar = phase_bar(case, progress)
                 if flag.signum is not None and not progress.finished:
                     checkpoints.save(progress)
                     raise RunInterrupted(flag.signum, checkpoint, progress.cycle)
             if bar is not None:
                 bar.close()
                 bar = None
-            summary = _finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers)
+            summary = finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers)
             late = flag.signum
     finally:
         if bar is not None:
@@ -250,7 +250,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
     return summary
 
 
-def _write_frame(writers: list[Writer], sim, progress: Progress) -> None:
+def write_frame(writers: list[Writer], sim, progress: Progress) -> None:
     """Call every writer's ``frame``; their wall time counts in ``frames_wall_time_s``."""
     t0 = time.perf_counter()
     frame = Frame.of(sim)
@@ -259,7 +259,7 @@ def _write_frame(writers: list[Writer], sim, progress: Progress) -> None:
     progress.frames_wall_time_s += time.perf_counter() - t0
 
 
-def _finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers,
+def finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers,
             extra: dict | None = None) -> dict:  # fmt: skip
     """Write summary.json (strict JSON, whole or not at all), then close the writers.
 
@@ -304,7 +304,7 @@ def _note(text: str) -> None:
     tqdm.write(f"dem: {text}", file=sys.stderr)
 
 
-def _phase_bar(case, progress: Progress):
+def phase_bar(case, progress: Progress):
     """A progress bar of the current phase, whose total never changes.
 
     Settling: its cycles, or with ``settle_cycles = "auto"`` the cap
@@ -325,7 +325,7 @@ def _phase_bar(case, progress: Progress):
                 desc=f"dem {case.name}: settling")  # fmt: skip
 
 
-def _fill_bar(case):
+def fill_bar(case):
     """The fill's settling (drive off): a callback for :meth:`Simulation.settle`.
 
     A bar of simulated time up to the cap, with the rms speed against the speed that counts as

@@ -62,14 +62,14 @@ def cpu_batch(monkeypatch):
     LockstepCpu.instances.clear()
 
 
-def test_only_sphere_cases_on_cuda_are_batched(tmp_path):
+def test_cuda_cases_are_batched(tmp_path):
     case = load_case(write_case(tmp_path), {"run.device": "cuda"})
     assert batch.batchable(case) is None
     assert "CPU" in batch.batchable(load_case(write_case(tmp_path)))
     from pathlib import Path
 
     screws = Path(__file__).resolve().parents[2] / "cases" / "screw-trough"
-    assert "spheres only" in batch.batchable(load_case(screws, {"run.device": "cuda"}))
+    assert batch.batchable(load_case(screws, {"run.device": "cuda"})) is None
 
 
 @pytest.mark.integration

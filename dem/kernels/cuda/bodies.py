@@ -15,8 +15,8 @@ The CPU engine's clump step (:func:`dem.kernels.integrate.advance_clumps`) in tw
    where a member moved past skin/2 (:mod:`dem.kernels.cuda.step`).
 
 Each body writes only its own rows and its members' rows. The free rotation is the CPU
-engine's scalar :func:`dem.kernels.rigid._free_rotation_one` (the symmetric Lie-Poisson
-splitting) compiled as a device function, the quaternion rotation its ``_rotate``: the rigid
+engine's scalar :func:`dem.kernels.rigid.free_rotation_one` (the symmetric Lie-Poisson
+splitting) compiled as a device function, the quaternion rotation its ``rotate``: the rigid
 body's physics is written once. The glue here (kick, drift, reduce, place) repeats the CPU
 kernels' few lines on arrays because a device function taking arrays does not run in numba's
 CUDA simulator; the simulator tests (tests/engine/test_gpu_engine.py) hold the two to the bit.
@@ -24,9 +24,9 @@ CUDA simulator; the simulator tests (tests/engine/test_gpu_engine.py) hold the t
 
 from numba import cuda
 
-from dem.kernels.cuda.step import _moved_past
+from dem.kernels.cuda.step import moved_past
 from dem.kernels.periodic import nearest_image, wrap
-from dem.kernels.rigid import _free_rotation_one, _omega_one, _rotate
+from dem.kernels.rigid import free_rotation_one, omega_one, rotate
 
 
 @cuda.jit(device=True)
@@ -44,7 +44,7 @@ def _kick_drift(
     if drift:
         for c in range(3):
             body_x[b, c] += dt * body_v[b, c]
-        w, qx, qy, qz = _free_rotation_one(
+        w, qx, qy, qz = free_rotation_one(
             q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
             inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
         )  # fmt: skip
@@ -52,7 +52,7 @@ def _kick_drift(
         q[b, 1] = qx
         q[b, 2] = qy
         q[b, 3] = qz
-    o0, o1, o2 = _omega_one(
+    o0, o1, o2 = omega_one(
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
         inertia[b, 0], inertia[b, 1], inertia[b, 2],
     )  # fmt: skip
@@ -75,7 +75,7 @@ def _place_members(
     oz = body_omega[b, 2]
     for e in range(start[b], start[b + 1]):
         s = members[e]
-        rx, ry, rz = _rotate(
+        rx, ry, rz = rotate(
             q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
         )
         x[s, 0] = body_x[b, 0] + rx
@@ -87,7 +87,7 @@ def _place_members(
         omega[s, 0] = ox
         omega[s, 1] = oy
         omega[s, 2] = oz
-        if check and _moved_past(x, x_ref, s, length, limit):
+        if check and moved_past(x, x_ref, s, length, limit):
             trip[0] = seq
 
 
@@ -115,6 +115,22 @@ def _reduce(b, force, torque, x, body_x, start, members, length):
     return fx, fy, fz, tx, ty, tz
 
 
+@cuda.jit(device=True)
+def _body_force(
+    b, force, torque, x, body_x, start, members, length, body_mass, ax, ay, az, body_force,
+    body_torque,
+):  # fmt: skip
+    """F_b = sum F_s + M a_body and T_b about X_b into body b's rows."""
+    fx, fy, fz, tx, ty, tz = _reduce(b, force, torque, x, body_x, start, members, length)
+    m = body_mass[b]
+    body_force[b, 0] = fx + m * ax
+    body_force[b, 1] = fy + m * ay
+    body_force[b, 2] = fz + m * az
+    body_torque[b, 0] = tx
+    body_torque[b, 1] = ty
+    body_torque[b, 2] = tz
+
+
 @cuda.jit
 def reduce_kernel(
     force, torque, x, body_x, start, members, length, body_mass, ax, ay, az, body_force,
@@ -127,14 +143,8 @@ def reduce_kernel(
     b = cuda.grid(1)
     if b >= body_x.shape[0]:
         return
-    fx, fy, fz, tx, ty, tz = _reduce(b, force, torque, x, body_x, start, members, length)
-    m = body_mass[b]
-    body_force[b, 0] = fx + m * ax
-    body_force[b, 1] = fy + m * ay
-    body_force[b, 2] = fz + m * az
-    body_torque[b, 0] = tx
-    body_torque[b, 1] = ty
-    body_torque[b, 2] = tz
+    _body_force(b, force, torque, x, body_x, start, members, length, body_mass, ax, ay, az,
+                body_force, body_torque)  # fmt: skip
 
 
 @cuda.jit
@@ -174,14 +184,9 @@ def bodies_kernel(
     b = cuda.grid(1)
     if b >= body_x.shape[0] or trip[0] < seq:
         return
-    fx, fy, fz, tx, ty, tz = _reduce(b, force, torque, x, body_x, start, members, length)
+    _body_force(b, force, torque, x, body_x, start, members, length, body_mass, ax, ay, az,
+                body_force, body_torque)  # fmt: skip
     m = body_mass[b]
-    body_force[b, 0] = fx + m * ax
-    body_force[b, 1] = fy + m * ay
-    body_force[b, 2] = fz + m * az
-    body_torque[b, 0] = tx
-    body_torque[b, 1] = ty
-    body_torque[b, 2] = tz
     _kick_drift(
         b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
         inertia, body_omega,

@@ -30,7 +30,7 @@ NO_TRIP = 1 << 62
 
 
 @cuda.jit(device=True)
-def _moved_past(x, x_ref, i, length, limit):
+def moved_past(x, x_ref, i, length, limit):
     """Whether sphere i moved more than sqrt(limit) since the last build (minimum image)."""
     dx = minimum_image(x[i, 0] - x_ref[i, 0], length, 0.5 * length)
     dy = x[i, 1] - x_ref[i, 1]
@@ -56,7 +56,7 @@ def kick_drift_kernel(
         b = h * inv_inertia[i]
         for c in range(3):
             omega[i, c] += b * torque[i, c]
-    if _moved_past(x, x_ref, i, length, limit):
+    if moved_past(x, x_ref, i, length, limit):
         trip[0] = seq
 
 
@@ -120,5 +120,5 @@ def step_kernel(
     omega2[i, 0] = wx
     omega2[i, 1] = wy
     omega2[i, 2] = wz
-    if next_drift and _moved_past(x2, x_ref, i, length, limit):
+    if next_drift and moved_past(x2, x_ref, i, length, limit):
         trip[0] = seq
