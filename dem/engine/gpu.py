@@ -69,7 +69,6 @@ class GpuEngine:
         from numba import cuda
 
         from dem.kernels.cuda import bodies, forces, neighbours, step
-        from dem.kernels.cuda.forces import law_rows
 
         if sim.mesh is not None or sim.feeder is not None:
             raise ValueError("the GPU engine steps spheres and clumps with flat walls only")
@@ -80,7 +79,7 @@ class GpuEngine:
         self.chunk = 4
         self.skipped = 0  # launches queued after a trip (done nothing), in all
         self._since_build = 0  # steps since the last build
-        self.rows = law_rows(sim.law.params)
+        self._begin(sim)
         #: Launch the step through :class:`dem.kernels.cuda.launch.PreparedLaunch` (on a GPU).
         self.fast = not SIMULATOR
         self._prepared = {}
@@ -318,6 +317,20 @@ class GpuEngine:
             geom.length, 0.25 * geom.skin * geom.skin, self.px,
         )  # fmt: skip
 
+    def _begin(self, sim) -> None:
+        """Take up the simulation's law and scalars for this call.
+
+        The user may change them between calls; prepared launches are keyed by them.
+        """
+        from dem.kernels.cuda.forces import law_rows
+
+        geom = sim.geom
+        self.rows = law_rows(sim.law.params)
+        self._scalars = (
+            sim.law.model_id, self.rows, geom.length, geom.width, geom.back, geom.dt, geom.skin,
+            sim.rotation,
+        )  # fmt: skip
+
     def _run(self, kernel, n, key, args, changing) -> None:
         """Launch ``kernel`` over n threads with ``args``.
 
@@ -384,6 +397,7 @@ class GpuEngine:
         """The launch of ``kernel`` for ``key``'s buffers, prepared once (None: not possible)."""
         from dem.kernels.cuda.launch import prepare
 
+        key = (key, self._scalars)
         launch = self._prepared.get(key)
         if launch is None:
             launch = prepare(kernel, self.forces.blocks(n), self.forces.THREADS_PER_BLOCK, args)
@@ -417,6 +431,7 @@ class GpuEngine:
 
         ``drive``: :meth:`dem.physics.drive.Motion.kernel_array` (zeros: drive off).
         """
+        self._begin(sim)
         if self._stale(sim):
             self.upload(sim)
         self._evaluate(sim, drive)
@@ -437,6 +452,7 @@ class GpuEngine:
         if n_steps <= 0:  # as the CPU engine: not even the first half kick
             self.last_px = np.zeros(max(self.n, 0))
             return 0.0
+        self._begin(sim)
         if self._stale(sim):
             self.upload(sim)
         if not sim.forces_valid:

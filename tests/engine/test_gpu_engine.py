@@ -244,3 +244,14 @@ def test_gpu_clumps_evaluate_and_take_up_a_host_change():
         sim.bodies.place(sim.spheres)
         sim._advance(25)
     _compare_bodies(cpu, gpu)
+
+
+def test_gpu_takes_up_a_law_changed_between_calls():
+    """A contact law replaced between calls (a study changing the friction) is the one the next
+    call uses, as on the CPU."""
+    cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
+    for sim in (cpu, gpu):
+        sim._advance(20)
+        sim.law = _law("linear", _coefficients("linear", 0.5, 0.8, 0.0, False, "coulomb"))
+        sim._advance(20)
+    _compare(cpu, gpu)
