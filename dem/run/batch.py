@@ -57,10 +57,9 @@ def batchable(case) -> str | None:
 class _Replica:
     """One replica's scene, simulation, progress record and writers."""
 
-    def __init__(self, k, scene, run_dir, cycles, frames, lab_frame, keep_frames):
+    def __init__(self, k, scene, run_dir, cycles, lab_frame, keep_frames):
         self.k, self.scene, self.dir = k, scene, Path(run_dir)
-        self.cycles, self.frames, self.lab_frame = cycles, frames, lab_frame
-        self.keep_frames = keep_frames
+        self.cycles, self.lab_frame, self.keep_frames = cycles, lab_frame, keep_frames
         self.sim = None
         self.progress = None
         self.writers = []
@@ -119,15 +118,7 @@ def run_batch(case, out_dir: Path, run_dirs: list[Path], *, cycles: int | None,
     check_memory(scenes[0].case, replace(estimate, memory_bytes=2 * n * estimate.memory_bytes))
     per_frame = case.output.frames_per_cycle if frames else 1
     replicas = [
-        _Replica(
-            k,
-            scenes[k],
-            run_dirs[k],
-            cycles,
-            frames,
-            lab_frame,
-            frames and (k == 0 or all_replicas),
-        )  # fmt: skip
+        _Replica(k, scenes[k], run_dirs[k], cycles, lab_frame, frames and (k == 0 or all_replicas))
         for k in range(n)
     ]
     with ExitStack() as stack:
@@ -137,7 +128,6 @@ def run_batch(case, out_dir: Path, run_dirs: list[Path], *, cycles: int | None,
         for r in replicas:
             prepare_output(r.dir, overwrite=overwrite, resume=False)
         warn_plan(estimate)
-        _say(progress, f"{n} replicas as one GPU batch")
         with StopNow() as stop:
             t0 = time.perf_counter()
             compile_first(scenes[0].case, progress)
