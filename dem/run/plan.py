@@ -137,6 +137,8 @@ def plan(
     steps = int(cost.settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
     particle_steps = float(spheres) * steps
     speed, source = cost.rate(case, threads, data)
+    if case.run.device == "cuda":
+        source += "; the CPU engine's rate: a run on the GPU is not estimated"
     from dem import kernels
 
     shape = pt.kind

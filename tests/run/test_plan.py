@@ -348,3 +348,11 @@ def test_plan_warns_when_calibrated_contact_values_belong_to_another_drive(tmp_p
     there = plan(load_case(case_dir, {"drive.angle": 30.0}))
     [warn] = [a for a in there.advice if a.key == "contact.tangential_stiffness_ratio"]
     assert warn.level == "warn" and "phi 25 deg" in warn.text and "phi 30 deg" in warn.text
+
+
+def test_a_cuda_plan_says_its_times_are_the_cpu_engines(tmp_path):
+    cpu = plan.plan(load_case(write_case(tmp_path)), threads=1)
+    cuda = plan.plan(load_case(write_case(tmp_path), {"run.device": "cuda"}), threads=1)
+    assert cuda.wall_time_s == cpu.wall_time_s
+    assert "GPU is not estimated" in cuda.rate_source and "GPU" not in cpu.rate_source
+    assert "GPU is not estimated" in cuda.text()
