@@ -92,6 +92,27 @@ def _place_members(
 
 
 @cuda.jit(device=True)
+def _drift_place(
+    b, drift, dt, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+    inertia, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref, length, limit,
+):  # fmt: skip
+    """The next step's half kick, drift, free rotation and wrap (with ``drift``); members placed.
+
+    With ``drift`` a member past skin/2 trips a rebuild.
+    """
+    if drift:
+        _kick_drift(
+            b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+            inertia, body_omega,
+        )  # fmt: skip
+        body_x[b, 0] = wrap(body_x[b, 0], length)
+    _place_members(
+        b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
+        length, limit, drift,
+    )  # fmt: skip
+
+
+@cuda.jit(device=True)
 def _reduce(b, force, torque, x, body_x, start, members, length):
     """F_b and T_b about X_b from the members (:func:`dem.kernels.rigid.reduce_to_bodies`)."""
     fx = fy = fz = 0.0
@@ -159,14 +180,10 @@ def half_step_kernel(
     b = cuda.grid(1)
     if b >= body_x.shape[0] or trip[0] < seq:
         return
-    _kick_drift(
-        b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
-        inertia, body_omega,
-    )  # fmt: skip
-    body_x[b, 0] = wrap(body_x[b, 0], length)
-    _place_members(
-        b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
-        length, limit, True,
+    _drift_place(
+        b, True, dt, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
+        inertia, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref, length,
+        limit,
     )  # fmt: skip
 
 
@@ -192,13 +209,8 @@ def bodies_kernel(
         inertia, body_omega,
     )  # fmt: skip
     px[b] += m * body_v[b, 0]
-    if next_drift:
-        _kick_drift(
-            b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
-            inertia, body_omega,
-        )  # fmt: skip
-        body_x[b, 0] = wrap(body_x[b, 0], length)
-    _place_members(
-        b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
-        length, limit, next_drift,
+    _drift_place(
+        b, next_drift, dt, rotation, body_x, body_v, q, ang_mom, body_force, body_torque,
+        inv_mass, inertia, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
+        length, limit,
     )  # fmt: skip
