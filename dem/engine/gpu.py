@@ -16,6 +16,10 @@ compiled for the GPU (:mod:`dem.kernels.cuda.forces`), rigid clumps the CPU engi
 (:mod:`dem.kernels.cuda.bodies`). Flat walls only: meshes and feeders are refused before a run
 starts.
 
+The body acceleration g - s''(t) comes from an array, one row a queued step and one column a
+scene (:func:`accelerations`, filled once a chunk): replicas of other drives or inclines stepped
+together each feel their own.
+
 The host does not wait for each step: it queues up to :attr:`GpuEngine.chunk` step launches and
 then reads the rebuild trip once (:mod:`dem.kernels.cuda.step`). The launches queued after the
 step that tripped do nothing; the host rebuilds and relaunches from there. The chunk follows the
@@ -31,9 +35,10 @@ import math
 import os
 import warnings
 
+import numba
 import numpy as np
 
-from dem.config import DEM_GROWTH_FACTOR
+from dem.config import DEM_GROWTH_FACTOR, NUMBA_OPTIONS
 from dem.kernels.integrate import body_acceleration
 from dem.kernels.neighbours import OVERFLOW_PAIRS, grid_of
 
@@ -49,6 +54,21 @@ MAX_CHUNK = 64
 
 def _grow(need: int) -> int:
     return int(need * DEM_GROWTH_FACTOR) + 1
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def accelerations(times, gravity, drive, out):
+    """a_body of every scene at every time: out[k, s] = a_body(times[k]) of scene s, m/s^2.
+
+    ``gravity`` (S, 3) and ``drive`` (S, 12) per scene (:func:`dem.kernels.integrate.
+    body_acceleration`, whose values these are to the bit).
+    """
+    for k in range(times.shape[0]):
+        for s in range(gravity.shape[0]):
+            ax, ay, az = body_acceleration(times[k], gravity[s], drive[s])
+            out[k, s, 0] = ax
+            out[k, s, 1] = ay
+            out[k, s, 2] = az
 
 
 @functools.cache
@@ -87,6 +107,10 @@ class GpuEngine:
         warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
         self.scene_host = None if scene is None else np.asarray(scene, dtype=np.int32)
         self.scenes = 1 if scene is None else int(self.scene_host.max()) + 1
+        #: Where scenes differ in their drive or incline: ``drives(sim)`` gives each scene's
+        #: gravity (S, 3) and drive (S, 12); None: the simulation's, the same for all.
+        self.drives = None
+        self.acc_host = np.zeros((MAX_CHUNK, self.scenes, 3))
         self.last_px = None  # sum over the last call's steps of m_i v_x,i per sphere, kg m/s
         #: Where set (an array like ``last_px``), every call's ``last_px`` is added to it.
         self.px_sum = None
@@ -158,6 +182,10 @@ class GpuEngine:
                 to(b.mass), to(b.inv_mass), to(b.moments),
             )  # fmt: skip
             self.start, self.members, self.offsets = to(b.start), to(b.members), to(b.offsets)
+            first = scene[b.members[b.start[:-1]]]  # a body's scene: its first member's
+            self.bscene = to(np.ascontiguousarray(first, dtype=np.int32))
+        self.acc = cuda.to_device(self.acc_host)
+        self.no_acc = cuda.to_device(np.zeros((1, self.scenes, 3)))  # clump members: no a_body
         self.px = cuda.to_device(np.zeros(max(n, self.n_bodies)))
         # the rebuild trip: mapped host memory on a GPU (read without a copy)
         none = np.full(1, self.NO_TRIP, dtype=np.int64)
@@ -292,7 +320,7 @@ class GpuEngine:
         self.chunk = max(2, min(MAX_CHUNK, self._since_build // 2))
         self._since_build = 0
 
-    def _sphere_args(self, sim, seq, ax, ay, az, kick, next_drift) -> tuple:
+    def _sphere_args(self, sim, seq, acc, row, kick, next_drift) -> tuple:
         """The arguments of :func:`dem.kernels.cuda.step.step_kernel` for the buffers now."""
         geom = sim.geom
         p, pw = self.rows
@@ -301,16 +329,17 @@ class GpuEngine:
             seq, self.trip, sim.law.model_id, p, pw, x[0], v[0], om[0], x[1], v[1], om[1],
             self.radius, self.mass, self.inv_mass, self.inv_inertia, self.nbr[0], self.count[0],
             self.rev, self.rev_count, self.hist[0], self.hist[1], self.wall[0], self.wall[1],
-            geom.length, 0.5 * geom.width, geom.back, geom.dt, ax, ay, az, sim.rotation, kick,
-            next_drift, self.x_ref, 0.25 * geom.skin * geom.skin, self.force, self.torque,
-            self.px,
+            geom.length, 0.5 * geom.width, geom.back, geom.dt, acc, row, self.scene,
+            sim.rotation, kick, next_drift, self.x_ref, 0.25 * geom.skin * geom.skin, self.force,
+            self.torque, self.px,
         )  # fmt: skip
 
-    def _body_args(self, sim, seq, ax, ay, az, next_drift) -> tuple:
+    def _body_args(self, sim, seq, row, next_drift) -> tuple:
         """The arguments of :func:`dem.kernels.cuda.bodies.bodies_kernel`."""
         geom = sim.geom
         return (
-            seq, self.trip, geom.dt, ax, ay, az, sim.rotation, next_drift, self.force,
+            seq, self.trip, geom.dt, self.acc, row, self.bscene, sim.rotation, next_drift,
+            self.force,
             self.torque, self.x[0], self.v[0], self.omega[0], self.body_x, self.body_v, self.q,
             self.ang_mom, self.body_force, self.body_torque, self.body_omega, self.body_inv_mass,
             self.body_mass, self.moments, self.offsets, self.start, self.members, self.x_ref,
@@ -352,37 +381,49 @@ class GpuEngine:
                 launch.set_float(i, value)
         launch()
 
-    def _step(self, sim, seq: int, t: float, drive, kick: bool, next_drift: bool) -> None:
-        """Launch step ``seq`` at time t.
+    def _step(self, sim, seq: int, row: int, kick: bool, next_drift: bool) -> None:
+        """Launch step ``seq`` with the body accelerations of row ``row`` of :attr:`acc`.
 
         Spheres: the step kernel. Clumps: the members' forces, then the bodies' step. With
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
-        ax, ay, az = body_acceleration(t, sim.gravity, drive)
         clumps = self.n_bodies > 0
         step = self.step.step_kernel
         if clumps:
-            args = self._sphere_args(sim, seq, 0.0, 0.0, 0.0, False, False)
+            args = self._sphere_args(sim, seq, self.no_acc, 0, False, False)
             key = ("forces", id(self.hist[0]), id(self.wall[0]))
             self._run(step, self.n, key, args, ("seq",))
         else:
-            args = self._sphere_args(sim, seq, ax, ay, az, kick, next_drift)
+            args = self._sphere_args(sim, seq, self.acc, row, kick, next_drift)
             key = ("step", kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
-            self._run(step, self.n, key, args, ("seq", "ax", "ay", "az", "next_drift"))
+            self._run(step, self.n, key, args, ("seq", "row", "next_drift"))
         self._swap(kick and not clumps)
         if not clumps:
             return
         if kick:
             self._run(
                 self.bodies.bodies_kernel, self.n_bodies, ("bodies",),
-                self._body_args(sim, seq, ax, ay, az, next_drift),
-                ("seq", "ax", "ay", "az", "next_drift"),
+                self._body_args(sim, seq, row, next_drift), ("seq", "row", "next_drift"),
             )  # fmt: skip
         else:
             self._launch(self.bodies.reduce_kernel, self.n_bodies)(
                 self.force, self.torque, self.x[0], self.body_x, self.start, self.members,
-                sim.geom.length, self.body_mass, ax, ay, az, self.body_force, self.body_torque,
+                sim.geom.length, self.body_mass, self.acc, row, self.bscene, self.body_force,
+                self.body_torque,
             )  # fmt: skip
+
+    def _accelerate(self, sim, drive, times: np.ndarray) -> None:
+        """Rows 0.. of :attr:`acc`: every scene's a_body at ``times`` (one row a time)."""
+        if self.drives is None:
+            gravity, drives = np.asarray(sim.gravity, dtype=np.float64)[None], drive[None]
+        else:
+            gravity, drives = self.drives(sim)
+        k = times.shape[0]
+        if gravity.shape[0] == 1 and self.scenes > 1:  # every scene the same
+            gravity = np.repeat(gravity, self.scenes, axis=0)
+            drives = np.repeat(drives, self.scenes, axis=0)
+        accelerations(times, gravity, drives, self.acc_host[:k])
+        self.acc[:k].copy_to_device(self.acc_host[:k])
 
     def _swap(self, state: bool) -> None:
         """The other history buffers (and with ``state``, the other sphere buffers) are current."""
@@ -424,7 +465,8 @@ class GpuEngine:
         """Rebuild and evaluate the forces at the current state, no kick."""
         self._reset_trip()
         self.build(sim)
-        self._step(sim, 0, sim.drive_time, drive, False, False)
+        self._accelerate(sim, drive, np.array([sim.drive_time]))
+        self._step(sim, 0, 0, False, False)
 
     def compute_forces(self, sim, drive) -> None:
         """Rebuild and evaluate forces at the current state (no kick), as the CPU engine does.
@@ -481,8 +523,9 @@ class GpuEngine:
                 self._reset_trip()
                 self.build(sim)
             chunk = min(self.chunk, n_steps - s)
+            self._accelerate(sim, drive, (step0 + np.arange(s, s + chunk) + 1) * dt)
             for k in range(s, s + chunk):
-                self._step(sim, k + 1, (step0 + k + 1) * dt, drive, True, k < n_steps - 1)
+                self._step(sim, k + 1, k - s, True, k < n_steps - 1)
             trip = self._read_trip()
             done = chunk if trip == self.NO_TRIP else trip - s
             if (chunk - done) % 2:  # the skipped launches swapped no buffers

@@ -11,12 +11,14 @@ computation as the replica alone except that the pair lists are rebuilt whenever
 needs it (a superset of its own builds): in numba's CUDA simulator identical replicas give the
 single run's bits (tests/engine/test_gpu_replicas.py).
 
-What all replicas must share: the contact law, time step, trough (length, width, inclination,
-drive), rotation and the step count (the drive's phase); the batch takes the largest of their
-Verlet skins (which changes when lists are rebuilt, never a force). Spheres or clumps (all
-replicas the same), flat walls, periodic. The
-instability checks run on the whole batch (a replica that blows up stops them all, naming its
-grain); each replica's velocity is measured on its own.
+What all replicas must share: the contact law, time step, trough section (length, width, back
+wall), the drive's period, rotation and the step count (the drive's phase); the batch takes the
+largest of their Verlet skins (which changes when lists are rebuilt, never a force). Each
+replica's drive (amplitude, angle, phase of its components) and incline are its own: the engine
+gives each scene its own body acceleration g - s''(t) (``GpuEngine.drives``), so a sweep of the
+vibration angle or throw number at one frequency is one batch. Spheres or clumps (all replicas
+the same), flat walls, periodic. The instability checks run on the whole batch (a replica that
+blows up stops them all, naming its grain); each replica's velocity is measured on its own.
 
 Two ways to use it: :meth:`GpuReplicas.measure` (velocities of whole cycles, nothing else), or
 :meth:`GpuReplicas.settle` and :meth:`GpuReplicas.run`, after which every replica's own
@@ -70,7 +72,10 @@ class GpuReplicas:
         _same(sims, "contact law", lambda s: s.law.params)
         _same(sims, "time step", lambda s: s.dt)
         _same(sims, "rotation", lambda s: s.rotation)
-        _same(sims, "trough", lambda s: s.trough)
+        # one section and one period; the drive's amplitude, angle, phase and the incline may
+        # differ (each replica's body acceleration is its own: a sweep of them is one batch)
+        _same(sims, "trough section", lambda s: (s.trough.length, s.trough.width, s.geom.back))
+        _same(sims, "drive period", lambda s: s.trough.period)
         _same(sims, "step index", lambda s: (s.step_index, s.drive_start_step, s.drive_on))
         self.counts = np.array([s.spheres.n for s in sims])
         self.start = np.concatenate([[0], np.cumsum(self.counts)])
@@ -122,6 +127,7 @@ class GpuReplicas:
         self.sims = sims
         self.engine = sim.use_gpu(self.scene)
         self.engine.px_sum = np.zeros(self.start[-1])
+        self._set_drives()
 
     @property
     def replicas(self) -> int:
@@ -142,6 +148,18 @@ class GpuReplicas:
         sim.stats[1] += n_steps
         sim.step_index += n_steps
         return self._px() / (n_steps * self.mass)
+
+    def _set_drives(self) -> None:
+        """Each replica's gravity (its incline) and drive for the engine's body accelerations.
+
+        The drive arrays, on and off, follow the batch's ``drive_on``.
+        """
+        gravity = np.array([rs.gravity for rs in self.sims], dtype=np.float64)
+        drive = {
+            on: np.array([rs.trough.drive_array(on) for rs in self.sims], dtype=np.float64)
+            for on in (False, True)
+        }  # fmt: skip
+        self.engine.drives = lambda sim: (gravity, drive[bool(sim.drive_on)])
 
     def run(self, n_steps: int, stop=None) -> int:
         """``n_steps`` steps of the batch with the instability checks, then :meth:`scatter`.

@@ -1,27 +1,30 @@
-"""Replicas as one GPU job: ``dem run --replicas N --device cuda`` for a small scene.
+"""Many runs as one GPU job: ``dem run --replicas N`` and ``dem sweep`` under ``--device cuda``.
 
 A bed of a few thousand spheres keeps a GPU mostly idle (launches, not arithmetic, set its
-pace); N replicas of it stepped as one scene of N times the spheres
-(:class:`dem.engine.gpu_replicas.GpuReplicas`) fill it. This module runs the N replicas of a
-case that way and leaves, for each one, what its own run would have left: each replica k is
-filled with seed ``run.seed + k`` as alone; the batch settles them with the drive off until the
-last one rests (each rests that long) and starts the drive in all at once; then every frame the
-batch steps, the replicas' own :class:`~dem.engine.simulation.Simulation` objects take their
-share of the state (:meth:`GpuReplicas.scatter`), run their own instability checks and go through
-the single run's writers, cycle records ("auto" settling decided per replica) and summary
-(:mod:`dem.run.runner`). A replica whose measured cycles are done writes its summary and stops
-recording; the batch steps on until the last one is done. :func:`dem.run.replicas.run_replicas`
-pools the summaries as for replicas run one by one.
+pace); N runs of it stepped as one scene of N times the spheres
+(:class:`dem.engine.gpu_replicas.GpuReplicas`) fill it. The runs are the replicas of a case
+(seeds ``run.seed + k``) or the points of a sweep that differ only in their drive (angle,
+amplitude or throw number), incline or seed: one section, one period, one law, one time step (the
+smallest of their automatic ones). :func:`run_batch` leaves, for each run, what its own run would
+have left: each is filled as alone; the batch settles them with the drive off until the last one
+rests (each rests that long) and starts the drive in all at once; then every frame the batch
+steps, each run's own :class:`~dem.engine.simulation.Simulation` takes its share of the state
+(:meth:`GpuReplicas.scatter`), runs its own instability checks and goes through the single run's
+writers, cycle records ("auto" settling decided per run) and summary (:mod:`dem.run.runner`). A
+run whose measured cycles are done writes its summary and stops recording; the batch steps on
+until the last one is done. :func:`dem.run.replicas.run_replicas` pools the replicas' summaries;
+:func:`dem.studies.sweep.run_sweep` gathers the points'.
 
-What differs from N separate runs: the common settling time (the longest replica's), rebuilds of
-every pair list whenever one replica needs one (this moves the last bits of positions, not the
-physics), and the wall time: each summary's ``wall_time_s`` is its share of the batch's step loop
-(the batch's time over the replicas still recording), and ``gpu_batch`` gives the batch's size
-and whole wall time. An interrupted batch writes every unfinished replica's checkpoint; ``--resume``
-continues them one by one (:func:`dem.run.replicas.run_replicas`), not as a batch.
+What differs from separate runs: the common settling time (the longest run's), the common time
+step of a sweep, rebuilds of every pair list whenever one run needs one (this moves the last bits
+of positions, not the physics), and the wall time: each summary's ``wall_time_s`` is its share of
+the batch's step loop (the batch's time over the runs still recording), and ``gpu_batch`` gives
+the batch's size and whole wall time. An interrupted batch writes every unfinished run's
+checkpoint; a rerun (``--resume``, or the sweep again) continues them one by one, not as a batch.
+One run that blows up stops the batch: a sweep then runs its points one by one.
 
-Cost: the fill of each replica (O(grains) each), then the batch's steps: one launch a step for all
-replicas, plus O(spheres + pairs log pairs) on the host at every frame for the scatter and the
+Cost: the fill of each run (O(grains) each), then the batch's steps: one launch a step for all
+runs, plus O(spheres + pairs log pairs) on the host at every frame for the scatter and the
 checks.
 """
 
@@ -97,62 +100,65 @@ class _Replica:
                     pass
 
 
-def run_batch(case, out_dir: Path, run_dirs: list[Path], *, cycles: int | None,
-              progress: bool, overwrite: bool, frames: bool, lab_frame: bool,
-              all_replicas: bool) -> dict[int, dict]:  # fmt: skip
-    """Run the replicas ``run_dirs`` (replica k's folder at k) as one GPU job.
+def run_batch(cases: list, run_dirs: list[Path], *, cycles: int | None, progress: bool,
+              overwrite: bool, frames: bool, lab_frame: bool,
+              keep_frames: list[bool] | None = None) -> dict[int, dict]:  # fmt: skip
+    """Run ``cases`` (replicas, or sweep points of one section, period and law) as one GPU job.
 
-    Arguments as :func:`dem.run.replicas.run_replicas`. Returns each replica's summary by k.
+    Case k runs into ``run_dirs[k]``; ``keep_frames[k]``: it writes its frames (default: all,
+    with ``frames``). Where the cases' automatic time steps differ (a throw-number sweep), all run
+    at the smallest. Other arguments as :func:`dem.run.runner.run_case`. Returns each case's
+    summary by k.
 
     Raises:
-        RunInterrupted: a signal stopped the batch; every unfinished replica left a checkpoint.
+        RunInterrupted: a signal stopped the batch; every unfinished case left a checkpoint.
 
     """
-    from dem.run.replicas import replica_case
-
-    n = len(run_dirs)
-    scenes = [resolve(replica_case(case, k)) for k in range(n)]
-    cycles = scenes[0].case.run.cycles if cycles is None else int(cycles)
+    n = len(cases)
+    scenes = [resolve(c) for c in cases]
+    steps = {s.step.dt for s in scenes}
+    if len(steps) > 1:
+        scenes = [resolve(c, timestep=min(steps)) for c in cases]
+    first = scenes[0].case
+    cycles = first.run.cycles if cycles is None else int(cycles)
     estimate = plan.plan(scenes[0], threads=1, cycles=cycles, frames=frames)
-    # the host holds every replica's state, and the batch's besides
-    check_memory(scenes[0].case, replace(estimate, memory_bytes=2 * n * estimate.memory_bytes))
-    per_frame = case.output.frames_per_cycle if frames else 1
-    replicas = [
-        _Replica(k, scenes[k], run_dirs[k], cycles, lab_frame, frames and (k == 0 or all_replicas))
-        for k in range(n)
-    ]
+    # the host holds every case's state, and the batch's besides
+    check_memory(first, replace(estimate, memory_bytes=2 * n * estimate.memory_bytes))
+    per_frame = first.output.frames_per_cycle if frames else 1
+    keep = [frames] * n if keep_frames is None else [frames and k for k in keep_frames]
+    runs = [_Replica(k, scenes[k], run_dirs[k], cycles, lab_frame, keep[k]) for k in range(n)]
     with ExitStack() as stack:
-        for r in replicas:
+        for r in runs:
             stack.enter_context(locked(r.dir))
         stack.enter_context(file_size_limit_as_error())
-        for r in replicas:
+        for r in runs:
             prepare_output(r.dir, overwrite=overwrite, resume=False)
         warn_plan(estimate)
         with StopNow() as stop:
             t0 = time.perf_counter()
-            compile_first(scenes[0].case, progress)
+            compile_first(first, progress)
             compile_wall = time.perf_counter() - t0
             stop.phase = "filling"
-            _say(progress, f"filling {n} troughs with {case.particles.count} grains each")
+            _say(progress, f"filling {n} troughs with {first.particles.count} grains each")
             t0 = time.perf_counter()
-            for r in replicas:
+            for r in runs:
                 r.sim = setup.from_case(r.scene)
             fill_wall = (time.perf_counter() - t0) / n
-            batch = GpuReplicas([r.sim for r in replicas])
+            batch = GpuReplicas([r.sim for r in runs])
             t0 = time.perf_counter()
             stop.phase = "settling"
-            settle_time = batch.settle(progress=fill_bar(case) if progress else None)
+            settle_time = batch.settle(progress=fill_bar(first) if progress else None)
             batch.start_drive()
             settle_wall = (time.perf_counter() - t0) / n
-        for r in replicas:
+        for r in runs:
             r.sim.stats[:] = 0.0
             r.open(settle_time, settle_wall, compile_wall, fill_wall)
         try:
-            _cycles(batch, replicas, per_frame, estimate, out_dir, progress)
+            _cycles(batch, runs, per_frame, estimate, Path(run_dirs[0]), progress)
         finally:
-            for r in replicas:
+            for r in runs:
                 r.close()
-    return {r.k: r.summary for r in replicas}
+    return {r.k: r.summary for r in runs}
 
 
 def _cycles(batch, replicas, per_frame, estimate, out_dir, show) -> None:

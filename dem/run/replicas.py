@@ -148,9 +148,10 @@ def run_replicas(
             print(f"dem: the {n} replicas run as one GPU batch (dem.run.batch)", file=sys.stderr,
                   flush=True)  # fmt: skip
         run_dirs = [out_dir if k == 0 else replica_dir(out_dir, k) for k in range(n)]
-        done = run_batch(case, out_dir, run_dirs, cycles=cycles, progress=progress,
-                         overwrite=overwrite, frames=frames, lab_frame=lab_frame,
-                         all_replicas=all_replicas)  # fmt: skip
+        done = run_batch([replica_case(case, k) for k in range(n)], run_dirs, cycles=cycles,
+                         progress=progress, overwrite=overwrite, frames=frames,
+                         lab_frame=lab_frame,
+                         keep_frames=[k == 0 or all_replicas for k in range(n)])  # fmt: skip
         for k, summary in done.items():
             summaries[k] = summary
             _keep_own_summary(out_dir, k, summary)

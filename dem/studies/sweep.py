@@ -8,6 +8,11 @@ on Dask (``dask.distributed``, the ``sweep`` extra): a local cluster of one-thre
 core, by default; a running ``dask scheduler`` when ``--scheduler ADDRESS`` is given (the point
 folders must then be on storage that every worker sees).
 
+Under ``--device cuda`` (or ``run.device = "cuda"``) the points of a new sweep that differ only in
+:data:`BATCH_KEYS` (the drive's angle, amplitude or throw number, the incline, the seed) run as one
+GPU job instead (:mod:`dem.run.batch`: each point its own folder, summary and record, one time
+step for all, the smallest of theirs); if that batch stops on an error the points run one by one.
+
 A grid of more than :data:`MAX_POINTS` points is refused before a case is loaded: each point
 is a whole ``dem run``. A rerun skips the points whose folder holds a summary.json and resumes
 the ones that hold a checkpoint. A finished point is reused only when its case and run options
@@ -62,6 +67,11 @@ TABLE = "sweep"
 MAX_POINTS = 10_000
 #: The record of the case and options a finished point ran with, beside its summary.json.
 RECORD = "sweep_point.json"
+#: Swept keys whose points can share one GPU batch (``--device cuda``): each point's body
+#: acceleration is its own (:mod:`dem.engine.gpu_replicas`); law, section and period are shared.
+BATCH_KEYS = frozenset(
+    {"drive.angle", "drive.throw_number", "drive.amplitude", "trough.inclination", "run.seed"}
+)
 
 
 @dataclass(frozen=True)
@@ -285,6 +295,8 @@ def run_sweep(
     todo = [p for p in points if status(p) != "done"]
     skipped = len(points) - len(todo)
     failed: dict[str, str] = {}
+    if _run_as_batch(case_dir, todo, cycles, frames, device, progress):
+        todo = []
     if todo:
         from dask.distributed import as_completed
 
@@ -329,6 +341,43 @@ def run_sweep(
     plot(rows, out / f"{TABLE}.png", [k for k, _ in sets], held=held_values(case_dir, sets))
     return {"points": len(points), "done": len(points) - len(failed), "skipped": skipped,
             "failed": failed, "csv": str(csv_path)}  # fmt: skip
+
+
+def _run_as_batch(case_dir: Path, todo: list[SweepPoint], cycles, frames: bool,
+                  device: str | None, progress: bool) -> bool:  # fmt: skip
+    """Run the points as one GPU batch (:func:`dem.run.batch.run_batch`) where they can be.
+
+    They can where they run on ``cuda``, are new (none to resume) and differ only in
+    :data:`BATCH_KEYS`. Returns whether they ran. If the batch stops on an error (one point's
+    blow-up stops them all) it says so and returns False: the points then run one by one, so
+    that a failing point leaves the others running.
+    """
+    from dem.errors import SimulationError
+    from dem.io.files import replace_text
+    from dem.run.batch import run_batch
+    from dem.scene.case import load_case
+
+    if len(todo) < 2 or any(status(p) != "new" for p in todo):
+        return False
+    if any(set(p.overrides) - BATCH_KEYS for p in todo):
+        return False
+    cases = [load_case(case_dir, p.overrides | device_override(device)) for p in todo]
+    if cases[0].run.device != "cuda" or cases[0].feeder is not None:
+        return False
+    if progress:
+        print(f"dem sweep: {len(todo)} points as one GPU batch", flush=True)
+    for p in todo:
+        (p.folder / RECORD).unlink(missing_ok=True)
+    try:
+        run_batch(cases, [p.folder for p in todo], cycles=cycles, progress=progress,
+                  overwrite=True, frames=frames, lab_frame=False)  # fmt: skip
+    except (SimulationError, ValueError) as exc:
+        print(f"dem sweep: the GPU batch stopped ({type(exc).__name__}: {exc}); the points run "
+              "one by one", flush=True)  # fmt: skip
+        return False
+    for p, case in zip(todo, cases, strict=True):
+        replace_text(p.folder / RECORD, json.dumps(record(case, cycles, frames), indent=1) + "\n")
+    return True
 
 
 def dask_client(scheduler: str | None, workers: int, command: str):

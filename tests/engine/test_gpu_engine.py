@@ -41,7 +41,7 @@ def _needs_cuda():
         pytest.skip("no GPU, and NUMBA_ENABLE_CUDASIM=1 (numba's CUDA simulator) is not set")
 
 
-def _pair(model, e, mu, mu_roll, limit, tangential, arm, dt, seed=3):
+def _pair(model, e, mu, mu_roll, limit, tangential, arm, dt, seed=3, angle=30.0, incline=0.1):
     """Two simulations of one 40-sphere periodic packing, driven and inclined, with random
     velocities and spins: the first on the CPU, the second on the GPU."""
     rng = np.random.default_rng(seed)
@@ -49,13 +49,13 @@ def _pair(model, e, mu, mu_roll, limit, tangential, arm, dt, seed=3):
     v = rng.normal(0, 0.4, (len(r), 3))
     w = rng.normal(0, 200.0, (len(r), 3))
     law = _law(model, _coefficients(model, e, mu, mu_roll, limit, tangential, arm))
-    motion = drive.Motion(2 * math.pi * 50.0, (drive.Component(2e-3, math.radians(30.0)),))
+    motion = drive.Motion(2 * math.pi * 50.0, (drive.Component(2e-3, math.radians(angle)),))
     sims = []
     for device in ("cpu", "cuda"):
         spheres = Spheres.create(x, r, 2500.0)
         spheres.v[:] = v
         spheres.omega[:] = w
-        trough = Trough(LENGTH, WIDTH, inclination=0.1, motion=motion)
+        trough = Trough(LENGTH, WIDTH, inclination=incline, motion=motion)
         sim = Simulation(spheres, trough, law, dt)
         sim.device = device
         sim.start_drive()

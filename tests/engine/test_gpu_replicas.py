@@ -81,11 +81,37 @@ def test_different_replicas_each_as_alone():
     assert k > 0 and np.all(scene[pairs.pair_i[:k]] == scene[pairs.pair_j[:k]])
 
 
+def test_replicas_of_other_drives_and_inclines_each_as_alone():
+    """A sweep as one batch: the same packing under drive angles of 20 and 50 deg and inclines
+    of 0 and 0.1 rad, each replica with its own body acceleration: each as stepped alone (to
+    1e-9, the wraps of a superset of rebuilds), its momentum too."""
+    sweep = [(20.0, 0.0), (50.0, 0.1)]
+    singles = [_pair(*LAW, angle=a, incline=i)[1] for a, i in sweep]
+    batch = GpuReplicas([_pair(*LAW, angle=a, incline=i)[1] for a, i in sweep])
+    assert batch.run(50) == 50
+    for r, sim in enumerate(singles):
+        sim.run(50)
+        _close(batch.sims[r].spheres, sim.spheres, exact=False)
+        np.testing.assert_allclose(batch.sims[r].stats[0], sim.stats[0], rtol=1e-9)
+    a, b = (s.spheres.v for s in singles)
+    assert np.max(np.abs(a - b)) > 1e-3  # the drives did differ
+
+
 def test_replicas_must_share_the_scene():
     a = _pair(*LAW)[1]
     b = _pair(*LAW[:-1], 1e-5)[1]
     with pytest.raises(ValueError, match="replica 1 differs from replica 0 in its time step"):
         GpuReplicas([a, b])
+    import dataclasses
+    import math
+
+    from dem.physics import drive
+
+    c = _pair(*LAW)[1]
+    faster = drive.Motion(2 * math.pi * 60.0, c.trough.motion.components)
+    c.trough = dataclasses.replace(c.trough, motion=faster)
+    with pytest.raises(ValueError, match="replica 1 differs from replica 0 in its drive period"):
+        GpuReplicas([a, c])
 
 
 def test_run_scatters_each_replica_into_its_own_simulation():

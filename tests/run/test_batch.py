@@ -114,3 +114,27 @@ def test_a_signal_checkpoints_every_unfinished_replica(cpu_batch, tmp_path, monk
     for run_dir in (out, out / "replicas" / "1"):
         assert (run_dir / CHECKPOINT).is_file()
         assert not (run_dir / "summary.json").exists()
+
+
+@pytest.mark.integration
+def test_a_cuda_sweep_of_the_drive_is_one_batch(cpu_batch, tmp_path):
+    """``dem sweep --device cuda`` over the drive angle and amplitude: one batch, each
+    point its own drive, folder, summary and record; a rerun recomputes nothing."""
+    from dem.studies.sweep import run_sweep
+
+    case_dir = write_case(tmp_path / "case", TINY)
+    out = tmp_path / "out"
+    sets = [("drive.angle", [20.0, 40.0]), ("drive.amplitude", [0.0004, 0.0007])]
+    done = run_sweep(case_dir, sets, out, device="cuda", progress=False)
+    assert done["done"] == 4 and done["failed"] == {} and done["skipped"] == 0
+    (stepper,) = LockstepCpu.instances
+    assert len(stepper.sims) == 4
+    angles = sorted({round(float(np.degrees(s.trough.angle)), 6) for s in stepper.sims})
+    assert angles == [20.0, 40.0]
+    summaries = [json.loads(p.read_text()) for p in sorted(out.glob("*/summary.json"))]
+    assert len(summaries) == 4 and len({s["mean_velocity"] for s in summaries}) == 4
+    assert len({s["timestep"] for s in summaries}) == 1  # the batch's one step, the smallest
+    assert all(s["gpu_batch"]["replicas"] == 4 for s in summaries)
+    assert len(list(out.glob("*/sweep_point.json"))) == 4
+    again = run_sweep(case_dir, sets, out, device="cuda", progress=False)
+    assert again["skipped"] == 4 and len(LockstepCpu.instances) == 1

@@ -42,6 +42,7 @@ def signatures() -> dict:
     f8, i8, b1 = types.float64, types.int64, types.boolean
     a2 = types.Array(f8, 2, "C")
     a1 = types.Array(f8, 1, "C")
+    a3 = types.Array(f8, 3, "C")
     i4a = types.Array(types.int32, 1, "C")
     i8a = types.Array(i8, 1, "C")
     row = types.UniTuple(f8, N_PARAMS)
@@ -63,14 +64,14 @@ def signatures() -> dict:
             i8, i8a, f8, a2, a2, a2, a2, a2, a1, a1, b1, a2, f8, f8)),
         "step_kernel": (step.step_kernel, (
             i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a,
-            a2, a2, a2, a2, f8, f8, f8, f8, f8, f8, f8, b1, b1, b1, a2, f8, a2, a2, a1)),
+            a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
         "reduce_kernel": (bodies.reduce_kernel, (
-            a2, a2, a2, a2, i8a, i8a, f8, a1, f8, f8, f8, a2, a2)),
+            a2, a2, a2, a2, i8a, i8a, f8, a1, a3, i8, i4a, a2, a2)),
         "half_step_kernel": (bodies.half_step_kernel, (
             i8, i8a, f8, b1, a2, a2, a2, a2, a2, a2, a1, a2, a2, a2, i8a, i8a, a2, a2, a2, a2,
             f8, f8)),
         "bodies_kernel": (bodies.bodies_kernel, (
-            i8, i8a, f8, f8, f8, f8, b1, b1, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a1,
+            i8, i8a, f8, a3, i8, i4a, b1, b1, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a2, a1,
             a1, a2, a2, i8a, i8a, a2, f8, f8, a1)),
     }  # fmt: skip
 

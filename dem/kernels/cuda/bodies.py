@@ -154,17 +154,18 @@ def _body_force(
 
 @cuda.jit
 def reduce_kernel(
-    force, torque, x, body_x, start, members, length, body_mass, ax, ay, az, body_force,
+    force, torque, x, body_x, start, members, length, body_mass, acc, row, bscene, body_force,
     body_torque,
 ):  # fmt: skip
-    """Thread b: F_b = sum F_s + M a_body and T_b about X_b, no kick.
+    """Thread b: F_b = sum F_s + M a_body and T_b about X_b, no kick; a_body = acc[row, bscene[b]].
 
     A force evaluation at rest (:func:`dem.kernels.integrate.evaluate_forces_clumps`).
     """
     b = cuda.grid(1)
     if b >= body_x.shape[0]:
         return
-    _body_force(b, force, torque, x, body_x, start, members, length, body_mass, ax, ay, az,
+    _body_force(b, force, torque, x, body_x, start, members, length, body_mass,
+                acc[row, bscene[b], 0], acc[row, bscene[b], 1], acc[row, bscene[b], 2],
                 body_force, body_torque)  # fmt: skip
 
 
@@ -189,19 +190,21 @@ def half_step_kernel(
 
 @cuda.jit
 def bodies_kernel(
-    seq, trip, dt, ax, ay, az, rotation, next_drift, force, torque, x, v, omega, body_x, body_v,
-    q, ang_mom, body_force, body_torque, body_omega, inv_mass, body_mass, inertia, offsets, start,
-    members, x_ref, length, limit, px,
+    seq, trip, dt, acc, row, bscene, rotation, next_drift, force, torque, x, v, omega, body_x,
+    body_v, q, ang_mom, body_force, body_torque, body_omega, inv_mass, body_mass, inertia, offsets,
+    start, members, x_ref, length, limit, px,
 ):  # fmt: skip
     """Thread b: reduce, M a_body, closing kick, momentum, next drift, members placed.
 
     As the module docstring says. ``px[b] += M V_x``; ``force``/``torque``: the members'
-    contact forces of :func:`dem.kernels.cuda.step.step_kernel` in the same step.
+    contact forces of :func:`dem.kernels.cuda.step.step_kernel` in the same step; a_body =
+    ``acc[row, bscene[b]]`` (:func:`dem.kernels.cuda.step.step_kernel`).
     """
     b = cuda.grid(1)
     if b >= body_x.shape[0] or trip[0] < seq:
         return
-    _body_force(b, force, torque, x, body_x, start, members, length, body_mass, ax, ay, az,
+    _body_force(b, force, torque, x, body_x, start, members, length, body_mass,
+                acc[row, bscene[b], 0], acc[row, bscene[b], 1], acc[row, bscene[b], 2],
                 body_force, body_torque)  # fmt: skip
     m = body_mass[b]
     _kick_drift(

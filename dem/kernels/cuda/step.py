@@ -64,13 +64,15 @@ def kick_drift_kernel(
 def step_kernel(
     seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
     nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back,
-    dt, ax, ay, az, rotation, kick, next_drift, x_ref, limit, force, torque, px,
+    dt, acc, row, scene, rotation, kick, next_drift, x_ref, limit, force, torque, px,
 ):  # fmt: skip
     """Thread i: the force on sphere i, then its kicks and drift into the other buffers.
 
     With ``kick`` the second half kick goes into ``v2``, ``omega2`` (and ``px[i] += m_i v_x,i``),
     with ``next_drift`` the next step's half kick and drift into ``x2``, ``v2``, ``omega2`` and
-    the rebuild trip. Without ``kick`` only the force, torque and history are written (an
+    the rebuild trip. The body acceleration a_body of sphere i is ``acc[row, scene[i]]``: one row
+    of the launch's step, one column a scene (replicas of other drives, one for a single scene).
+    Without ``kick`` only the force, torque and history are written (an
     evaluation at rest, :meth:`dem.engine.simulation.Simulation.compute_forces`).
     """
     i = cuda.grid(1)
@@ -78,7 +80,8 @@ def step_kernel(
         return
     f = sphere_force(
         i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
-        hist_out, wall_in, wall_out, length, half_width, back, dt, ax, ay, az,
+        hist_out, wall_in, wall_out, length, half_width, back, dt, acc[row, scene[i], 0],
+        acc[row, scene[i], 1], acc[row, scene[i], 2],
     )  # fmt: skip
     for c in range(3):
         force[i, c] = f[c]
