@@ -68,6 +68,19 @@ def wrap_kernel(x, length, zrange):
     cuda.atomic.max(zrange, 1, x[i, 2])
 
 
+@cuda.jit(device=True)
+def _put(count, items, key, cap, value, status, need):
+    """Append ``value`` to bucket ``key`` of capacity ``cap`` (an atomic count).
+
+    A full bucket records the capacity it needs in ``status[need]`` instead.
+    """
+    pos = cuda.atomic.add(count, key, 1)
+    if pos < cap:
+        items[key * cap + pos] = value
+    else:
+        cuda.atomic.max(status, need, pos + 1)
+
+
 @cuda.jit
 def bin_kernel(
     x, scene, ncx, ncy, ncz, sx, sy, sz, zmin, width, cell_count, cell_items, cap, status,
@@ -82,11 +95,7 @@ def bin_kernel(
         return
     cx, cy, cz = cell_coords(x[i, 0], x[i, 1], x[i, 2], ncx, ncy, ncz, sx, sy, sz, zmin, width)
     c = ((scene[i] * ncz + cz) * ncy + cy) * ncx + cx
-    pos = cuda.atomic.add(cell_count, c, 1)
-    if pos < cap:
-        cell_items[c * cap + pos] = i
-    else:
-        cuda.atomic.max(status, NEED_CELL, pos + 1)
+    _put(cell_count, cell_items, c, cap, i, status, NEED_CELL)
 
 
 @cuda.jit
@@ -180,11 +189,7 @@ def reverse_kernel(nbr, count, rev, rev_count, status):
     for s in range(count[a]):
         k = a * slots + s
         b = nbr[k]
-        pos = cuda.atomic.add(rev_count, b, 1)
-        if pos < rslots:
-            rev[b * rslots + pos] = k
-        else:
-            cuda.atomic.max(status, NEED_REVERSE, pos + 1)
+        _put(rev_count, rev, b, rslots, k, status, NEED_REVERSE)
 
 
 @cuda.jit
