@@ -33,6 +33,7 @@ import functools
 import inspect
 import math
 import os
+import time
 import warnings
 
 import numba
@@ -103,6 +104,11 @@ class GpuEngine:
         #: Launch the step through :class:`dem.kernels.cuda.launch.PreparedLaunch` (on a GPU).
         self.fast = not SIMULATOR
         self._prepared = {}
+        #: Threads per block of the prepared (per-step) launches: a tuning knob, the same bits.
+        self.threads = forces.THREADS_PER_BLOCK
+        #: Seconds the host spent queueing step launches and then waiting for them, in all.
+        self.host_s = 0.0
+        self.wait_s = 0.0
         # a small scene's grid is below numba's occupancy rule of thumb: no warning every step
         warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
         self.scene_host = None if scene is None else np.asarray(scene, dtype=np.int32)
@@ -441,7 +447,8 @@ class GpuEngine:
         key = (key, self._scalars)
         launch = self._prepared.get(key)
         if launch is None:
-            launch = prepare(kernel, self.forces.blocks(n), self.forces.THREADS_PER_BLOCK, args)
+            t = self.threads
+            launch = prepare(kernel, max(1, (n + t - 1) // t), t, args)
             if launch is None:
                 self.fast = False
                 return None
@@ -523,10 +530,14 @@ class GpuEngine:
                 self._reset_trip()
                 self.build(sim)
             chunk = min(self.chunk, n_steps - s)
+            t0 = time.perf_counter()
             self._accelerate(sim, drive, (step0 + np.arange(s, s + chunk) + 1) * dt)
             for k in range(s, s + chunk):
                 self._step(sim, k + 1, k - s, True, k < n_steps - 1)
+            t1 = time.perf_counter()
             trip = self._read_trip()
+            self.host_s += t1 - t0
+            self.wait_s += time.perf_counter() - t1
             done = chunk if trip == self.NO_TRIP else trip - s
             if (chunk - done) % 2:  # the skipped launches swapped no buffers
                 self._swap(self.n_bodies == 0)

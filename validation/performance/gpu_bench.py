@@ -395,44 +395,114 @@ def bed_job(args) -> dict:
     return out
 
 
+def _replicas(blob: bytes, reps: int) -> list:
+    """``reps`` copies of the pickled bed, each but the first with velocities nudged by 1e-9 m/s."""
+    rng = np.random.default_rng(reps)
+    sims = []
+    for r in range(reps):
+        sim = pickle.loads(blob)
+        if r:  # a replica: the same bed, velocities nudged (chaos does the rest)
+            sim.spheres.v += rng.normal(0.0, 1e-9, sim.spheres.v.shape)
+        sims.append(sim)
+    return sims
+
+
+def _time_batch(blob: bytes, reps: int, cycles: int, threads=None, max_registers=None) -> dict:
+    """One batch of ``reps`` replicas timed over ``cycles`` drive cycles (a row of the JSON).
+
+    ``threads``: threads per block of the step launches; ``max_registers``: the step kernel
+    compiled with at most this many registers (None: the defaults).
+    """
+    import types as pytypes
+
+    from numba import cuda
+
+    from dem.engine.gpu_replicas import GpuReplicas
+    from dem.kernels.cuda import step
+
+    sims = _replicas(blob, reps)
+    t0 = time.perf_counter()
+    batch = GpuReplicas(sims)
+    setup = time.perf_counter() - t0
+    eng = batch.engine
+    if threads is not None:
+        eng.threads = threads
+    kernel = step.step_kernel
+    if max_registers is not None:
+        kernel = cuda.jit(max_registers=max_registers)(step.step_kernel.py_func)
+        eng.step = pytypes.SimpleNamespace(
+            step_kernel=kernel, kick_drift_kernel=step.kick_drift_kernel
+        )
+    eng._prepared.clear()
+    batch.advance(10)  # compile, upload, first build
+    host0, wait0 = eng.host_s, eng.wait_s
+    t0 = time.perf_counter()
+    v = batch.measure(cycles)
+    wall = time.perf_counter() - t0
+    means = v.mean(axis=0)
+    n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
+    row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
+           "threads_per_block": eng.threads, "max_registers": max_registers,
+           "wall_s": round(wall, 2), "setup_s": round(setup, 2),
+           "host_queueing_s": round(eng.host_s - host0, 3),
+           "host_waiting_s": round(eng.wait_s - wait0, 3),
+           "us_per_step": 1e6 * wall / n_steps,
+           "replica_means_m_s": means.tolist(), "ensemble_mean_m_s": float(means.mean()),
+           "ensemble_standard_error_m_s": float(means.std(ddof=1) / np.sqrt(reps))
+           if reps > 1 else None, "builds": eng.builds, "chunk": eng.chunk,
+           "loadavg": load_loadavg()}  # fmt: skip
+    try:
+        row["registers"] = _first(kernel.get_regs_per_thread())
+        row["local_bytes"] = _first(kernel.get_local_mem_per_thread())
+    except Exception:  # noqa: BLE001  (a report, not a result)
+        pass
+    row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
+    print(f"batch {reps} x {cycles} cycles, {eng.threads} threads/block, registers "
+          f"{row.get('registers')}: {wall:.2f} s ({row['us_per_step']:.0f} us a step; host "
+          f"queueing {row['host_queueing_s']:.2f} s, waiting {row['host_waiting_s']:.2f} s), "
+          f"v = {row['ensemble_mean_m_s']:.6f}", flush=True)  # fmt: skip
+    return row
+
+
 def batch_job(args) -> dict:
     """R replicas of the pickled bed in one GPU job (dem.engine.gpu_replicas), timed."""
-    from dem.engine.gpu_replicas import GpuReplicas
-
     blob = Path(args.state).read_bytes()
     out = {"runs": [], "loadavg_start": load_loadavg()}
     for reps, cycles in zip(args.batch, args.batch_cycles, strict=True):
-        rng = np.random.default_rng(reps)
-        sims = []
-        for r in range(reps):
-            sim = pickle.loads(blob)
-            if (
-                r
-            ):  # a replica: the same bed, every velocity nudged by 1e-9 m/s (chaos does the rest)
-                sim.spheres.v += rng.normal(0.0, 1e-9, sim.spheres.v.shape)
-            sims.append(sim)
-        t0 = time.perf_counter()
-        batch = GpuReplicas(sims)
-        setup = time.perf_counter() - t0
-        batch.advance(10)  # compile, upload, first build
-        t0 = time.perf_counter()
-        v = batch.measure(cycles)
-        wall = time.perf_counter() - t0
-        means = v.mean(axis=0)
-        row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
-               "wall_s": round(wall, 2), "setup_s": round(setup, 2),
-               "replica_means_m_s": means.tolist(), "ensemble_mean_m_s": float(means.mean()),
-               "ensemble_standard_error_m_s": float(means.std(ddof=1) / np.sqrt(reps))
-               if reps > 1 else None, "builds": batch.engine.builds,
-               "loadavg": load_loadavg()}  # fmt: skip
-        n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
-        row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
-        print(f"batch {reps} x {cycles} cycles: {wall:.1f} s, "
-              f"{row['sphere_steps_per_s']:.3g} sphere-steps/s, "
-              f"v = {row['ensemble_mean_m_s']:.5f}", flush=True)  # fmt: skip
-        out["runs"].append(row)
+        out["runs"].append(_time_batch(blob, reps, cycles))
         Path(args.out).write_text(json.dumps(out, indent=1))
-        del batch, sims
+    return out
+
+
+def variants_job(args) -> dict:
+    """The batch's launch variants (threads per block, register caps), each a short run.
+
+    Then one replica alone (the host's cost of a step, the kernel being tiny) and the fastest
+    variant over the full --batch-cycles.
+    """
+    blob = Path(args.state).read_bytes()
+    reps, cycles = args.batch[0], args.variant_cycles
+    out = {"variants": [], "loadavg_start": load_loadavg()}
+    for spec in args.batch_variants:
+        threads, _, regs = spec.partition(":")
+        try:
+            row = _time_batch(blob, reps, cycles, int(threads), int(regs) if regs else None)
+        except Exception:  # noqa: BLE001  (the next variant may still run)
+            row = {"variant": spec, "error": traceback.format_exc()}
+            print(row["error"], flush=True)
+        out["variants"].append(row)
+        Path(args.out).write_text(json.dumps(out, indent=1))
+    try:
+        out["one_replica"] = _time_batch(blob, 1, cycles)
+    except Exception:  # noqa: BLE001
+        out["one_replica_error"] = traceback.format_exc()
+    Path(args.out).write_text(json.dumps(out, indent=1))
+    timed = [r for r in out["variants"] if "wall_s" in r]
+    if timed and args.batch_cycles:
+        best = min(timed, key=lambda r: r["wall_s"])
+        threads, regs = best["threads_per_block"], best["max_registers"]
+        out["best_full"] = _time_batch(blob, reps, args.batch_cycles[0], threads, regs)
+        Path(args.out).write_text(json.dumps(out, indent=1))
     return out
 
 
@@ -464,6 +534,10 @@ def main() -> None:
         default=[],
         help="cycles measured for each --batch count",
     )
+    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R]",
+                   help="time the first --batch count with T threads per block (and the step "
+                   "kernel capped at R registers) for --variant-cycles each")  # fmt: skip
+    p.add_argument("--variant-cycles", type=int, default=5)
     p.add_argument("--max-registers", nargs="*", type=int, default=[],
                    help="also time the step kernel compiled with at most this many registers, "
                    "at the second-largest size")  # fmt: skip
@@ -477,7 +551,9 @@ def main() -> None:
         bed_state(Path(args.bed_state), max(args.threads))
     if args.bed:
         bed_job(args)
-    if args.batch:
+    if args.batch_variants:
+        variants_job(args)
+    elif args.batch:
         batch_job(args)
     if args.clumps:
         clumps_job(args)
