@@ -106,6 +106,10 @@ class GpuEngine:
         self._prepared = {}
         #: Threads per block of the prepared (per-step) launches: a tuning knob, the same bits.
         self.threads = forces.THREADS_PER_BLOCK
+        #: Threads a sphere in the step (1: :func:`dem.kernels.cuda.step.step_kernel`; more, one
+        #: of ``step.LANE_COUNTS``: :func:`dem.kernels.cuda.step.lanes_step_kernel`, the same
+        #: bits). Not yet timed on a GPU against 1, so 1 stays the default.
+        self.lanes = 1
         #: Seconds the host spent queueing step launches and then waiting for them, in all.
         self.host_s = 0.0
         self.wait_s = 0.0
@@ -266,8 +270,9 @@ class GpuEngine:
 
     # --- the build and the step ---------------------------------------------------------------
 
-    def _launch(self, kernel, n):
-        return kernel[self.forces.blocks(n), self.forces.THREADS_PER_BLOCK]
+    def _launch(self, kernel, n, block=None):
+        t = self.forces.THREADS_PER_BLOCK if block is None else block
+        return kernel[max(1, (n + t - 1) // t), t]
 
     def build(self, sim) -> None:
         """Rebuild the pair slots at the current positions, carrying the history over."""
@@ -366,15 +371,15 @@ class GpuEngine:
             sim.rotation,
         )  # fmt: skip
 
-    def _run(self, kernel, n, key, args, changing) -> None:
-        """Launch ``kernel`` over n threads with ``args``.
+    def _run(self, kernel, n, key, args, changing, block=None) -> None:
+        """Launch ``kernel`` over n threads with ``args``, ``block`` a block (None: the default).
 
         On a GPU the launch is prepared once per ``key`` and only the arguments named in
         ``changing`` are set anew.
         """
-        launch = self._prepared_launch(kernel, n, key, args) if self.fast else None
+        launch = self._prepared_launch(kernel, n, key, args, block) if self.fast else None
         if launch is None:
-            self._launch(kernel, n)(*args)
+            self._launch(kernel, n, block)(*args)
             return
         for name in changing:
             i = _position(kernel, name)
@@ -394,15 +399,20 @@ class GpuEngine:
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
         clumps = self.n_bodies > 0
-        step = self.step.step_kernel
+        step, n, block, lanes = self.step.step_kernel, self.n, None, self.lanes
+        if lanes != 1:
+            if lanes not in self.step.LANE_COUNTS:
+                raise ValueError(f"lanes = {lanes}: one of {self.step.LANE_COUNTS}")
+            step, n, block = self.step.lanes_step_kernel, self.n * lanes, self.step.LANE_BLOCK
+        lead = () if lanes == 1 else (lanes,)
         if clumps:
-            args = self._sphere_args(sim, seq, self.no_acc, 0, False, False)
-            key = ("forces", id(self.hist[0]), id(self.wall[0]))
-            self._run(step, self.n, key, args, ("seq",))
+            args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False)
+            key = ("forces", lanes, id(self.hist[0]), id(self.wall[0]))
+            self._run(step, n, key, args, ("seq",), block)
         else:
-            args = self._sphere_args(sim, seq, self.acc, row, kick, next_drift)
-            key = ("step", kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
-            self._run(step, self.n, key, args, ("seq", "row", "next_drift"))
+            args = lead + self._sphere_args(sim, seq, self.acc, row, kick, next_drift)
+            key = ("step", lanes, kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
+            self._run(step, n, key, args, ("seq", "row", "next_drift"), block)
         self._swap(kick and not clumps)
         if not clumps:
             return
@@ -440,14 +450,14 @@ class GpuEngine:
             self.v.reverse()
             self.omega.reverse()
 
-    def _prepared_launch(self, kernel, n, key, args):
+    def _prepared_launch(self, kernel, n, key, args, block=None):
         """The launch of ``kernel`` for ``key``'s buffers, prepared once (None: not possible)."""
         from dem.kernels.cuda.launch import prepare
 
-        key = (key, self._scalars)
+        key = (key, self._scalars, block)
         launch = self._prepared.get(key)
         if launch is None:
-            t = self.threads
+            t = self.threads if block is None else block
             launch = prepare(kernel, max(1, (n + t - 1) // t), t, args)
             if launch is None:
                 self.fast = False

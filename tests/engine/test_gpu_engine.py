@@ -118,6 +118,28 @@ def test_gpu_steps_equal_the_cpu_engine(model, e, mu, mu_roll, limit, tangential
     assert gpu._gpu_engine.skipped > 0
 
 
+@pytest.mark.parametrize("lanes", [4])
+def test_gpu_lanes_give_the_same_bits(lanes):
+    """The step with several threads a sphere (their terms summed in the loops' order by the
+    sphere's first lane) against the CPU engine, spheres through rebuilds: the same bits."""
+    cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
+    gpu.use_gpu().lanes = lanes
+    steps = 40 if SIMULATOR else 5
+    for _ in range(2):
+        cpu._advance(steps)
+        gpu._advance(steps)
+        _compare(cpu, gpu)
+    assert cpu.pairs.builds >= 2 and np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
+    assert np.any(cpu.spheres.wall_hist != 0.0)
+
+
+def test_gpu_lanes_refuse_a_count_that_does_not_divide_the_block():
+    cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
+    gpu.use_gpu().lanes = 3
+    with pytest.raises(ValueError, match="lanes = 3"):
+        gpu._advance(2)
+
+
 def test_gpu_takes_up_a_state_the_host_changed():
     """A change to the host's arrays between calls (a restart, a refill) is uploaded, pair list
     and springs included, and the GPU goes on as the CPU does."""
@@ -229,6 +251,17 @@ def test_gpu_clumps_equal_the_cpu_engine(model, e, mu, tangential, rotation):
     assert k > 0 and np.all(body[cpu.pairs.pair_i[:k]] != body[cpu.pairs.pair_j[:k]])
     assert cpu.pairs.builds >= 3
     assert rotation == np.any(cpu.bodies.ang_mom != 0.0)
+
+
+def test_gpu_clumps_with_lanes_equal_the_cpu_engine():
+    """Screws with four threads a member sphere: the same bits as the CPU engine."""
+    cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact")
+    gpu.use_gpu().lanes = 4
+    for _ in range(2):
+        cpu._advance(25 if SIMULATOR else 5)
+        gpu._advance(25 if SIMULATOR else 5)
+        _compare_bodies(cpu, gpu)
+    assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
 
 
 def test_gpu_clumps_evaluate_and_take_up_a_host_change():

@@ -178,6 +178,86 @@ def sphere_force(
     return fx, fy, fz, tx, ty, tz
 
 
+@cuda.jit(device=True)
+def candidate_force(
+    i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in, hist_out,
+    wall_in, wall_out, length, half_width, back, dt,
+):  # fmt: skip
+    """Sphere i's candidate e and what it adds to i's force and torque.
+
+    The candidates in :func:`sphere_force`'s order: e < ``n_rev`` the reverse slots, then up to
+    ``n_pairs`` the own slots, then the N_WALLS walls. Writes the row of history i owns (own
+    pairs, walls; zeros where apart), as :func:`sphere_force` does.
+
+    Returns:
+        (touching, dfx, dfy, dfz, dtx, dty, dtz): whether the candidate touches, and its terms:
+        -F and the torque on the upper end for a reverse pair (x - y and x + (-y) are the same
+        float), F and the torque on i otherwise.
+
+    """
+    n = x.shape[0]
+    slots = nbr.shape[0] // n
+    rslots = rev.shape[0] // n
+    width = hist_in.shape[1]
+    half = 0.5 * length
+    if e < n_rev:
+        k = rev[i * rslots + e]
+        a = k // slots
+        dx = minimum_image(x[a, 0] - x[i, 0], length, half)
+        dy = x[a, 1] - x[i, 1]
+        dz = x[a, 2] - x[i, 2]
+        d2 = dx * dx + dy * dy + dz * dz
+        rsum = radius[a] + radius[i]
+        if d2 >= rsum * rsum:
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        f = _pair(model, p, x, v, omega, radius, mass, a, i, k, hist_in, dx, dy, dz, d2, dt)
+        return True, -f[0], -f[1], -f[2], f[6], f[7], f[8]
+    if e < n_pairs:
+        k = i * slots + (e - n_rev)
+        b = nbr[k]
+        dx = minimum_image(x[i, 0] - x[b, 0], length, half)
+        dy = x[i, 1] - x[b, 1]
+        dz = x[i, 2] - x[b, 2]
+        d2 = dx * dx + dy * dy + dz * dz
+        rsum = radius[i] + radius[b]
+        if d2 >= rsum * rsum:
+            for c in range(width):
+                hist_out[k, c] = 0.0
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        f = _pair(model, p, x, v, omega, radius, mass, i, b, k, hist_in, dx, dy, dz, d2, dt)
+        for c in range(width):
+            hist_out[k, c] = f[10 + c]
+        return True, f[0], f[1], f[2], f[3], f[4], f[5]
+    w = e - n_pairs
+    ri = radius[i]
+    if w < N_WALLS - 1:
+        gap, ny, nz = flat_wall(w, x[i, 1], x[i, 2], half_width)
+        nx = 0.0
+    else:
+        gap = x[i, 0] - back
+        nx, ny, nz = 1.0, 0.0, 0.0
+    delta = ri - gap
+    row = N_WALLS * i + w
+    if delta <= 0.0:
+        for c in range(width):
+            wall_out[row, c] = 0.0
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ci, ai = wall_arms(pw, ri, delta)
+    h3 = 0.0
+    h4 = 0.0
+    if width > 3:
+        h3 = wall_in[row, 3]
+        h4 = wall_in[row, 4]
+    f = contact_core(
+        model, pw, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
+        omega[i, 2], 0.0, 0.0, 0.0, ci, 0.0, ai, 0.0, mass[i], ri,
+        wall_in[row, 0], wall_in[row, 1], wall_in[row, 2], h3, h4, dt,
+    )  # fmt: skip
+    for c in range(width):
+        wall_out[row, c] = f[10 + c]
+    return True, f[0], f[1], f[2], f[3], f[4], f[5]
+
+
 @cuda.jit
 def forces_kernel(
     model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,

@@ -20,13 +20,21 @@ and the steps queued after the one that flagged are no-ops, relaunched after the
 ``seq`` k + 1.
 """
 
-from numba import cuda
+from numba import cuda, float64, int32
 
-from dem.kernels.cuda.forces import sphere_force
+from dem.kernels.cuda.forces import candidate_force, sphere_force
+from dem.kernels.forces import N_WALLS
 from dem.kernels.periodic import minimum_image
 
 #: ``trip[0]`` when no sphere has moved past skin/2 (above every launch's ``seq``).
 NO_TRIP = 1 << 62
+
+#: Threads per block of :func:`lanes_step_kernel` (its shared array's rows); a multiple of every
+#: lane count, so that a sphere's lanes share a block.
+LANE_BLOCK = 128
+
+#: Lane counts :func:`lanes_step_kernel` takes (divisors of :data:`LANE_BLOCK`).
+LANE_COUNTS = (1, 2, 4, 8, 16, 32)
 
 
 @cuda.jit(device=True)
@@ -60,29 +68,12 @@ def kick_drift_kernel(
         trip[0] = seq
 
 
-@cuda.jit
-def step_kernel(
-    seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
-    nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back,
-    dt, acc, row, scene, rotation, kick, next_drift, x_ref, limit, force, torque, px,
+@cuda.jit(device=True)
+def _finish(
+    i, f, seq, trip, x, v, omega, x2, v2, omega2, mass, inv_mass, inv_inertia, length, dt,
+    rotation, kick, next_drift, x_ref, limit, force, torque, px,
 ):  # fmt: skip
-    """Thread i: the force on sphere i, then its kicks and drift into the other buffers.
-
-    With ``kick`` the second half kick goes into ``v2``, ``omega2`` (and ``px[i] += m_i v_x,i``),
-    with ``next_drift`` the next step's half kick and drift into ``x2``, ``v2``, ``omega2`` and
-    the rebuild trip. The body acceleration a_body of sphere i is ``acc[row, scene[i]]``: one row
-    of the launch's step, one column a scene (replicas of other drives, one for a single scene).
-    Without ``kick`` only the force, torque and history are written (an
-    evaluation at rest, :meth:`dem.engine.simulation.Simulation.compute_forces`).
-    """
-    i = cuda.grid(1)
-    if i >= x.shape[0] or trip[0] < seq:
-        return
-    f = sphere_force(
-        i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
-        hist_out, wall_in, wall_out, length, half_width, back, dt, acc[row, scene[i], 0],
-        acc[row, scene[i], 1], acc[row, scene[i], 2],
-    )  # fmt: skip
+    """Sphere i's force and torque ``f`` stored, then its kicks and drift (:func:`step_kernel`)."""
     for c in range(3):
         force[i, c] = f[c]
         torque[i, c] = f[3 + c]
@@ -125,3 +116,119 @@ def step_kernel(
     omega2[i, 2] = wz
     if next_drift and moved_past(x2, x_ref, i, length, limit):
         trip[0] = seq
+
+
+@cuda.jit
+def step_kernel(
+    seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
+    nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back,
+    dt, acc, row, scene, rotation, kick, next_drift, x_ref, limit, force, torque, px,
+):  # fmt: skip
+    """Thread i: the force on sphere i, then its kicks and drift into the other buffers.
+
+    With ``kick`` the second half kick goes into ``v2``, ``omega2`` (and ``px[i] += m_i v_x,i``),
+    with ``next_drift`` the next step's half kick and drift into ``x2``, ``v2``, ``omega2`` and
+    the rebuild trip. The body acceleration a_body of sphere i is ``acc[row, scene[i]]``: one row
+    of the launch's step, one column a scene (replicas of other drives, one for a single scene).
+    Without ``kick`` only the force, torque and history are written (an
+    evaluation at rest, :meth:`dem.engine.simulation.Simulation.compute_forces`).
+    """
+    i = cuda.grid(1)
+    if i >= x.shape[0] or trip[0] < seq:
+        return
+    f = sphere_force(
+        i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
+        hist_out, wall_in, wall_out, length, half_width, back, dt, acc[row, scene[i], 0],
+        acc[row, scene[i], 1], acc[row, scene[i], 2],
+    )  # fmt: skip
+    _finish(
+        i, f, seq, trip, x, v, omega, x2, v2, omega2, mass, inv_mass, inv_inertia, length, dt,
+        rotation, kick, next_drift, x_ref, limit, force, torque, px,
+    )  # fmt: skip
+
+
+@cuda.jit
+def lanes_step_kernel(
+    lanes, seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass,
+    inv_inertia, nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length,
+    half_width, back, dt, acc, row, scene, rotation, kick, next_drift, x_ref, limit, force, torque,
+    px,
+):  # fmt: skip
+    """:func:`step_kernel` with ``lanes`` threads a sphere, in blocks of :data:`LANE_BLOCK`.
+
+    Launch n lanes threads. Sphere i's candidates (reverse pairs, own pairs, walls:
+    :func:`candidate_force`) are dealt round by round, candidate r lanes + l to lane l in round r;
+    each lane puts its terms in the block's shared memory and, after a barrier, the sphere's first
+    lane adds them in candidate order, the order of :func:`step_kernel`'s loops, so the sum is the
+    same float. The first lane then kicks and drifts as :func:`step_kernel`. Each thread's chain of
+    dependent reads is a lane count shorter, and the threads that meet the contact law in a round
+    are the candidates that touch, not the slots of spheres that happen to share a warp. The block's
+    rounds are its most loaded sphere's (a barrier needs every thread of the block).
+    """
+    share = cuda.shared.array((LANE_BLOCK, 7), float64)
+    most = cuda.shared.array(1, int32)
+    t = cuda.threadIdx.x
+    if trip[0] < seq:  # the same for every thread of the launch
+        return
+    g = cuda.grid(1)
+    i = g // lanes
+    lane = g - i * lanes
+    first = t - lane
+    n = x.shape[0]
+    n_rev = 0
+    n_pairs = 0
+    total = 0
+    if i < n:
+        n_rev = rev_count[i]
+        n_pairs = n_rev + count[i]
+        total = n_pairs + N_WALLS
+    if t == 0:
+        most[0] = 0
+    cuda.syncthreads()
+    cuda.atomic.max(most, 0, (total + lanes - 1) // lanes)
+    cuda.syncthreads()
+    rounds = most[0]
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    tx = 0.0
+    ty = 0.0
+    tz = 0.0
+    if lane == 0 and i < n:
+        m = mass[i]
+        fx = m * acc[row, scene[i], 0]
+        fy = m * acc[row, scene[i], 1]
+        fz = m * acc[row, scene[i], 2]
+    for r in range(rounds):
+        e = r * lanes + lane
+        if e < total:
+            c = candidate_force(
+                i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in,
+                hist_out, wall_in, wall_out, length, half_width, back, dt,
+            )  # fmt: skip
+            share[t, 6] = 1.0 if c[0] else 0.0
+            share[t, 0] = c[1]
+            share[t, 1] = c[2]
+            share[t, 2] = c[3]
+            share[t, 3] = c[4]
+            share[t, 4] = c[5]
+            share[t, 5] = c[6]
+        else:
+            share[t, 6] = 0.0
+        cuda.syncthreads()
+        if lane == 0:
+            for j in range(first, first + lanes):
+                if share[j, 6] != 0.0:
+                    fx += share[j, 0]
+                    fy += share[j, 1]
+                    fz += share[j, 2]
+                    tx += share[j, 3]
+                    ty += share[j, 4]
+                    tz += share[j, 5]
+        cuda.syncthreads()
+    if lane != 0 or i >= n:
+        return
+    _finish(
+        i, (fx, fy, fz, tx, ty, tz), seq, trip, x, v, omega, x2, v2, omega2, mass, inv_mass,
+        inv_inertia, length, dt, rotation, kick, next_drift, x_ref, limit, force, torque, px,
+    )  # fmt: skip
