@@ -10,12 +10,8 @@
 # Usage: bash validation/performance/run_device_divergence.sh [python]
 set -u
 PY=${1:-python3}
-OUT=${OUT:-device_out}
-mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1 NUMBA_NUM_THREADS=16
-B=validation/performance/gpu_bench.py
-S=device_in/bed.pkl
-quiet() { grep -v "Warning\|warn(" || true; }
+. "$(dirname "$0")/device_common.sh"
+export NUMBA_NUM_THREADS=16
 { date +%T; nproc; uptime; nvidia-smi -L; } 2>&1
 "$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 64 32 128:128 --variant-cycles 4 \
     --state $S --out "$OUT/new_batch.json" 2>&1 | quiet

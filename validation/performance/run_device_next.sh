@@ -6,10 +6,8 @@
 # Usage: bash validation/performance/run_device_next.sh [python]
 set -u
 PY=${1:-python3}
-OUT=${OUT:-device_out}
-mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1 NUMBA_NUM_THREADS=16
-B=validation/performance/gpu_bench.py
+. "$(dirname "$0")/device_common.sh"
+export NUMBA_NUM_THREADS=16
 L="$OUT/next.log"
 { nproc; uptime; nvidia-smi -L; } >"$L" 2>&1
 "$PY" $B --clumps --device cuda --clump-sizes 1e4 1e5 --out "$OUT/clumps_gpu.json" >>"$L" 2>&1

@@ -10,13 +10,7 @@
 set -u
 PY=${1:-python3}
 BUDGET=${2:-180}
-OUT=${OUT:-device_out}
-mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1
-B=validation/performance/gpu_bench.py
-S=device_in/bed.pkl
-quiet() { grep -v "Warning\|warn(" || true; }
-left() { echo $((BUDGET - SECONDS)); }
+. "$(dirname "$0")/device_common.sh"
 { date +%T; nvidia-smi -L; } 2>&1
 "$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 256 --variant-cycles 4 \
     --state $S --out "$OUT/pairs_batch.json" 2>&1 | quiet

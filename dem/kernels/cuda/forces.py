@@ -71,11 +71,99 @@ def _pair(model, p, x, v, omega, radius, mass, a, b, k, hist_in, dx, dy, dz, d2,
 
 
 @cuda.jit(device=True)
+def _upper_add(
+    i, k, model, p, x, v, omega, radius, mass, slots, hist_in, length, dt, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """Pair slot k = (a, i), a < i, from its upper end i: (touching, the sums updated).
+
+    -F and the torque on i are added to the sums, as :func:`sphere_force` adds them.
+    """
+    a = k // slots
+    dx = minimum_image(x[a, 0] - x[i, 0], length, 0.5 * length)
+    dy = x[a, 1] - x[i, 1]
+    dz = x[a, 2] - x[i, 2]
+    d2 = dx * dx + dy * dy + dz * dz
+    rsum = radius[a] + radius[i]
+    if d2 >= rsum * rsum:
+        return False, fx, fy, fz, tx, ty, tz
+    f = _pair(model, p, x, v, omega, radius, mass, a, i, k, hist_in, dx, dy, dz, d2, dt)
+    return True, fx - f[0], fy - f[1], fz - f[2], tx + f[6], ty + f[7], tz + f[8]
+
+
+@cuda.jit(device=True)
+def _lower_add(
+    i, k, model, p, x, v, omega, radius, mass, nbr, hist_in, hist_out, length, dt, fx, fy, fz,
+    tx, ty, tz,
+):  # fmt: skip
+    """Pair slot k = (i, b), b > i, from its lower end i: (touching, the sums updated).
+
+    F and the torque on i are added; i writes the slot's history row (zeros where apart).
+    """
+    b = nbr[k]
+    dx = minimum_image(x[i, 0] - x[b, 0], length, 0.5 * length)
+    dy = x[i, 1] - x[b, 1]
+    dz = x[i, 2] - x[b, 2]
+    d2 = dx * dx + dy * dy + dz * dz
+    rsum = radius[i] + radius[b]
+    if d2 >= rsum * rsum:
+        for c in range(hist_out.shape[1]):
+            hist_out[k, c] = 0.0
+        return False, fx, fy, fz, tx, ty, tz
+    f = _pair(model, p, x, v, omega, radius, mass, i, b, k, hist_in, dx, dy, dz, d2, dt)
+    for c in range(hist_out.shape[1]):
+        hist_out[k, c] = f[10 + c]
+    return True, fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
+
+
+@cuda.jit(device=True)
+def _wall_add(
+    i, w, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back, dt, fx, fy,
+    fz, tx, ty, tz,
+):  # fmt: skip
+    """Sphere i on wall w by the grain-wall law: (touching, the sums with F and torque added).
+
+    The walls: the floor, the side walls y = -width/2 and +width/2, the back wall x = back
+    (inward normal +x). i writes its wall row (zeros where apart).
+    """
+    width = wall_in.shape[1]
+    ri = radius[i]
+    if w < N_WALLS - 1:
+        gap, ny, nz = flat_wall(w, x[i, 1], x[i, 2], half_width)
+        nx = 0.0
+    else:
+        gap = x[i, 0] - back
+        nx, ny, nz = 1.0, 0.0, 0.0
+    delta = ri - gap
+    row = N_WALLS * i + w
+    if delta <= 0.0:
+        for c in range(width):
+            wall_out[row, c] = 0.0
+        return False, fx, fy, fz, tx, ty, tz
+    ci, ai = wall_arms(pw, ri, delta)
+    h3 = 0.0
+    h4 = 0.0
+    if width > 3:
+        h3 = wall_in[row, 3]
+        h4 = wall_in[row, 4]
+    f = contact_core(
+        model, pw, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
+        omega[i, 2], 0.0, 0.0, 0.0, ci, 0.0, ai, 0.0, mass[i], ri,
+        wall_in[row, 0], wall_in[row, 1], wall_in[row, 2], h3, h4, dt,
+    )  # fmt: skip
+    for c in range(width):
+        wall_out[row, c] = f[10 + c]
+    return True, fx + f[0], fy + f[1], fz + f[2], tx + f[3], ty + f[4], tz + f[5]
+
+
+@cuda.jit(device=True)
 def sphere_force(
     i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,
     wall_in, wall_out, length, half_width, back, dt, ax, ay, az,
 ):  # fmt: skip
     """Force and torque on sphere i (fx, fy, fz, tx, ty, tz); writes i's history rows.
+
+    The terms in the CPU engine's order: m a_body, the pairs (a, i) of i's reverse slots (i the
+    upper end receives -F and the torque on j), the pairs (i, b) of its own slots, the walls.
 
     Args:
         i, model: The sphere, the normal law id (:data:`dem.kernels.contact.MODELS`).
@@ -92,8 +180,6 @@ def sphere_force(
     n = x.shape[0]
     slots = nbr.shape[0] // n
     rslots = rev.shape[0] // n
-    width = hist_in.shape[1]
-    half = 0.5 * length
     m = mass[i]
     fx = m * ax
     fy = m * ay
@@ -101,80 +187,21 @@ def sphere_force(
     tx = 0.0
     ty = 0.0
     tz = 0.0
-    # pairs (a, i), a < i: i is the upper end and receives -F and the torque on j
     for e in range(rev_count[i]):
-        k = rev[i * rslots + e]
-        a = k // slots
-        dx = minimum_image(x[a, 0] - x[i, 0], length, half)
-        dy = x[a, 1] - x[i, 1]
-        dz = x[a, 2] - x[i, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        rsum = radius[a] + radius[i]
-        if d2 >= rsum * rsum:
-            continue
-        f = _pair(model, p, x, v, omega, radius, mass, a, i, k, hist_in, dx, dy, dz, d2, dt)
-        fx -= f[0]
-        fy -= f[1]
-        fz -= f[2]
-        tx += f[6]
-        ty += f[7]
-        tz += f[8]
-    # pairs (i, b), b > i: i writes the history row
-    for s in range(count[i]):
-        k = i * slots + s
-        b = nbr[k]
-        dx = minimum_image(x[i, 0] - x[b, 0], length, half)
-        dy = x[i, 1] - x[b, 1]
-        dz = x[i, 2] - x[b, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        rsum = radius[i] + radius[b]
-        if d2 >= rsum * rsum:
-            for c in range(width):
-                hist_out[k, c] = 0.0
-            continue
-        f = _pair(model, p, x, v, omega, radius, mass, i, b, k, hist_in, dx, dy, dz, d2, dt)
-        fx += f[0]
-        fy += f[1]
-        fz += f[2]
-        tx += f[3]
-        ty += f[4]
-        tz += f[5]
-        for c in range(width):
-            hist_out[k, c] = f[10 + c]
-    # the flat walls and the back wall x = back (inward normal +x), the grain-wall law
-    ri = radius[i]
-    for w in range(N_WALLS):
-        if w < N_WALLS - 1:
-            gap, ny, nz = flat_wall(w, x[i, 1], x[i, 2], half_width)
-            nx = 0.0
-        else:
-            gap = x[i, 0] - back
-            nx, ny, nz = 1.0, 0.0, 0.0
-        delta = ri - gap
-        row = N_WALLS * i + w
-        if delta <= 0.0:
-            for c in range(width):
-                wall_out[row, c] = 0.0
-            continue
-        ci, ai = wall_arms(pw, ri, delta)
-        h3 = 0.0
-        h4 = 0.0
-        if width > 3:
-            h3 = wall_in[row, 3]
-            h4 = wall_in[row, 4]
-        f = contact_core(
-            model, pw, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-            omega[i, 2], 0.0, 0.0, 0.0, ci, 0.0, ai, 0.0, m, ri,
-            wall_in[row, 0], wall_in[row, 1], wall_in[row, 2], h3, h4, dt,
+        _, fx, fy, fz, tx, ty, tz = _upper_add(
+            i, rev[i * rslots + e], model, p, x, v, omega, radius, mass, slots, hist_in, length,
+            dt, fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
-        fx += f[0]
-        fy += f[1]
-        fz += f[2]
-        tx += f[3]
-        ty += f[4]
-        tz += f[5]
-        for c in range(width):
-            wall_out[row, c] = f[10 + c]
+    for s in range(count[i]):
+        _, fx, fy, fz, tx, ty, tz = _lower_add(
+            i, i * slots + s, model, p, x, v, omega, radius, mass, nbr, hist_in, hist_out,
+            length, dt, fx, fy, fz, tx, ty, tz,
+        )  # fmt: skip
+    for w in range(N_WALLS):
+        _, fx, fy, fz, tx, ty, tz = _wall_add(
+            i, w, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back, dt,
+            fx, fy, fz, tx, ty, tz,
+        )  # fmt: skip
     return fx, fy, fz, tx, ty, tz
 
 
@@ -183,79 +210,34 @@ def candidate_force(
     i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in, hist_out,
     wall_in, wall_out, length, half_width, back, dt,
 ):  # fmt: skip
-    """Sphere i's candidate e and what it adds to i's force and torque.
+    """Sphere i's candidate e, in :func:`sphere_force`'s order, and what it adds to i's sums.
 
-    The candidates in :func:`sphere_force`'s order: e < ``n_rev`` the reverse slots, then up to
-    ``n_pairs`` the own slots, then the N_WALLS walls. Writes the row of history i owns (own
-    pairs, walls; zeros where apart), as :func:`sphere_force` does.
+    e < ``n_rev``: the reverse slots; up to ``n_pairs``: the own slots; then the N_WALLS walls.
+    Writes the history row i owns (own pairs, walls), as :func:`sphere_force` does.
 
     Returns:
-        (touching, dfx, dfy, dfz, dtx, dty, dtz): whether the candidate touches, and its terms:
-        -F and the torque on the upper end for a reverse pair (x - y and x + (-y) are the same
-        float), F and the torque on i otherwise.
+        (touching, dfx, dfy, dfz, dtx, dty, dtz): whether it touches, and its terms added to
+        zeros (the same floats as the terms, but for the sign of a zero).
 
     """
     n = x.shape[0]
     slots = nbr.shape[0] // n
-    rslots = rev.shape[0] // n
-    width = hist_in.shape[1]
-    half = 0.5 * length
     if e < n_rev:
-        k = rev[i * rslots + e]
-        a = k // slots
-        dx = minimum_image(x[a, 0] - x[i, 0], length, half)
-        dy = x[a, 1] - x[i, 1]
-        dz = x[a, 2] - x[i, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        rsum = radius[a] + radius[i]
-        if d2 >= rsum * rsum:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        f = _pair(model, p, x, v, omega, radius, mass, a, i, k, hist_in, dx, dy, dz, d2, dt)
-        return True, -f[0], -f[1], -f[2], f[6], f[7], f[8]
+        k = rev[i * (rev.shape[0] // n) + e]
+        return _upper_add(
+            i, k, model, p, x, v, omega, radius, mass, slots, hist_in, length, dt, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0,
+        )  # fmt: skip
     if e < n_pairs:
         k = i * slots + (e - n_rev)
-        b = nbr[k]
-        dx = minimum_image(x[i, 0] - x[b, 0], length, half)
-        dy = x[i, 1] - x[b, 1]
-        dz = x[i, 2] - x[b, 2]
-        d2 = dx * dx + dy * dy + dz * dz
-        rsum = radius[i] + radius[b]
-        if d2 >= rsum * rsum:
-            for c in range(width):
-                hist_out[k, c] = 0.0
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        f = _pair(model, p, x, v, omega, radius, mass, i, b, k, hist_in, dx, dy, dz, d2, dt)
-        for c in range(width):
-            hist_out[k, c] = f[10 + c]
-        return True, f[0], f[1], f[2], f[3], f[4], f[5]
-    w = e - n_pairs
-    ri = radius[i]
-    if w < N_WALLS - 1:
-        gap, ny, nz = flat_wall(w, x[i, 1], x[i, 2], half_width)
-        nx = 0.0
-    else:
-        gap = x[i, 0] - back
-        nx, ny, nz = 1.0, 0.0, 0.0
-    delta = ri - gap
-    row = N_WALLS * i + w
-    if delta <= 0.0:
-        for c in range(width):
-            wall_out[row, c] = 0.0
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    ci, ai = wall_arms(pw, ri, delta)
-    h3 = 0.0
-    h4 = 0.0
-    if width > 3:
-        h3 = wall_in[row, 3]
-        h4 = wall_in[row, 4]
-    f = contact_core(
-        model, pw, nx, ny, nz, delta, v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-        omega[i, 2], 0.0, 0.0, 0.0, ci, 0.0, ai, 0.0, mass[i], ri,
-        wall_in[row, 0], wall_in[row, 1], wall_in[row, 2], h3, h4, dt,
+        return _lower_add(
+            i, k, model, p, x, v, omega, radius, mass, nbr, hist_in, hist_out, length, dt, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0,
+        )  # fmt: skip
+    return _wall_add(
+        i, e - n_pairs, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back,
+        dt, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     )  # fmt: skip
-    for c in range(width):
-        wall_out[row, c] = f[10 + c]
-    return True, f[0], f[1], f[2], f[3], f[4], f[5]
 
 
 @cuda.jit
