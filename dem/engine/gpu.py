@@ -454,7 +454,7 @@ class GpuEngine:
         """The launch of ``kernel`` for ``key``'s buffers, prepared once (None: not possible)."""
         from dem.kernels.cuda.launch import prepare
 
-        key = (key, self._scalars, block)
+        key = (key, self._scalars, block, self.threads)
         launch = self._prepared.get(key)
         if launch is None:
             t = self.threads if block is None else block
