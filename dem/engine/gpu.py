@@ -110,6 +110,11 @@ class GpuEngine:
         #: of ``step.LANE_COUNTS``: :func:`dem.kernels.cuda.step.lanes_step_kernel`, the same
         #: bits). Not yet timed on a GPU against 1, so 1 stays the default.
         self.lanes = 1
+        #: The step that gathers each block's touching candidates before the contact law
+        #: (:func:`dem.kernels.cuda.step.compact_step_kernel`, the same bits), listing at most
+        #: ``compact_keep`` a sphere a pass (1 to ``step.COMPACT_KEEP``). Not yet timed on a GPU.
+        self.compact = False
+        self.compact_keep = step.COMPACT_KEEP
         #: Seconds the host spent queueing step launches and then waiting for them, in all.
         self.host_s = 0.0
         self.wait_s = 0.0
@@ -392,6 +397,26 @@ class GpuEngine:
                 launch.set_float(i, value)
         launch()
 
+    def _step_kernel(self) -> tuple:
+        """The step kernel :attr:`lanes` and :attr:`compact` choose.
+
+        Returns (kernel, threads, block, its leading arguments), the block None for the default
+        :attr:`threads`.
+        """
+        step, lanes = self.step, self.lanes
+        if self.compact:
+            keep = self.compact_keep
+            if lanes != 1:
+                raise ValueError(f"compact with lanes = {lanes}: the compact step has one lane")
+            if not 1 <= keep <= step.COMPACT_KEEP:
+                raise ValueError(f"compact_keep = {keep}: 1 to {step.COMPACT_KEEP}")
+            return step.compact_step_kernel, self.n, step.COMPACT_BLOCK, (int(keep),)
+        if lanes == 1:
+            return step.step_kernel, self.n, None, ()
+        if lanes not in step.LANE_COUNTS:
+            raise ValueError(f"lanes = {lanes}: one of {step.LANE_COUNTS}")
+        return step.lanes_step_kernel, self.n * lanes, step.LANE_BLOCK, (lanes,)
+
     def _step(self, sim, seq: int, row: int, kick: bool, next_drift: bool) -> None:
         """Launch step ``seq`` with the body accelerations of row ``row`` of :attr:`acc`.
 
@@ -399,19 +424,15 @@ class GpuEngine:
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
         clumps = self.n_bodies > 0
-        step, n, block, lanes = self.step.step_kernel, self.n, None, self.lanes
-        if lanes != 1:
-            if lanes not in self.step.LANE_COUNTS:
-                raise ValueError(f"lanes = {lanes}: one of {self.step.LANE_COUNTS}")
-            step, n, block = self.step.lanes_step_kernel, self.n * lanes, self.step.LANE_BLOCK
-        lead = () if lanes == 1 else (lanes,)
+        step, n, block, lead = self._step_kernel()
+        scheme = (self.lanes, self.compact) + lead
         if clumps:
             args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False)
-            key = ("forces", lanes, id(self.hist[0]), id(self.wall[0]))
+            key = ("forces", scheme, id(self.hist[0]), id(self.wall[0]))
             self._run(step, n, key, args, ("seq",), block)
         else:
             args = lead + self._sphere_args(sim, seq, self.acc, row, kick, next_drift)
-            key = ("step", lanes, kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
+            key = ("step", scheme, kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
             self._run(step, n, key, args, ("seq", "row", "next_drift"), block)
         self._swap(kick and not clumps)
         if not clumps:

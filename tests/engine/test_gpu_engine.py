@@ -133,6 +133,35 @@ def test_gpu_lanes_give_the_same_bits(lanes):
     assert np.any(cpu.spheres.wall_hist != 0.0)
 
 
+@pytest.mark.parametrize("keep", [16, 1])
+def test_gpu_compact_step_gives_the_same_bits(keep):
+    """The step that gathers each block's touching candidates before the law (one pass a
+    block, or with ``keep`` 1 a pass for every touching candidate of the most crowded sphere)
+    against the CPU engine, spheres (through rebuilds with 16), walls touched: the same bits."""
+    cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
+    engine = gpu.use_gpu()
+    engine.compact = True
+    engine.compact_keep = keep
+    steps = (40 if keep > 1 else 6) if SIMULATOR else 5  # the simulator's barriers are slow
+    for _ in range(2):
+        cpu._advance(steps)
+        gpu._advance(steps)
+        _compare(cpu, gpu)
+    assert keep == 1 or cpu.pairs.builds >= 2
+    assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
+    assert np.any(cpu.spheres.wall_hist != 0.0)
+    assert keep > 1 or np.max(cpu.contact_counts()) > 1  # spheres that took several passes
+
+
+@pytest.mark.parametrize(("lanes", "keep", "words"), [(4, 16, "one lane"), (1, 0, "1 to 16")])
+def test_gpu_compact_step_refuses_what_it_cannot_do(lanes, keep, words):
+    cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
+    engine = gpu.use_gpu()
+    engine.compact, engine.lanes, engine.compact_keep = True, lanes, keep
+    with pytest.raises(ValueError, match=words):
+        gpu._advance(2)
+
+
 def test_gpu_lanes_refuse_a_count_that_does_not_divide_the_block():
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
     gpu.use_gpu().lanes = 3
@@ -257,6 +286,19 @@ def test_gpu_clumps_with_lanes_equal_the_cpu_engine():
     """Screws with four threads a member sphere: the same bits as the CPU engine."""
     cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact")
     gpu.use_gpu().lanes = 4
+    for _ in range(2):
+        cpu._advance(25 if SIMULATOR else 5)
+        gpu._advance(25 if SIMULATOR else 5)
+        _compare_bodies(cpu, gpu)
+    assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
+
+
+def test_gpu_clumps_with_the_compact_step_equal_the_cpu_engine():
+    """Screws' member spheres through the compact step, two touching candidates a pass: the same
+    bits as the CPU engine."""
+    cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact")
+    engine = gpu.use_gpu()
+    engine.compact, engine.compact_keep = True, 2
     for _ in range(2):
         cpu._advance(25 if SIMULATOR else 5)
         gpu._advance(25 if SIMULATOR else 5)

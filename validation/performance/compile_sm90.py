@@ -68,6 +68,9 @@ def signatures() -> dict:
         "lanes_step_kernel": (step.lanes_step_kernel, (
             i8, i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a,
             i4a, a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
+        "compact_step_kernel": (step.compact_step_kernel, (
+            i8, i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a,
+            i4a, a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
         "reduce_kernel": (bodies.reduce_kernel, (
             a2, a2, a2, a2, i8a, i8a, f8, a1, a3, i8, i4a, a2, a2)),
         "half_step_kernel": (bodies.half_step_kernel, (
