@@ -102,6 +102,13 @@ def screw_lattice_sim(n: int, device: str, seed: int = 1):
     return sim
 
 
+def _scheme(sim, args) -> None:
+    """The step scheme the command line asks for (--lanes, --compact) on ``sim``'s GPU engine."""
+    if args.lanes != 1 or args.compact:
+        engine = sim.use_gpu()
+        engine.lanes, engine.compact = args.lanes, args.compact
+
+
 def clumps_job(args) -> dict:
     """Clump-steps/s of screw lattices on ``args.device`` (CPU: at each thread count)."""
     import numba
@@ -112,8 +119,8 @@ def clumps_job(args) -> dict:
         threads = args.threads if args.device == "cpu" else [None]
         try:
             sim = screw_lattice_sim(n, args.device)
-            if args.device == "cuda" and args.lanes != 1:
-                sim.use_gpu().lanes = args.lanes
+            if args.device == "cuda":
+                _scheme(sim, args)
             if args.device == "cpu":
                 numba.set_num_threads(max(threads))
             sim._advance(200)  # compile, upload, the lattice starts to shake
@@ -231,8 +238,7 @@ def gpu_job(args) -> dict:
         try:
             t0 = time.perf_counter()
             sim = lattice_sim(n, "cuda")
-            if args.lanes != 1:
-                sim.use_gpu().lanes = args.lanes
+            _scheme(sim, args)
             row["spheres"] = sim.spheres.n
             row["setup_s"] = round(time.perf_counter() - t0, 2)
             t0 = time.perf_counter()
@@ -412,13 +418,15 @@ def _replicas(blob: bytes, reps: int) -> list:
 
 
 def _time_batch(
-    blob: bytes, reps: int, cycles: int, threads=None, max_registers=None, lanes: int = 1
-) -> dict:
+    blob: bytes, reps: int, cycles: int, threads=None, max_registers=None, lanes: int = 1,
+    compact: bool = False,
+) -> dict:  # fmt: skip
     """One batch of ``reps`` replicas timed over ``cycles`` drive cycles (a row of the JSON).
 
     ``threads``: threads per block of the step launches; ``max_registers``: the step kernels
     compiled with at most this many registers (None: the defaults); ``lanes``: threads a sphere
-    (:attr:`dem.engine.gpu.GpuEngine.lanes`).
+    (:attr:`dem.engine.gpu.GpuEngine.lanes`); ``compact``: the step that gathers the touching
+    candidates first (:attr:`dem.engine.gpu.GpuEngine.compact`).
     """
     import types as pytypes
 
@@ -434,17 +442,18 @@ def _time_batch(
     eng = batch.engine
     if threads is not None:
         eng.threads = threads
-    eng.lanes = lanes
-    kernel = step.step_kernel if lanes == 1 else step.lanes_step_kernel
+    eng.lanes, eng.compact = lanes, compact
     if max_registers is not None:
         capped = cuda.jit(max_registers=max_registers)
         eng.step = pytypes.SimpleNamespace(
             step_kernel=capped(step.step_kernel.py_func),
             lanes_step_kernel=capped(step.lanes_step_kernel.py_func),
+            compact_step_kernel=capped(step.compact_step_kernel.py_func),
             kick_drift_kernel=step.kick_drift_kernel, LANE_COUNTS=step.LANE_COUNTS,
-            LANE_BLOCK=step.LANE_BLOCK,
+            LANE_BLOCK=step.LANE_BLOCK, COMPACT_BLOCK=step.COMPACT_BLOCK,
+            COMPACT_KEEP=step.COMPACT_KEEP,
         )  # fmt: skip
-        kernel = eng.step.step_kernel if lanes == 1 else eng.step.lanes_step_kernel
+    kernel, _, block, _ = eng._step_kernel()
     eng._prepared.clear()
     batch.advance(10)  # compile, upload, first build
     host0, wait0 = eng.host_s, eng.wait_s
@@ -454,7 +463,8 @@ def _time_batch(
     means = v.mean(axis=0)
     n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
     row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
-           "threads_per_block": eng.threads, "max_registers": max_registers, "lanes": lanes,
+           "threads_per_block": block or eng.threads, "max_registers": max_registers,
+           "lanes": lanes, "compact": compact,
            "wall_s": round(wall, 2), "setup_s": round(setup, 2),
            "host_queueing_s": round(eng.host_s - host0, 3),
            "host_waiting_s": round(eng.wait_s - wait0, 3),
@@ -469,9 +479,10 @@ def _time_batch(
     except Exception:  # noqa: BLE001  (a report, not a result)
         pass
     row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
-    print(f"batch {reps} x {cycles} cycles, {lanes} lanes, {eng.threads} threads/block, registers "
-          f"{row.get('registers')}: {wall:.2f} s ({row['us_per_step']:.0f} us a step; host "
-          f"queueing {row['host_queueing_s']:.2f} s, waiting {row['host_waiting_s']:.2f} s), "
+    scheme = "compact" if compact else f"{lanes} lanes"
+    print(f"batch {reps} x {cycles} cycles, {scheme}, {block or eng.threads} threads/block, "
+          f"registers {row.get('registers')}: {wall:.2f} s ({row['us_per_step']:.0f} us a step; "
+          f"host queueing {row['host_queueing_s']:.2f} s, waiting {row['host_waiting_s']:.2f} s), "
           f"v = {row['ensemble_mean_m_s']:.6f}", flush=True)  # fmt: skip
     return row
 
@@ -496,12 +507,13 @@ def variants_job(args) -> dict:
     reps, cycles = args.batch[0], args.variant_cycles
     out = {"variants": [], "loadavg_start": load_loadavg()}
     for spec in args.batch_variants:
-        spec_launch, _, lanes = spec.partition("x")
+        compact = spec.endswith("c")
+        spec_launch, _, lanes = spec.removesuffix("c").partition("x")
         threads, _, regs = spec_launch.partition(":")
         try:
             row = _time_batch(
                 blob, reps, cycles, int(threads), int(regs) if regs else None,
-                int(lanes) if lanes else 1,
+                int(lanes) if lanes else 1, compact,
             )  # fmt: skip
         except Exception:  # noqa: BLE001  (the next variant may still run)
             row = {"variant": spec, "error": traceback.format_exc()}
@@ -516,8 +528,10 @@ def variants_job(args) -> dict:
     timed = [r for r in out["variants"] if "wall_s" in r]
     if timed and args.batch_cycles:
         best = min(timed, key=lambda r: r["wall_s"])
-        threads, regs, lanes = best["threads_per_block"], best["max_registers"], best["lanes"]
-        out["best_full"] = _time_batch(blob, reps, args.batch_cycles[0], threads, regs, lanes)
+        out["best_full"] = _time_batch(
+            blob, reps, args.batch_cycles[0], best["threads_per_block"], best["max_registers"],
+            best["lanes"], best["compact"],
+        )  # fmt: skip
         Path(args.out).write_text(json.dumps(out, indent=1))
     return out
 
@@ -550,15 +564,20 @@ def main() -> None:
         default=[],
         help="cycles measured for each --batch count",
     )
-    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][xL]",
+    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][xL|c]",
                    help="time the first --batch count with T threads per block (the step "
-                   "kernel capped at R registers, L threads a sphere) for --variant-cycles "
-                   "each")  # fmt: skip
+                   "kernel capped at R registers, L threads a sphere, or c: the compact step) "
+                   "for --variant-cycles each")  # fmt: skip
     p.add_argument(
         "--lanes",
         type=int,
         default=1,
         help="threads a sphere in the step (--gpu and --clumps on cuda)",
+    )
+    p.add_argument(
+        "--compact",
+        action="store_true",
+        help="the step that gathers touching candidates first (--gpu and --clumps on cuda)",
     )
     p.add_argument("--variant-cycles", type=int, default=5)
     p.add_argument("--max-registers", nargs="*", type=int, default=[],
