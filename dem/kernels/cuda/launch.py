@@ -10,6 +10,13 @@ same 0.56-0.62 ms a step), more than the kernel itself below a million spheres. 
 The arrays must be the same objects at every launch: the caller prepares one launch per set of
 buffers and prepares again after a rebuild replaces them.
 
+The converted scalars are then handed to ``cuda.core.launch`` as Python floats and ints
+(:func:`fast_arg`), not as numba's ctypes objects: cuda.core's ``ParamHolder`` takes a float as a
+C double and an int as an intptr_t (8 bytes) in its first type checks, but a ctypes scalar only
+after some thirty failed ``isinstance`` checks against numpy's and ctypes' types, about 0.6 us
+each; the step's two parameter rows alone are 48 ctypes doubles. The driver receives the same
+bytes (validation/performance/launch_args.py checks them and times the difference).
+
 This uses numba-cuda internals (pinned at 0.30.4 by the ``cuda`` extra); where they differ,
 :func:`prepare` returns None and the caller launches the ordinary way.
 """
@@ -17,6 +24,22 @@ This uses numba-cuda internals (pinned at 0.30.4 by the ``cuda`` extra); where t
 from __future__ import annotations
 
 import ctypes
+
+#: An intptr_t is 8 bytes: a Python int passes an int64 (cuda.core passes ints as intptr_t).
+_INT64_AS_INT = ctypes.sizeof(ctypes.c_void_p) == 8
+
+
+def fast_arg(value):
+    """A converted kernel argument as cuda.core converts it fastest, the same bytes.
+
+    A ctypes double becomes a Python float (a C double to cuda.core), a ctypes int64 a Python
+    int (an intptr_t, the same 8 bytes on a 64-bit host); anything else is returned as it is.
+    """
+    if isinstance(value, ctypes.c_double):
+        return float(value.value)
+    if _INT64_AS_INT and isinstance(value, ctypes.c_int64):
+        return int(value.value)
+    return value
 
 
 class PreparedLaunch:
@@ -35,6 +58,7 @@ class PreparedLaunch:
         for t, v in zip(kernel.argument_types, args, strict=True):
             self.positions.append(len(self.kernelargs))
             kernel._prepare_args(t, v, self.stream, [], self.kernelargs)
+        self.kernelargs = [fast_arg(a) for a in self.kernelargs]
         coop = "is_cooperative" if CUDA_CORE_GE_1_0 else "cooperative_launch"
         self.config = LaunchConfig(
             grid=cfg.griddim, block=cfg.blockdim, shmem_size=0, **{coop: False}
@@ -43,11 +67,11 @@ class PreparedLaunch:
 
     def set_float(self, index: int, value: float) -> None:
         """Argument ``index`` (a float64) takes ``value`` at the next launch."""
-        self.kernelargs[self.positions[index]] = ctypes.c_double(value)
+        self.kernelargs[self.positions[index]] = fast_arg(ctypes.c_double(value))
 
     def set_int(self, index: int, value: int) -> None:
         """Argument ``index`` (an int64) takes ``value`` at the next launch."""
-        self.kernelargs[self.positions[index]] = ctypes.c_int64(value)
+        self.kernelargs[self.positions[index]] = fast_arg(ctypes.c_int64(value))
 
     def set_bool(self, index: int, value: bool) -> None:
         """Argument ``index`` (a boolean) takes ``value`` at the next launch."""
