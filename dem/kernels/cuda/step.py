@@ -40,7 +40,8 @@ LANE_COUNTS = (1, 2, 4, 8, 16, 32)
 COMPACT_BLOCK = 128
 
 #: Touching candidates a sphere lists in one pass of :func:`compact_step_kernel` (its shared
-#: list's columns); a sphere with more takes further passes.
+#: list's rows, a column a thread: a warp's writes fall in different banks); a sphere with more
+#: takes further passes.
 COMPACT_KEEP = 16
 
 
@@ -263,7 +264,7 @@ def compact_step_kernel(
     skipped, and they add nothing in :func:`step_kernel` either: the sums are the same floats,
     the CPU engine's bits in numba's CUDA simulator.
     """
-    codes = cuda.shared.array((COMPACT_BLOCK, COMPACT_KEEP), int32)
+    codes = cuda.shared.array((COMPACT_KEEP, COMPACT_BLOCK), int32)  # a thread a column
     ends = cuda.shared.array(COMPACT_BLOCK, int32)
     share = cuda.shared.array((COMPACT_BLOCK, 7), float64)
     more = cuda.shared.array(1, int32)
@@ -298,7 +299,7 @@ def compact_step_kernel(
                 i, e, n_rev, n_pairs, x, radius, nbr, rev, hist_out, wall_out, length,
                 half_width, back,
             ):  # fmt: skip
-                codes[t, listed] = e
+                codes[listed, t] = e
                 listed += 1
             e += 1
         if t == 0:
@@ -336,7 +337,7 @@ def compact_step_kernel(
                 o = base + lo
                 o_rev = rev_count[o]
                 c = candidate_force(
-                    o, codes[lo, k], o_rev, o_rev + count[o], model, p, pw, x, v, omega, radius,
+                    o, codes[k, lo], o_rev, o_rev + count[o], model, p, pw, x, v, omega, radius,
                     mass, nbr, rev, hist_in, hist_out, wall_in, wall_out, length, half_width,
                     back, dt,
                 )  # fmt: skip
