@@ -3,12 +3,12 @@
 ``device = "cpu"`` (the default) runs everywhere. ``device = "cuda"`` needs numba's CUDA target
 to work on this machine: a GPU and its driver with numba-cuda (``pip install -e '.[cuda]'``), or
 numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, set before numba is imported; slow, for
-tests). The GPU engine steps spheres and rigid clumps between flat walls in a periodic section,
-under the drive and every contact law; it does not have trough meshes or the finite feeder yet,
-and a case that asks for one of them with ``device = "cuda"`` is refused here, naming the key
-that asks for it. :func:`check_device` runs at the door of ``dem run``, ``dem plan`` and
-``dem sweep``, before anything is filled or written; its errors are
-:class:`dem.errors.InputError`, which the command line ends with exit status 2.
+tests). The GPU engine steps spheres and rigid clumps between flat walls or in a trough mesh
+(U and V pans, CAD troughs) in a periodic section, under the drive and every contact law; it
+does not have the finite feeder yet, and a case that asks for one with ``device = "cuda"`` is
+refused here, naming the key that asks for it. :func:`check_device` runs at the door of
+``dem run``, ``dem plan`` and ``dem sweep``, before anything is filled or written; its errors
+are :class:`dem.errors.InputError`, which the command line ends with exit status 2.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ def check_device(device: str, scene) -> None:
             :class:`dem.scene.case.Case`.
 
     Raises:
-        InputError: for ``"cuda"``: naming ``trough.mesh`` (a U or V pan) or ``feeder`` (a
-            finite trough) in the case file, which the GPU engine does not have yet; or naming
+        InputError: for ``"cuda"``: naming ``feeder`` (a finite trough) in the case file,
+            which the GPU engine does not have yet; or naming
             ``run.device`` when numba's CUDA cannot run here (numba-cuda missing, or no GPU or
             driver: numba's reason is quoted).
             For a device other than ``"cpu"`` and ``"cuda"``, naming ``run.device``.
@@ -50,12 +50,6 @@ def _check_features(case) -> None:
     """Refuse the features the GPU engine lacks, each by the key that asks for it."""
     source = str(case.source)
     gpu = 'under run.device = "cuda"'
-    if case.trough.mesh is not None:
-        raise InputError(
-            "trough.mesh", str(case.trough.mesh),
-            f"no trough mesh {gpu}: the GPU engine has flat walls only so far (no U or V pans); "
-            f"remove the key, or {USE_CPU}", source,
-        )  # fmt: skip
     if case.feeder is not None:
         raise InputError(
             "feeder", {"feed_rate": case.feeder.feed_rate, "feed_length": case.feeder.feed_length},

@@ -13,8 +13,9 @@ cross only when read (a checkpoint, the summary) and then cost a sort on the hos
 The step is the CPU engine's (:mod:`dem.kernels.cuda.step`), the pair list the CPU engine's in
 per-sphere slots (:mod:`dem.kernels.cuda.neighbours`), the force the CPU engine's contact law
 compiled for the GPU (:mod:`dem.kernels.cuda.forces`), rigid clumps the CPU engine's clump step
-(:mod:`dem.kernels.cuda.bodies`). Flat walls only: meshes and feeders are refused before a run
-starts.
+(:mod:`dem.kernels.cuda.bodies`), a trough mesh's contacts the CPU's mesh functions compiled
+for the GPU (:mod:`dem.kernels.cuda.mesh`, :func:`dem.kernels.cuda.step.mesh_step_kernel`). The
+finite feeder is refused before a run starts.
 
 The body acceleration g - s''(t) comes from an array, one row a queued step and one column a
 scene (:func:`accelerations`, filled once a chunk): replicas of other drives or inclines stepped
@@ -91,8 +92,8 @@ class GpuEngine:
 
         from dem.kernels.cuda import bodies, forces, neighbours, step
 
-        if sim.mesh is not None or sim.feeder is not None:
-            raise ValueError("the GPU engine steps spheres and clumps with flat walls only")
+        if sim.feeder is not None:
+            raise ValueError("the GPU engine steps periodic sections only (no feeder)")
         self.cuda, self.forces, self.nb, self.step = cuda, forces, neighbours, step
         self.bodies = bodies
         self.NO_TRIP = step.NO_TRIP
@@ -115,6 +116,7 @@ class GpuEngine:
         #: ``compact_keep`` a sphere a pass (1 to ``step.COMPACT_KEEP``). Not yet timed on a GPU.
         self.compact = False
         self.compact_keep = step.COMPACT_KEEP
+        self.mesh = None  # the trough mesh's device arrays (upload)
         #: Seconds the host spent queueing step launches and then waiting for them, in all.
         self.host_s = 0.0
         self.wait_s = 0.0
@@ -141,6 +143,8 @@ class GpuEngine:
         """The host arrays a step starts from (the bodies' too); :meth:`_stale` compares them."""
         s, b = sim.spheres, sim.bodies
         arrays = (s.x, s.v, s.omega)
+        if sim.mesh is not None:
+            arrays += (s.mesh_hist, s.mesh_normal)
         if b is not None:
             arrays += (b.x, b.v, b.q, b.ang_mom)
         return arrays
@@ -174,6 +178,14 @@ class GpuEngine:
             raise ValueError(f"{scene.shape[0]} scene numbers for {n} spheres")
         self.scene = to(scene)
         self.wall = [to(s.wall_hist), to(s.wall_hist)]
+        m = sim.mesh
+        #: The mesh's triangles and index, then the spheres' mesh slots (None: flat walls).
+        self.mesh = None
+        if m is not None:
+            self.mesh = (
+                to(m.tri), to(m.grid), to(m.dims), to(m.cell_start), to(m.cell_tris),
+                to(s.mesh_hist), to(s.mesh_normal),
+            )  # fmt: skip
         self.x_ref = to(pairs.x_ref)
         self.width = pairs.hist.shape[1]
         nbr, count, slot_hist, self.slots = compact_to_slots(
@@ -227,6 +239,9 @@ class GpuEngine:
         self.force.copy_to_host(s.force)
         self.torque.copy_to_host(s.torque)
         self.wall[0].copy_to_host(s.wall_hist)
+        if self.mesh is not None:
+            self.mesh[5].copy_to_host(s.mesh_hist)
+            self.mesh[6].copy_to_host(s.mesh_normal)
         b = sim.bodies
         if b is not None:
             for name, array in (
@@ -398,24 +413,31 @@ class GpuEngine:
         launch()
 
     def _step_kernel(self) -> tuple:
-        """The step kernel :attr:`lanes` and :attr:`compact` choose.
+        """The step kernel :attr:`lanes`, :attr:`compact` and the trough's mesh choose.
 
-        Returns (kernel, threads, block, its leading arguments), the block None for the default
-        :attr:`threads`.
+        Returns (kernel, threads, block, its leading arguments, its trailing arguments), the
+        block None for the default :attr:`threads`.
         """
         step, lanes = self.step, self.lanes
+        if self.mesh is not None:
+            if lanes != 1 or self.compact:
+                raise ValueError(
+                    f"lanes = {lanes}, compact = {self.compact} in a trough mesh: the GPU's mesh "
+                    "step has one thread a sphere (lanes = 1, compact = False)"
+                )
+            return step.mesh_step_kernel, self.n, None, (), self.mesh
         if self.compact:
             keep = self.compact_keep
             if lanes != 1:
                 raise ValueError(f"compact with lanes = {lanes}: the compact step has one lane")
             if not 1 <= keep <= step.COMPACT_KEEP:
                 raise ValueError(f"compact_keep = {keep}: 1 to {step.COMPACT_KEEP}")
-            return step.compact_step_kernel, self.n, step.COMPACT_BLOCK, (int(keep),)
+            return step.compact_step_kernel, self.n, step.COMPACT_BLOCK, (int(keep),), ()
         if lanes == 1:
-            return step.step_kernel, self.n, None, ()
+            return step.step_kernel, self.n, None, (), ()
         if lanes not in step.LANE_COUNTS:
             raise ValueError(f"lanes = {lanes}: one of {step.LANE_COUNTS}")
-        return step.lanes_step_kernel, self.n * lanes, step.LANE_BLOCK, (lanes,)
+        return step.lanes_step_kernel, self.n * lanes, step.LANE_BLOCK, (lanes,), ()
 
     def _step(self, sim, seq: int, row: int, kick: bool, next_drift: bool) -> None:
         """Launch step ``seq`` with the body accelerations of row ``row`` of :attr:`acc`.
@@ -424,14 +446,14 @@ class GpuEngine:
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
         clumps = self.n_bodies > 0
-        step, n, block, lead = self._step_kernel()
-        scheme = (self.lanes, self.compact) + lead
+        step, n, block, lead, trail = self._step_kernel()
+        scheme = (self.lanes, self.compact) + lead + tuple(id(a) for a in trail)
         if clumps:
-            args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False)
+            args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False) + trail
             key = ("forces", scheme, id(self.hist[0]), id(self.wall[0]))
             self._run(step, n, key, args, ("seq",), block)
         else:
-            args = lead + self._sphere_args(sim, seq, self.acc, row, kick, next_drift)
+            args = lead + self._sphere_args(sim, seq, self.acc, row, kick, next_drift) + trail
             key = ("step", scheme, kick, id(self.x[0]), id(self.hist[0]), id(self.wall[0]))
             self._run(step, n, key, args, ("seq", "row", "next_drift"), block)
         self._swap(kick and not clumps)

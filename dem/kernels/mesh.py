@@ -115,7 +115,7 @@ def cell_of(px, py, pz, grid, dims):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def _counted(px, py, pz, r, tri, cell_tris, lo, hi, m, qx, qy, qz, feature):
+def counted(px, py, pz, r, tri, cell_tris, lo, hi, m, qx, qy, qz, feature):
     """True if the contact of list entry m (point q, ``feature``) counts (module docstring)."""
     if feature == FACE:
         return True
@@ -149,13 +149,22 @@ def mesh_cell(i, x, mesh):
     The cell lists ``mesh.cell_tris[lo:hi]``; lo == hi where it lists none or the centre lies
     outside the padded bounding box.
     """
+    return cell_list(i, x, mesh.grid, mesh.dims, mesh.cell_start)
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def cell_list(i, x, grid, dims, cell_start):
+    """:func:`mesh_cell` with the index's arrays as arguments.
+
+    Arrays, not the named tuple: the GPU compiles this source too (:mod:`dem.kernels.cuda.mesh`).
+    """
     px = x[i, 0]
-    if mesh.grid[4] > 0.0:
-        px = wrap(px, mesh.grid[4])
-    c = cell_of(px, x[i, 1], x[i, 2], mesh.grid, mesh.dims)
+    if grid[4] > 0.0:
+        px = wrap(px, grid[4])
+    c = cell_of(px, x[i, 1], x[i, 2], grid, dims)
     if c < 0:
         return px, 0, 0
-    return px, mesh.cell_start[c], mesh.cell_start[c + 1]
+    return px, cell_start[c], cell_start[c + 1]
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -170,7 +179,7 @@ def mesh_contact(e, px, py, pz, r, tri, cell_tris, lo, hi):
     d2 = dx * dx + dy * dy + dz * dz
     touch = d2 < r * r and d2 != 0.0
     if touch:
-        touch = _counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature)
+        touch = counted(px, py, pz, r, tri, cell_tris, lo, hi, e, qx, qy, qz, feature)
     return dx, dy, dz, d2, touch
 
 
@@ -195,19 +204,33 @@ def mesh_wall_forces(i, model, p, x, v, omega, radius, mass, dt, mesh, fx, fy, f
     cell lists no triangle only resets its slots here; the others call :func:`mesh_forces` (a call,
     not inlined: inlined into every step kernel it took two minutes to compile).
     """
-    px, lo, hi = mesh_cell(i, x, mesh)
+    return mesh_walls(
+        i, model, p, x, v, omega, radius, mass, dt, mesh.tri, mesh.grid, mesh.dims,
+        mesh.cell_start, mesh.cell_tris, mesh.slot_hist, mesh.slot_normal, fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def mesh_walls(
+    i, model, p, x, v, omega, radius, mass, dt, tri, grid, dims, cell_start, cell_tris,
+    slot_hist, slot_normal, fx, fy, fz, tx, ty, tz,
+):  # fmt: skip
+    """:func:`mesh_wall_forces` with the mesh's arrays as arguments.
+
+    Arrays, not the named tuple: the GPU compiles this source too (:mod:`dem.kernels.cuda.mesh`).
+    """
+    px, lo, hi = cell_list(i, x, grid, dims, cell_start)
     if lo == hi:
         for row in range(MESH_SLOTS * i, MESH_SLOTS * i + MESH_SLOTS):
-            for k in range(mesh.slot_hist.shape[1]):
-                mesh.slot_hist[row, k] = 0.0
+            for k in range(slot_hist.shape[1]):
+                slot_hist[row, k] = 0.0
             for k in range(3):
-                mesh.slot_normal[row, k] = 0.0
+                slot_normal[row, k] = 0.0
         return fx, fy, fz, tx, ty, tz
     f = mesh_forces(
-        model, p, dt, mesh.tri, lo, hi, mesh.cell_tris,
-        mesh.slot_hist, mesh.slot_normal, MESH_SLOTS * i, px, x[i, 1], x[i, 2],
-        v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], radius[i], mass[i],
-        fx, fy, fz, tx, ty, tz,
+        model, p, dt, tri, lo, hi, cell_tris, slot_hist, slot_normal, MESH_SLOTS * i, px, x[i, 1],
+        x[i, 2], v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], radius[i],
+        mass[i], fx, fy, fz, tx, ty, tz,
     )  # fmt: skip
     return f[0], f[1], f[2], f[3], f[4], f[5]
 

@@ -354,7 +354,7 @@ def _run_as_batch(case_dir: Path, todo: list[SweepPoint], cycles, frames: bool,
     """
     from dem.errors import SimulationError
     from dem.io.files import replace_text
-    from dem.run.batch import run_batch
+    from dem.run.batch import batchable, run_batch
     from dem.scene.case import load_case
 
     if len(todo) < 2 or any(status(p) != "new" for p in todo):
@@ -362,7 +362,7 @@ def _run_as_batch(case_dir: Path, todo: list[SweepPoint], cycles, frames: bool,
     if any(set(p.overrides) - BATCH_KEYS for p in todo):
         return False
     cases = [load_case(case_dir, p.overrides | device_override(device)) for p in todo]
-    if cases[0].run.device != "cuda" or cases[0].feeder is not None:
+    if batchable(cases[0]) is not None:
         return False
     if progress:
         print(f"dem sweep: {len(todo)} points as one GPU batch", flush=True)

@@ -19,7 +19,6 @@ U_PAN = {"trough.length": 0.12, "trough.width": 0.06,
          "trough.mesh": str(CASES / "geometry" / "u_trough.stl")}  # fmt: skip
 #: What the GPU engine lacks: (the case, its overrides, the key a refusal names).
 REFUSED = [
-    ("mesh", U_PAN, "trough.mesh"),
     ("feeder", {"feeder.feed_rate": 0.0}, "feeder"),
 ]
 
@@ -174,6 +173,17 @@ def test_what_the_gpu_engine_lacks_is_refused_naming_its_key(
     assert err.key == key and err.source == str(case.source)
     assert 'run.device = "cuda"' in err.allowed and 'run.device = "cpu"' in err.allowed
     check_device("cpu", case)
+
+
+def test_a_mesh_trough_passes_the_check_and_its_replicas_go_one_by_one(tmp_path, gpu):
+    """The GPU engine has trough meshes; its batches (replicas, sweeps) have flat troughs only,
+    so a mesh case's replicas run alone, each on the GPU."""
+    from dem.run.batch import batchable
+
+    case = load_case(write_case(tmp_path / "pan"), U_PAN | {"run.device": "cuda"})
+    check_device("cuda", case)
+    assert "trough.mesh" in batchable(case)
+    assert batchable(load_case(write_case(tmp_path / "flat"), {"run.device": "cuda"})) is None
 
 
 @pytest.mark.integration

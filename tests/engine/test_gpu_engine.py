@@ -162,6 +162,64 @@ def test_gpu_compact_step_refuses_what_it_cannot_do(lanes, keep, words):
         gpu._advance(2)
 
 
+def _pan():
+    """A pan across the section: flat bottom, 34-degree slopes, vertical sides (14 triangles
+    along three segments in x, the mesh periodic in x)."""
+    from dem.scene.mesh import TriangleMesh, extrude
+
+    h = 0.5 * WIDTH
+    profile = [[-h, 0.012], [-h, 0.002], [-0.002, 0.0], [0.002, 0.0], [h, 0.002], [h, 0.012]]
+    m = extrude(profile, LENGTH, 3)
+    return TriangleMesh(m.points[m.cells[0].data], period=LENGTH, source="pan")
+
+
+def _mesh_pair(model, e, mu, tangential, seed=5):
+    """Two simulations of the 40-sphere packing lifted 2 mm into :func:`_pan`, driven and
+    inclined, with random velocities and spins: CPU, then GPU."""
+    rng = np.random.default_rng(seed)
+    x, r = _packing(rng)
+    x[:, 2] += 2e-3
+    v = rng.normal(0, 0.4, (len(r), 3))
+    w = rng.normal(0, 200.0, (len(r), 3))
+    law = _law(model, _coefficients(model, e, mu, 0.0, False, tangential, "surface"))
+    motion = drive.Motion(2 * math.pi * 50.0, (drive.Component(2e-3, math.radians(30.0)),))
+    sims = []
+    for device in ("cpu", "cuda"):
+        spheres = Spheres.create(x, r, 2500.0)
+        spheres.v[:] = v
+        spheres.omega[:] = w
+        trough = Trough(LENGTH, WIDTH, inclination=0.1, motion=motion)
+        sim = Simulation(spheres, trough, law, 2e-5, mesh=_pan())
+        sim.device = device
+        sim.start_drive()
+        sims.append(sim)
+    return sims
+
+
+def test_gpu_steps_in_a_mesh_equal_the_cpu_engine():
+    """Spheres in a triangle-mesh pan (the closest points, the rule against counting a contact
+    twice, the slots that carry a spring from one triangle to the next) through a rebuild: the
+    same bits as the CPU, the mesh springs and their normals included."""
+    cpu, gpu = _mesh_pair("hertz_mindlin", 0.3, 0.5, "impact")
+    steps = 15 if SIMULATOR else 5  # the simulator runs the mesh's Python: slow
+    on_mesh = 0
+    for _ in range(2):
+        cpu._advance(steps)
+        gpu._advance(steps)
+        _compare(cpu, gpu)
+        for name in ("mesh_hist", "mesh_normal"):
+            ref = getattr(cpu.spheres, name)
+            _same(getattr(gpu.spheres, name), ref, np.max(np.abs(ref)))
+        slots = np.any(cpu.spheres.mesh_normal != 0.0, axis=1).reshape(cpu.spheres.n, -1)
+        on_mesh = max(on_mesh, int(np.count_nonzero(slots.any(axis=1))))
+        assert np.any(cpu.spheres.mesh_hist != 0.0)  # springs on the mesh
+    assert on_mesh >= 5
+    assert cpu.pairs.builds >= 2
+    with pytest.raises(ValueError, match="mesh step has one thread a sphere"):
+        gpu.use_gpu().compact = True
+        gpu._advance(1)
+
+
 def test_gpu_lanes_refuse_a_count_that_does_not_divide_the_block():
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
     gpu.use_gpu().lanes = 3
@@ -223,12 +281,14 @@ def _screws(rng, template, n, depth=3e-5):
     return np.array(x), np.array(q)
 
 
-def _clump_pair(model, e, mu, tangential, rotation=True, seed=4):
+def _clump_pair(model, e, mu, tangential, rotation=True, seed=4, mesh=False):
     """Two simulations of 20 small screws (a head and shank spheres) thrown into one periodic
-    section with random velocities and angular momenta, driven and inclined: CPU, then GPU."""
+    section with random velocities and angular momenta, driven and inclined: CPU, then GPU.
+    With ``mesh`` they are lifted 2 mm into :func:`_pan`."""
     rng = np.random.default_rng(seed)
     template = shapes.screw(0.006, 0.0006, 0.0011, density=7800.0)
     x, q = _screws(rng, template, 20)
+    x[:, 2] += 2e-3 if mesh else 0.0
     n = len(x)
     v = rng.normal(0, 0.3, (n, 3))
     law = _law(model, _coefficients(model, e, mu, 0.0, False, tangential, "surface"))
@@ -242,7 +302,8 @@ def _clump_pair(model, e, mu, tangential, rotation=True, seed=4):
         )  # fmt: skip
         bodies.place(spheres)
         trough = Trough(LENGTH, WIDTH, inclination=0.1, motion=motion)
-        sim = Simulation(spheres, trough, law, 2e-5, rotation=rotation, bodies=bodies)
+        sim = Simulation(spheres, trough, law, 2e-5, rotation=rotation, bodies=bodies,
+                         mesh=_pan() if mesh else None)  # fmt: skip
         sim.device = device
         sim.start_drive()
         sims.append(sim)
@@ -304,6 +365,19 @@ def test_gpu_clumps_with_the_compact_step_equal_the_cpu_engine():
         gpu._advance(25 if SIMULATOR else 5)
         _compare_bodies(cpu, gpu)
     assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
+
+
+def test_gpu_clumps_in_a_mesh_equal_the_cpu_engine():
+    """Screws in the triangle-mesh pan: the same bits as the CPU engine, mesh springs included."""
+    cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact", mesh=True)
+    for _ in range(2):  # the simulator runs the mesh's Python for 160 spheres: few steps
+        cpu._advance(8 if SIMULATOR else 5)
+        gpu._advance(8 if SIMULATOR else 5)
+        _compare_bodies(cpu, gpu)
+        for name in ("mesh_hist", "mesh_normal"):
+            ref = getattr(cpu.spheres, name)
+            _same(getattr(gpu.spheres, name), ref, np.max(np.abs(ref)))
+    assert np.any(cpu.spheres.mesh_hist != 0.0)
 
 
 def test_gpu_clumps_evaluate_and_take_up_a_host_change():

@@ -65,6 +65,10 @@ def signatures() -> dict:
         "step_kernel": (step.step_kernel, (
             i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a,
             a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
+        "mesh_step_kernel": (step.mesh_step_kernel, (
+            i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a,
+            a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1,
+            a3, a1, i8a, i8a, i8a, a2, a2)),
         "lanes_step_kernel": (step.lanes_step_kernel, (
             i8, i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a,
             i4a, a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),

@@ -453,7 +453,7 @@ def _time_batch(
             LANE_BLOCK=step.LANE_BLOCK, COMPACT_BLOCK=step.COMPACT_BLOCK,
             COMPACT_KEEP=step.COMPACT_KEEP,
         )  # fmt: skip
-    kernel, _, block, _ = eng._step_kernel()
+    kernel, _, block, _, _ = eng._step_kernel()
     eng._prepared.clear()
     batch.advance(10)  # compile, upload, first build
     host0, wait0 = eng.host_s, eng.wait_s

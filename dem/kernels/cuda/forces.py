@@ -32,6 +32,7 @@ import numpy as np
 from numba import cuda
 
 from dem.kernels.contact import N_PARAMS, contact_core, pair_arms, wall_arms
+from dem.kernels.cuda.mesh import mesh_walls
 from dem.kernels.forces import N_WALLS, flat_wall
 from dem.kernels.periodic import minimum_image
 
@@ -191,6 +192,56 @@ def sphere_force(
             (-inf: none). dt: Time step, s. ax, ay, az: Body acceleration a_body, m/s^2.
 
     """
+    fx, fy, fz, tx, ty, tz = _pair_sums(
+        i, model, p, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,
+        length, dt, ax, ay, az,
+    )  # fmt: skip
+    for w in range(N_WALLS):
+        _, fx, fy, fz, tx, ty, tz = _wall_add(
+            i, w, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back, dt,
+            fx, fy, fz, tx, ty, tz,
+        )  # fmt: skip
+    return fx, fy, fz, tx, ty, tz
+
+
+@cuda.jit(device=True)
+def mesh_sphere_force(
+    i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,
+    wall_in, wall_out, length, half_width, back, dt, ax, ay, az, tri, grid, dims, cell_start,
+    cell_tris, slot_hist, slot_normal,
+):  # fmt: skip
+    """:func:`sphere_force` in a mesh trough: the mesh's contacts instead of the flat walls.
+
+    As the CPU engine (:func:`dem.kernels.forces.wall_forces` with a mesh): after the pairs the
+    mesh contacts (:func:`dem.kernels.cuda.mesh.mesh_walls`, sphere i's slot rows of
+    ``slot_hist``, ``slot_normal`` updated in place), then the back wall (wall row
+    N_WALLS i + 3). The flat walls' rows are carried over unchanged, as the CPU leaves them.
+    """
+    fx, fy, fz, tx, ty, tz = _pair_sums(
+        i, model, p, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,
+        length, dt, ax, ay, az,
+    )  # fmt: skip
+    fx, fy, fz, tx, ty, tz = mesh_walls(
+        i, model, pw, x, v, omega, radius, mass, dt, tri, grid, dims, cell_start, cell_tris,
+        slot_hist, slot_normal, fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
+    for w in range(N_WALLS - 1):
+        row = N_WALLS * i + w
+        for c in range(wall_in.shape[1]):
+            wall_out[row, c] = wall_in[row, c]
+    _, fx, fy, fz, tx, ty, tz = _wall_add(
+        i, N_WALLS - 1, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back,
+        dt, fx, fy, fz, tx, ty, tz,
+    )  # fmt: skip
+    return fx, fy, fz, tx, ty, tz
+
+
+@cuda.jit(device=True)
+def _pair_sums(
+    i, model, p, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in, hist_out,
+    length, dt, ax, ay, az,
+):  # fmt: skip
+    """m_i a_body plus sphere i's pairs, reverse slots then own slots: (fx, ..., tz)."""
     n = x.shape[0]
     slots = nbr.shape[0] // n
     rslots = rev.shape[0] // n
@@ -210,11 +261,6 @@ def sphere_force(
         _, fx, fy, fz, tx, ty, tz = _lower_add(
             i, i * slots + s, model, p, x, v, omega, radius, mass, nbr, hist_in, hist_out,
             length, dt, fx, fy, fz, tx, ty, tz,
-        )  # fmt: skip
-    for w in range(N_WALLS):
-        _, fx, fy, fz, tx, ty, tz = _wall_add(
-            i, w, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back, dt,
-            fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
     return fx, fy, fz, tx, ty, tz
 

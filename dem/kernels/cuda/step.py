@@ -22,7 +22,12 @@ and the steps queued after the one that flagged are no-ops, relaunched after the
 
 from numba import cuda, float64, int32
 
-from dem.kernels.cuda.forces import candidate_force, candidate_touches, sphere_force
+from dem.kernels.cuda.forces import (
+    candidate_force,
+    candidate_touches,
+    mesh_sphere_force,
+    sphere_force,
+)
 from dem.kernels.forces import N_WALLS
 from dem.kernels.periodic import minimum_image
 
@@ -148,6 +153,34 @@ def step_kernel(
         i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
         hist_out, wall_in, wall_out, length, half_width, back, dt, acc[row, scene[i], 0],
         acc[row, scene[i], 1], acc[row, scene[i], 2],
+    )  # fmt: skip
+    _finish(
+        i, f, seq, trip, x, v, omega, x2, v2, omega2, mass, inv_mass, inv_inertia, length, dt,
+        rotation, kick, next_drift, x_ref, limit, force, torque, px,
+    )  # fmt: skip
+
+
+@cuda.jit
+def mesh_step_kernel(
+    seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
+    nbr, count, rev, rev_count, hist_in, hist_out, wall_in, wall_out, length, half_width, back,
+    dt, acc, row, scene, rotation, kick, next_drift, x_ref, limit, force, torque, px, tri, grid,
+    dims, cell_start, cell_tris, slot_hist, slot_normal,
+):  # fmt: skip
+    """:func:`step_kernel` in a trough mesh (:func:`dem.kernels.cuda.forces.mesh_sphere_force`).
+
+    The mesh's triangles and cell index (``tri`` to ``cell_tris``, :class:`dem.kernels.layout.
+    MeshArrays`) and the spheres' mesh contact slots (``slot_hist``, ``slot_normal``, rows
+    MESH_SLOTS i + s, updated in place by thread i) follow the step kernel's arguments.
+    """
+    i = cuda.grid(1)
+    if i >= x.shape[0] or trip[0] < seq:
+        return
+    f = mesh_sphere_force(
+        i, model, p, pw, x, v, omega, radius, mass, nbr, count, rev, rev_count, hist_in,
+        hist_out, wall_in, wall_out, length, half_width, back, dt, acc[row, scene[i], 0],
+        acc[row, scene[i], 1], acc[row, scene[i], 2], tri, grid, dims, cell_start, cell_tris,
+        slot_hist, slot_normal,
     )  # fmt: skip
     _finish(
         i, f, seq, trip, x, v, omega, x2, v2, omega2, mass, inv_mass, inv_inertia, length, dt,
