@@ -397,23 +397,22 @@ class Simulation(InstabilityChecks):
         chunk of at most :attr:`dem.engine.feeder.Feeder.interval` steps. ``stop`` (a callable, or
         None) is asked after every chunk; when it returns True the run returns early. Without a
         feeder the chunks then shorten to about ``DEM_STOP_LATENCY_S`` of wall time each, from
-        the last chunk's speed; the checks (and so the overlap record) stay on the steps that are
-        whole multiples of ``DEM_CHECK_INTERVAL`` and the call's last step, whatever the machine's
-        load. Returns the steps advanced.
+        the last chunk's speed; the checks (and so the overlap record) stay on every
+        ``DEM_CHECK_INTERVAL``-th step of the call and its last, whatever the machine's load.
+        Returns the steps advanced.
         """
         left = total = int(n_steps)
         guard = self.guard
         feeder = self.feeder
-        every = limit = config.DEM_CHECK_INTERVAL
+        limit = config.DEM_CHECK_INTERVAL
         if feeder is not None:
             limit = min(limit, feeder.interval)
         while left > 0:
-            chunk = min(left, limit)
-            if feeder is None:
-                # without a feeder the checks fall on whole multiples of DEM_CHECK_INTERVAL steps
-                # (and the call's last step) whatever shortens a chunk below, so that the
-                # overlap record samples the same steps on a busy machine as on an idle one
-                chunk = min(chunk, every - self.step_index % every)
+            # a chunk never crosses a multiple of ``limit`` steps from the call's start: the
+            # checks fall there (and on the call's last step) whatever shortens a chunk below,
+            # so that the overlap record samples the same steps on a busy machine as on an idle
+            # one
+            chunk = min(left, limit - (total - left) % limit)
             if stop is not None and feeder is None and self._step_seconds > 0.0:
                 # a big scene asks ``stop`` about every DEM_STOP_LATENCY_S, not every 500 steps
                 # (a million spheres take a minute for those); a feeder keeps its exchange
@@ -436,7 +435,7 @@ class Simulation(InstabilityChecks):
             left -= chunk
             if feeder is not None:
                 feeder.exchange(self)
-            if feeder is not None or left == 0 or self.step_index % every == 0:
+            if left == 0 or (total - left) % limit == 0:
                 self.check()
             if left > 0 and stop is not None and stop():
                 break
