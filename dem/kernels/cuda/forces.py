@@ -324,6 +324,17 @@ def _clear(kind, row, hist_out, wall_out):
 
 
 @cuda.jit(device=True)
+def _history(hist, row):
+    """Row ``row`` of a history array as five floats, the last two zero where it has three."""
+    h3 = 0.0
+    h4 = 0.0
+    if hist.shape[1] > 3:
+        h3 = hist[row, 3]
+        h4 = hist[row, 4]
+    return hist[row, 0], hist[row, 1], hist[row, 2], h3, h4
+
+
+@cuda.jit(device=True)
 def candidate_force(
     i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in, hist_out,
     wall_in, wall_out, length, half_width, back, dt,
@@ -358,12 +369,7 @@ def candidate_force(
         wjx, wjy, wjz = 0.0, 0.0, 0.0
         m_eff = mass[i]
         r_eff = ri
-        h0, h1, h2 = wall_in[row, 0], wall_in[row, 1], wall_in[row, 2]
-        h3 = 0.0
-        h4 = 0.0
-        if wall_in.shape[1] > 3:
-            h3 = wall_in[row, 3]
-            h4 = wall_in[row, 4]
+        h0, h1, h2, h3, h4 = _history(wall_in, row)
     else:
         q = p
         d = math.sqrt(d2)
@@ -379,12 +385,7 @@ def candidate_force(
         wjx, wjy, wjz = omega[b, 0], omega[b, 1], omega[b, 2]
         m_eff = ma * mb / (ma + mb)
         r_eff = ra * rb / rsum
-        h0, h1, h2 = hist_in[row, 0], hist_in[row, 1], hist_in[row, 2]
-        h3 = 0.0
-        h4 = 0.0
-        if hist_in.shape[1] > 3:
-            h3 = hist_in[row, 3]
-            h4 = hist_in[row, 4]
+        h0, h1, h2, h3, h4 = _history(hist_in, row)
     f = contact_core(
         model, q, nx, ny, nz, delta, vx, vy, vz, omega[a, 0], omega[a, 1], omega[a, 2], wjx, wjy,
         wjz, ci, cj, ai, aj, m_eff, r_eff, h0, h1, h2, h3, h4, dt,

@@ -131,6 +131,37 @@ def _finish(
         trip[0] = seq
 
 
+@cuda.jit(device=True)
+def _put(share, t, c):
+    """Row t of a block's shared terms: the terms of candidate ``c``, and 1 in column 6.
+
+    ``c`` is :func:`dem.kernels.cuda.forces.candidate_force`'s result; where it does not touch
+    the row is left as it is (its flag, column 6, is set to 0 before).
+    """
+    if c[0]:
+        share[t, 0] = c[1]
+        share[t, 1] = c[2]
+        share[t, 2] = c[3]
+        share[t, 3] = c[4]
+        share[t, 4] = c[5]
+        share[t, 5] = c[6]
+        share[t, 6] = 1.0
+
+
+@cuda.jit(device=True)
+def _add_terms(share, first, last, fx, fy, fz, tx, ty, tz):
+    """The sums plus the shared terms of rows ``first`` to ``last - 1`` that touch, in order."""
+    for j in range(first, last):
+        if share[j, 6] != 0.0:
+            fx += share[j, 0]
+            fy += share[j, 1]
+            fz += share[j, 2]
+            tx += share[j, 3]
+            ty += share[j, 4]
+            tz += share[j, 5]
+    return fx, fy, fz, tx, ty, tz
+
+
 @cuda.jit
 def step_kernel(
     seq, trip, model, p, pw, x, v, omega, x2, v2, omega2, radius, mass, inv_mass, inv_inertia,
@@ -242,30 +273,15 @@ def lanes_step_kernel(
         fz = m * acc[row, scene[i], 2]
     for r in range(rounds):
         e = r * lanes + lane
+        share[t, 6] = 0.0
         if e < total:
-            c = candidate_force(
+            _put(share, t, candidate_force(
                 i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in,
                 hist_out, wall_in, wall_out, length, half_width, back, dt,
-            )  # fmt: skip
-            share[t, 6] = 1.0 if c[0] else 0.0
-            share[t, 0] = c[1]
-            share[t, 1] = c[2]
-            share[t, 2] = c[3]
-            share[t, 3] = c[4]
-            share[t, 4] = c[5]
-            share[t, 5] = c[6]
-        else:
-            share[t, 6] = 0.0
+            ))  # fmt: skip
         cuda.syncthreads()
         if lane == 0:
-            for j in range(first, first + lanes):
-                if share[j, 6] != 0.0:
-                    fx += share[j, 0]
-                    fy += share[j, 1]
-                    fz += share[j, 2]
-                    tx += share[j, 3]
-                    ty += share[j, 4]
-                    tz += share[j, 5]
+            fx, fy, fz, tx, ty, tz = _add_terms(share, first, first + lanes, fx, fy, fz, tx, ty, tz)
         cuda.syncthreads()
     if lane != 0 or i >= n:
         return
@@ -369,29 +385,16 @@ def compact_step_kernel(
                     k = q - ends[lo - 1]
                 o = base + lo
                 o_rev = rev_count[o]
-                c = candidate_force(
+                _put(share, t, candidate_force(
                     o, codes[k, lo], o_rev, o_rev + count[o], model, p, pw, x, v, omega, radius,
                     mass, nbr, rev, hist_in, hist_out, wall_in, wall_out, length, half_width,
                     back, dt,
-                )  # fmt: skip
-                if c[0]:
-                    share[t, 0] = c[1]
-                    share[t, 1] = c[2]
-                    share[t, 2] = c[3]
-                    share[t, 3] = c[4]
-                    share[t, 4] = c[5]
-                    share[t, 5] = c[6]
-                    share[t, 6] = 1.0
+                ))  # fmt: skip
             cuda.syncthreads()
-            for j in range(max(mine, start) - start, min(mine + listed, start + COMPACT_BLOCK)
-                           - start):  # fmt: skip
-                if share[j, 6] != 0.0:
-                    fx += share[j, 0]
-                    fy += share[j, 1]
-                    fz += share[j, 2]
-                    tx += share[j, 3]
-                    ty += share[j, 4]
-                    tz += share[j, 5]
+            fx, fy, fz, tx, ty, tz = _add_terms(
+                share, max(mine, start) - start, min(mine + listed, start + COMPACT_BLOCK) - start,
+                fx, fy, fz, tx, ty, tz,
+            )  # fmt: skip
             cuda.syncthreads()
         again = more[0]
         cuda.syncthreads()  # every thread has read ``more`` before thread 0 clears it
