@@ -52,8 +52,11 @@ def load_loadavg() -> list[float]:
     return [round(v, 2) for v in os.getloadavg()]
 
 
-def lattice_sim(n: int, device: str, seed: int = 1):
-    """The sphere-bed case's spheres on a jittered cubic lattice of about n spheres."""
+def lattice_sim(n: int, device: str, seed: int = 1, mesh: bool = False):
+    """The sphere-bed case's spheres on a jittered cubic lattice of about n spheres.
+
+    With ``mesh`` the floor and side walls are triangles (:func:`box_mesh`), the lattice the same.
+    """
     from dem.engine.setup import from_grains
     from dem.scene.case import load_case
 
@@ -62,17 +65,36 @@ def lattice_sim(n: int, device: str, seed: int = 1):
     rows = max(1, round(n / (ACROSS * LAYERS)))
     width = ACROSS * a
     length = rows * a
-    case = load_case(CASE, {"trough.length": length, "trough.width": width})
+    sets = {"trough.length": length, "trough.width": width}
+    if mesh:  # its stability limit is 3.95e-6 s (checked at load), the flat one's above 4e-6
+        sets["trough.mesh"] = str(box_mesh(length, width, (LAYERS + 2) * a))
+        sets["run.timestep"] = 3.9e-6
+    case = load_case(CASE, sets)
     i, j, k = np.meshgrid(np.arange(rows), np.arange(ACROSS), np.arange(LAYERS), indexing="ij")
     rng = np.random.default_rng(seed)
     x = np.column_stack(
         [(i.ravel() + 0.5) * a, (j.ravel() + 0.5) * a - width / 2, 0.5 * a + k.ravel() * a]
     )
     x[:, :2] += rng.uniform(-1e-4 * r, 1e-4 * r, (x.shape[0], 2))
-    sim = from_grains(case, x, timestep=4.0e-6)
+    sim = from_grains(case, x, timestep=3.9e-6 if mesh else 4.0e-6)
     sim.device = device
     sim.start_drive()
     return sim
+
+
+def box_mesh(length: float, width: float, height: float) -> Path:
+    """The flat trough's floor and side walls as triangles, 1 cm long along x, in an STL file."""
+    import tempfile
+
+    import meshio
+
+    from dem.scene.mesh import extrude
+
+    h = 0.5 * width
+    profile = [[-h, height], [-h, 0.0], [h, 0.0], [h, height]]
+    path = Path(tempfile.mkdtemp(prefix="dem_bench_")) / "box.stl"
+    meshio.write(path, extrude(profile, length, max(1, round(length / 0.01))), binary=True)
+    return path
 
 
 def screw_lattice_sim(n: int, device: str, seed: int = 1):
@@ -215,6 +237,7 @@ def gpu_job(args) -> dict:
             "memory_GiB": round(total / 2**30, 1),
         }
     out.update({
+        "mesh": args.mesh,
         "numba": numba.__version__,
         "numpy": np.__version__,
         "python": platform.python_version(),
@@ -237,7 +260,7 @@ def gpu_job(args) -> dict:
         row = {"spheres_asked": n}
         try:
             t0 = time.perf_counter()
-            sim = lattice_sim(n, "cuda")
+            sim = lattice_sim(n, "cuda", mesh=args.mesh)
             _scheme(sim, args)
             row["spheres"] = sim.spheres.n
             row["setup_s"] = round(time.perf_counter() - t0, 2)
@@ -348,10 +371,10 @@ def cpu_job(args) -> dict:
     import numba
 
     out = {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-           "numba": numba.__version__, "sizes": []}  # fmt: skip
+           "numba": numba.__version__, "mesh": args.mesh, "sizes": []}  # fmt: skip
     for n in args.sizes:
         n = int(float(n))
-        sim = lattice_sim(n, "cpu")
+        sim = lattice_sim(n, "cpu", mesh=args.mesh)
         numba.set_num_threads(max(args.threads))
         sim._advance(220)
         for threads in args.threads:
@@ -578,6 +601,11 @@ def main() -> None:
         "--compact",
         action="store_true",
         help="the step that gathers touching candidates first (--gpu and --clumps on cuda)",
+    )
+    p.add_argument(
+        "--mesh",
+        action="store_true",
+        help="--gpu and --cpu lattices in a trough of triangles (the flat walls as a mesh)",
     )
     p.add_argument("--variant-cycles", type=int, default=5)
     p.add_argument("--max-registers", nargs="*", type=int, default=[],

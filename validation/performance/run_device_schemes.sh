@@ -4,7 +4,8 @@
 # one thread a sphere (step_kernel, the default), the compact step (GpuEngine.compact,
 # compact_step_kernel: a block's touching candidates gathered before the contact law), and 2 and
 # 4 threads a sphere (GpuEngine.lanes, lanes_step_kernel); then the Done-when sizes with the
-# fastest (1e6 spheres, 1e5 screws), and Nsight Compute on its kernel. warp_model.py counts what
+# fastest (1e6 spheres, 1e5 screws), 1e5 spheres in a trough of triangles (gpu_bench --mesh:
+# mesh_step_kernel), and Nsight Compute on the fastest step kernel. warp_model.py counts what
 # each scheme should save (warp_model_sphere-bed.json). The baseline of the 50x (100 x the
 # 16-thread CPU run of the bed, 6.1-7.0 s each) was measured on three loans of the H200
 # (gpu_h200_batch_queued.json). The bed state is carried in: device_in/bed.pkl
@@ -32,6 +33,10 @@ fi
 if [ "$(left)" -gt 40 ]; then
     "$PY" $B --clumps --device cuda --clump-sizes 1e5 --lanes "$L" $C \
         --out "$OUT/schemes_screws.json" 2>&1 | quiet | tail -2
+fi
+if [ "$(left)" -gt 50 ]; then  # the trough mesh on the GPU (one thread a sphere): untimed so far
+    "$PY" $B --gpu --sizes 1e5 --mesh --out "$OUT/schemes_mesh.json" 2>&1 | quiet \
+        | grep -i "sphere-steps\|error" | head -3
 fi
 echo "sizes done at ${SECONDS} s"
 if [ "$(left)" -gt 45 ] && [ "$K" != step_kernel ]; then
