@@ -66,9 +66,8 @@ def lattice_sim(n: int, device: str, seed: int = 1, mesh: bool = False):
     width = ACROSS * a
     length = rows * a
     sets = {"trough.length": length, "trough.width": width}
-    if mesh:  # its stability limit is 3.95e-6 s (checked at load), the flat one's above 4e-6
+    if mesh:
         sets["trough.mesh"] = str(box_mesh(length, width, (LAYERS + 2) * a))
-        sets["run.timestep"] = 3.9e-6
     case = load_case(CASE, sets)
     i, j, k = np.meshgrid(np.arange(rows), np.arange(ACROSS), np.arange(LAYERS), indexing="ij")
     rng = np.random.default_rng(seed)
@@ -76,7 +75,7 @@ def lattice_sim(n: int, device: str, seed: int = 1, mesh: bool = False):
         [(i.ravel() + 0.5) * a, (j.ravel() + 0.5) * a - width / 2, 0.5 * a + k.ravel() * a]
     )
     x[:, :2] += rng.uniform(-1e-4 * r, 1e-4 * r, (x.shape[0], 2))
-    sim = from_grains(case, x, timestep=3.9e-6 if mesh else 4.0e-6)
+    sim = from_grains(case, x, timestep=4.0e-6)
     sim.device = device
     sim.start_drive()
     return sim
