@@ -439,6 +439,15 @@ class GpuEngine:
             raise ValueError(f"lanes = {lanes}: one of {step.LANE_COUNTS}")
         return step.lanes_step_kernel, self.n * lanes, step.LANE_BLOCK, (lanes,), ()
 
+    def _choose(self) -> None:
+        """Take up :attr:`lanes`, :attr:`compact` and the mesh for this call's steps.
+
+        Once a call, not once a step: :meth:`_step` runs for every step.
+        """
+        step, n, block, lead, trail = self._step_kernel()
+        scheme = (self.lanes, self.compact) + lead + tuple(id(a) for a in trail)
+        self._chosen = (step, n, block, lead, trail, scheme)
+
     def _step(self, sim, seq: int, row: int, kick: bool, next_drift: bool) -> None:
         """Launch step ``seq`` with the body accelerations of row ``row`` of :attr:`acc`.
 
@@ -446,8 +455,7 @@ class GpuEngine:
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
         clumps = self.n_bodies > 0
-        step, n, block, lead, trail = self._step_kernel()
-        scheme = (self.lanes, self.compact) + lead + tuple(id(a) for a in trail)
+        step, n, block, lead, trail, scheme = self._chosen
         if clumps:
             args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False) + trail
             key = ("forces", scheme, id(self.hist[0]), id(self.wall[0]))
@@ -536,6 +544,7 @@ class GpuEngine:
         self._begin(sim)
         if self._stale(sim):
             self.upload(sim)
+        self._choose()
         self._evaluate(sim, drive)
         self.download(sim)
 
@@ -557,6 +566,7 @@ class GpuEngine:
         self._begin(sim)
         if self._stale(sim):
             self.upload(sim)
+        self._choose()
         if not sim.forces_valid:
             self._evaluate(sim, drive)
             sim.forces_valid = True
