@@ -26,6 +26,15 @@ then reads the rebuild trip once (:mod:`dem.kernels.cuda.step`). The launches qu
 step that tripped do nothing; the host rebuilds and relaunches from there. The chunk follows the
 steps between the last two rebuilds (half of them, 2 to :data:`MAX_CHUNK`), so that few launches
 are wasted and the GPU is not kept waiting for the host.
+
+Two step kernels give the same bits for spheres between flat walls: the plain one (a thread a
+sphere, its contacts in its own loops) and the compact one (a block gathers its touching
+contacts first, so a warp's threads run the contact law together). Which is faster depends on
+the GPU and the scene, so by default (:attr:`GpuEngine.compact` None) a scene of
+:data:`TUNE_MIN_SPHERES` or more runs its first chunks alternately with each, times them by the
+host's clock (the queueing and the wait for the chunk, per launch; each kernel's first chunk, its
+compile, untimed) and keeps the faster (:attr:`GpuEngine.tuned`); the chunks of the trial are the
+run's own steps, so the trial costs only the slower kernel's share of a few chunks.
 """
 
 from __future__ import annotations
@@ -52,6 +61,17 @@ START_CELL = 16
 SIMULATOR = os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
 #: The most step launches queued before the host reads the rebuild trip.
 MAX_CHUNK = 64
+#: Where :attr:`GpuEngine.compact` is None (the default), scenes of at least this many spheres
+#: (flat walls, one lane) time the plain and the compact step on their own first chunks and keep
+#: the faster (:meth:`GpuEngine._pick`); smaller scenes are bound by the host's launches.
+TUNE_MIN_SPHERES = 20_000
+#: The trial times each step over at least this many chunks and launches (after an untimed
+#: first chunk: its compile), the two alternating chunk by chunk so that a passing load on the
+#: host falls on both.
+TUNE_CHUNKS = 3
+TUNE_LAUNCHES = 24
+#: Launches after a decision before the trial runs again (the scene may have changed).
+TUNE_EVERY = 20_000
 
 
 def _grow(need: int) -> int:
@@ -113,9 +133,19 @@ class GpuEngine:
         self.lanes = 1
         #: The step that gathers each block's touching candidates before the contact law
         #: (:func:`dem.kernels.cuda.step.compact_step_kernel`, the same bits), listing at most
-        #: ``compact_keep`` a sphere a pass (1 to ``step.COMPACT_KEEP``). Not yet timed on a GPU.
-        self.compact = False
+        #: ``compact_keep`` a sphere a pass (1 to ``step.COMPACT_KEEP``). True or False: that
+        #: step; None (the default): timed against the plain step on the run's own chunks where
+        #: the scene has ``tune_min`` spheres or more, flat walls and one lane (the plain below).
+        self.compact = None
         self.compact_keep = step.COMPACT_KEEP
+        self.tune_min = TUNE_MIN_SPHERES
+        #: The last trial's outcome: {"chose": "plain" | "compact", "us_per_step": {"plain":
+        #: mean, "compact": mean}, "trials": trials so far} (None: no trial, or none decided).
+        self.tuned = None
+        self._trial = None  # the trial under way: seconds, launches and chunks of each step
+        self._since_trial = 0  # launches since the last decision
+        self._chosen = None  # the step kernel and its launch of the chunk (:meth:`_choose`)
+        self._clock = time.perf_counter
         self.mesh = None  # the trough mesh's device arrays (upload)
         #: Seconds the host spent queueing step launches and then waiting for them, in all.
         self.host_s = 0.0
@@ -164,6 +194,8 @@ class GpuEngine:
         cuda = self.cuda
         s, pairs = sim.spheres, sim.pairs  # the pairs first come back if the device's are newer
         self.pairs_on_device = False
+        if s.n != self.n:  # another scene: time its steps anew
+            self._trial = self.tuned = None
         n = self.n = s.n
         to = cuda.to_device
         self.x = [to(s.x), cuda.device_array((n, 3))]
@@ -412,21 +444,23 @@ class GpuEngine:
                 launch.set_float(i, value)
         launch()
 
-    def _step_kernel(self) -> tuple:
-        """The step kernel :attr:`lanes`, :attr:`compact` and the trough's mesh choose.
+    def _step_kernel(self, compact: bool | None = None) -> tuple:
+        """The step kernel :attr:`lanes`, ``compact`` and the trough's mesh choose.
 
-        Returns (kernel, threads, block, its leading arguments, its trailing arguments), the
-        block None for the default :attr:`threads`.
+        ``compact`` None: :attr:`compact`'s (None there: the plain step). Returns (kernel,
+        threads, block, its leading arguments, its trailing arguments), the block None for the
+        default :attr:`threads`.
         """
         step, lanes = self.step, self.lanes
+        compact = bool(self.compact) if compact is None else compact
         if self.mesh is not None:
-            if lanes != 1 or self.compact:
+            if lanes != 1 or compact:
                 raise ValueError(
                     f"lanes = {lanes}, compact = {self.compact} in a trough mesh: the GPU's mesh "
-                    "step has one thread a sphere (lanes = 1, compact = False)"
+                    "step has one thread a sphere (lanes = 1, compact = False or None)"
                 )
             return step.mesh_step_kernel, self.n, None, (), self.mesh
-        if self.compact:
+        if compact:
             keep = self.compact_keep
             if lanes != 1:
                 raise ValueError(f"compact with lanes = {lanes}: the compact step has one lane")
@@ -442,11 +476,81 @@ class GpuEngine:
     def _choose(self) -> None:
         """Take up :attr:`lanes`, :attr:`compact` and the mesh for this call's steps.
 
-        Once a call, not once a step: :meth:`_step` runs for every step.
+        Once a call, not once a step: :meth:`_step` runs for every step. Where the plain and
+        the compact step are timed against each other (:attr:`compact` None), both are made
+        ready: the trial's chunks alternate (:meth:`_pick`), the others run the faster.
         """
-        step, n, block, lead, trail = self._step_kernel()
-        scheme = (self.lanes, self.compact) + lead + tuple(id(a) for a in trail)
-        self._chosen = (step, n, block, lead, trail, scheme)
+        trial = (
+            self.compact is None and self.lanes == 1 and self.mesh is None
+            and self.n >= self.tune_min
+        )  # fmt: skip
+        if not trial:
+            self._trial, self.tuned = None, None
+        elif self._trial is None and self.tuned is None:
+            self._start_trial()
+        options = (False, True) if trial else (None,)
+        self._options = {}
+        for compact in options:
+            step, n, block, lead, trail = self._step_kernel(compact)
+            scheme = (self.lanes, compact) + lead + tuple(id(a) for a in trail)
+            self._options[compact] = (step, n, block, lead, trail, scheme)
+        faster = self.tuned is not None and self.tuned["chose"] == "compact"
+        self._chosen = self._options[faster if trial else None]
+
+    def _start_trial(self) -> None:
+        self._trial = {"seconds": {False: 0.0, True: 0.0}, "launches": {False: 0, True: 0},
+                       "chunks": {False: 0, True: 0}}  # fmt: skip
+
+    def _pick(self) -> bool | None:
+        """The step of the next chunk in a trial (the one with fewer chunks run), else None."""
+        if self._trial is None:
+            return None  # nothing to time
+        pick = min((False, True), key=self._trial["chunks"].get)
+        self._chosen = self._options[pick]
+        return pick
+
+    def _timed(self, compact, seconds: float, launches: int) -> None:
+        """Take one chunk's time into the trial; decide once each step has its timings.
+
+        A step's first chunk in a trial is not counted (it compiles); the chunks after count
+        with all their launches, those queued after a rebuild's trip included (they cost each
+        step the same). :data:`TUNE_EVERY` launches after a decision the trial runs again (the
+        scene changes: a fill settles, the drive starts).
+        """
+        t = self._trial
+        if t is None:
+            self._since_trial += launches
+            if self.tuned is not None and self._since_trial >= TUNE_EVERY:
+                self._start_trial()
+            return
+        if t["chunks"][compact]:
+            t["seconds"][compact] += seconds
+            t["launches"][compact] += launches
+        t["chunks"][compact] += 1
+        if any(t["chunks"][c] <= TUNE_CHUNKS or t["launches"][c] < TUNE_LAUNCHES
+               for c in (False, True)):  # fmt: skip
+            return
+        us = {("compact" if c else "plain"): 1e6 * t["seconds"][c] / t["launches"][c]
+              for c in (False, True)}  # fmt: skip
+        chose = "compact" if us["compact"] < us["plain"] else "plain"
+        trials = 1 if self.tuned is None else self.tuned["trials"] + 1
+        self.tuned = {"chose": chose, "us_per_step": us, "trials": trials}
+        self._trial, self._since_trial = None, 0
+        self._chosen = self._options[chose == "compact"]
+
+    def step_scheme(self) -> dict:
+        """The step kernel of the run (None before a call), and the last trial's timings.
+
+        After a trial, the kernel it chose (a later trial's chunks alternate meanwhile).
+        """
+        chosen = self._chosen
+        if self.tuned is not None:
+            chosen = self._options[self.tuned["chose"] == "compact"]
+        out = {"kernel": None if chosen is None else chosen[0].py_func.__name__}
+        if self.tuned is not None:
+            out["trial_us_per_step"] = self.tuned["us_per_step"]
+            out["trials"] = self.tuned["trials"]
+        return out
 
     def _step(self, sim, seq: int, row: int, kick: bool, next_drift: bool) -> None:
         """Launch step ``seq`` with the body accelerations of row ``row`` of :attr:`acc`.
@@ -593,14 +697,17 @@ class GpuEngine:
                 self._reset_trip()
                 self.build(sim)
             chunk = min(self.chunk, n_steps - s)
-            t0 = time.perf_counter()
+            compact = self._pick()
+            t0 = self._clock()
             self._accelerate(sim, drive, (step0 + np.arange(s, s + chunk) + 1) * dt)
             for k in range(s, s + chunk):
                 self._step(sim, k + 1, k - s, True, k < n_steps - 1)
-            t1 = time.perf_counter()
+            t1 = self._clock()
             trip = self._read_trip()
+            t2 = self._clock()
             self.host_s += t1 - t0
-            self.wait_s += time.perf_counter() - t1
+            self.wait_s += t2 - t1
+            self._timed(compact, t2 - t0, chunk)
             done = chunk if trip == self.NO_TRIP else trip - s
             if (chunk - done) % 2:  # the skipped launches swapped no buffers
                 self._swap(self.n_bodies == 0)

@@ -138,6 +138,10 @@ class GpuReplicas:
         """Replica r's spheres in the batch's arrays (``self.sim.spheres``)."""
         return slice(int(self.start[r]), int(self.start[r + 1]))
 
+    def step_scheme(self) -> dict:
+        """The step kernel the batch runs (:meth:`dem.engine.gpu.GpuEngine.step_scheme`)."""
+        return self.engine.step_scheme()
+
     def advance(self, n_steps: int) -> np.ndarray:
         """``n_steps`` steps of every replica; each one's mass-weighted mean x-velocity, m/s."""
         sim = self.sim

@@ -19,9 +19,11 @@ What differs from separate runs: the common settling time (the longest run's), t
 step of a sweep, rebuilds of every pair list whenever one run needs one (this moves the last bits
 of positions, not the physics), and the wall time: each summary's ``wall_time_s`` is its share of
 the batch's step loop (the batch's time over the runs still recording), and ``gpu_batch`` gives
-the batch's size and whole wall time. An interrupted batch writes every unfinished run's
-checkpoint; a rerun (``--resume``, or the sweep again) continues them one by one, not as a batch.
-One run that blows up stops the batch: a sweep then runs its points one by one.
+the batch's size, whole wall time and the step kernel that ran (with the engine's timings of the
+plain and compact steps where it tried both: :meth:`dem.engine.gpu.GpuEngine.step_scheme`). An
+interrupted batch writes every unfinished run's checkpoint; a rerun (``--resume``, or the sweep
+again) continues them one by one, not as a batch. One run that blows up stops the batch: a sweep
+then runs its points one by one.
 
 Cost: the fill of each run (O(grains) each), then the batch's steps: one launch a step for all
 runs, plus O(spheres + pairs log pairs) on the host at every frame for the scatter and the
@@ -226,6 +228,7 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
                     extra = {"gpu_batch": {
                         "replicas": len(replicas), "spheres": int(sim.spheres.n),
                         "steps": steps_done, "wall_time_s": time.perf_counter() - started,
+                        "step": batch.step_scheme(),
                     }}  # fmt: skip
                     r.summary = finish(r.scene, r.sim, r.progress, r.cycles, 1, estimate,
                                         r.dir, r.writers, extra)  # fmt: skip

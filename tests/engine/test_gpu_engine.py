@@ -153,6 +153,76 @@ def test_gpu_compact_step_gives_the_same_bits(keep):
     assert keep > 1 or np.max(cpu.contact_counts()) > 1  # spheres that took several passes
 
 
+def test_gpu_times_the_plain_and_compact_steps_and_keeps_the_faster(monkeypatch):
+    """With ``compact`` None (the default) a scene of ``tune_min`` spheres or more runs its chunks
+    alternately with the plain and the compact step, times them (here on a clock that charges
+    each launch by its kernel, the compact one a tenth) and keeps the faster for the rest of the
+    run, across calls, until the trial runs again (the costs swapped: the plain wins): every
+    chunk, whichever step ran it, gives the CPU engine's bits."""
+    from dem.engine import gpu as gpu_module
+
+    faster = "compact"  # then "plain", in the second trial
+    cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
+    engine = gpu.use_gpu()
+    assert engine.compact is None
+    engine.tune_min = 1  # the 40 spheres: below the default, which would not time them
+    monkeypatch.setattr(gpu_module, "TUNE_CHUNKS", 2)  # fewer of the simulator's slow compact
+    monkeypatch.setattr(gpu_module, "TUNE_LAUNCHES", 8)  # steps (its barriers run as threads)
+    names = {"plain": "step_kernel", "compact": "compact_step_kernel"}
+    cost = {"compact_step_kernel": 0.1, "step_kernel": 1.0}
+    launched = {name: 0 for name in cost}
+    real_step = engine._step
+
+    def counted_step(*args):
+        launched[engine._chosen[0].py_func.__name__] += 1
+        real_step(*args)
+
+    engine._step = counted_step
+    engine._clock = lambda: sum(cost[k] * launched[k] for k in cost)
+    per_call = 20 if SIMULATOR else 5
+    calls = 0
+    while engine.tuned is None:
+        assert calls < 8, f"no decision after {calls} calls: {engine._trial}"
+        cpu._advance(per_call)
+        gpu._advance(per_call)
+        _compare(cpu, gpu)
+        calls += 1
+    assert engine.tuned["chose"] == faster, (engine.tuned, engine._trial, launched)
+    us = engine.tuned["us_per_step"]
+    assert us[faster] == pytest.approx(1e5) and us[next(n for n in us if n != faster)] == 1e6
+    assert min(launched.values()) >= gpu_module.TUNE_LAUNCHES
+    before = dict(launched)
+    cpu._advance(per_call)
+    gpu._advance(per_call)
+    _compare(cpu, gpu)
+    assert launched[names[faster]] > before[names[faster]]
+    slower = next(k for k in launched if k != names[faster])
+    assert launched[slower] == before[slower]  # the decision held in the next call
+    assert engine.step_scheme() == {"kernel": names[faster], "trial_us_per_step": us,
+                                    "trials": 1}  # fmt: skip
+    # TUNE_EVERY launches on, the trial runs again: the costs swapped, the other step wins
+    monkeypatch.setattr(gpu_module, "TUNE_EVERY", 10)
+    cost = {k: 1.1 - c for k, c in cost.items()}
+    calls = 0
+    while engine.tuned["trials"] < 2:
+        assert calls < 8, f"no second decision after {calls} calls: {engine._trial}"
+        cpu._advance(per_call)
+        gpu._advance(per_call)
+        _compare(cpu, gpu)
+        calls += 1
+    assert engine.tuned["chose"] == "plain"
+    assert engine.step_scheme()["kernel"] == "step_kernel"
+
+
+def test_gpu_small_scenes_run_the_plain_step_untimed():
+    """Below ``tune_min`` spheres (the default 20,000 here) nothing is timed: the plain step."""
+    cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
+    engine = gpu.use_gpu()
+    gpu._advance(3)
+    assert engine.tuned is None and engine._trial is None
+    assert engine.step_scheme() == {"kernel": "step_kernel"}
+
+
 @pytest.mark.parametrize(("lanes", "keep", "words"), [(4, 16, "one lane"), (1, 0, "1 to 16")])
 def test_gpu_compact_step_refuses_what_it_cannot_do(lanes, keep, words):
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
@@ -201,6 +271,7 @@ def test_gpu_steps_in_a_mesh_equal_the_cpu_engine():
     twice, the slots that carry a spring from one triangle to the next) through a rebuild: the
     same bits as the CPU, the mesh springs and their normals included."""
     cpu, gpu = _mesh_pair("hertz_mindlin", 0.3, 0.5, "impact")
+    gpu.use_gpu().tune_min = 1  # no trial all the same: the mesh has one step
     steps = 15 if SIMULATOR else 5  # the simulator runs the mesh's Python: slow
     on_mesh = 0
     for _ in range(2):
@@ -215,6 +286,8 @@ def test_gpu_steps_in_a_mesh_equal_the_cpu_engine():
         assert np.any(cpu.spheres.mesh_hist != 0.0)  # springs on the mesh
     assert on_mesh >= 5
     assert cpu.pairs.builds >= 2
+    assert gpu._gpu_engine._trial is None
+    assert gpu._gpu_engine.step_scheme() == {"kernel": "mesh_step_kernel"}
     with pytest.raises(ValueError, match="mesh step has one thread a sphere"):
         gpu.use_gpu().compact = True
         gpu._advance(1)

@@ -60,6 +60,7 @@ def test_identical_replicas_are_the_single_run_to_the_bit():
                     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
             np.testing.assert_allclose(v[r], alone.cycle_velocity(), rtol=1e-12)
     assert batch.engine.builds >= 2
+    assert batch.step_scheme() == {"kernel": "step_kernel"}  # 80 spheres: nothing to time
 
 
 def test_different_replicas_each_as_alone():

@@ -48,6 +48,9 @@ class LockstepCpu:
         for sim in self.sims:
             sim.start_drive()
 
+    def step_scheme(self):
+        return {"kernel": "the CPU engine (LockstepCpu)"}
+
     def run(self, n_steps, stop=None):
         done = self.sims[0].run(n_steps, stop=stop)  # stopped early by a signal, as the batch
         for sim in self.sims[1:]:
@@ -88,6 +91,7 @@ def test_a_cuda_replica_run_is_one_batch_with_each_replicas_own_outputs(
     assert own[0]["mean_velocity"] != own[1]["mean_velocity"]  # two fills
     for o in own:
         assert o["gpu_batch"]["replicas"] == 2 and o["gpu_batch"]["spheres"] == 40
+        assert o["gpu_batch"]["step"] == {"kernel": "the CPU engine (LockstepCpu)"}
         assert len(o["per_cycle_velocity"]) == 3
         assert np.all(np.isfinite(o["per_cycle_velocity"]))
         assert o["settle_time_s"] == own[0]["settle_time_s"]

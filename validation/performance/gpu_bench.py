@@ -123,11 +123,25 @@ def screw_lattice_sim(n: int, device: str, seed: int = 1):
     return sim
 
 
+STEPS = {"plain": False, "compact": True, "auto": None}
+
+
 def _scheme(sim, args) -> None:
-    """The step scheme the command line asks for (--lanes, --compact) on ``sim``'s GPU engine."""
-    if args.lanes != 1 or args.compact:
-        engine = sim.use_gpu()
-        engine.lanes, engine.compact = args.lanes, args.compact
+    """The step scheme the command line asks for (--lanes, --step) on ``sim``'s GPU engine."""
+    engine = sim.use_gpu()
+    engine.lanes = args.lanes
+    engine.compact = STEPS[args.step] if args.lanes == 1 else False
+
+
+def _trial_done(advance, engine, steps: int = 64, calls: int = 40) -> None:
+    """Advance until the engine's trial of the plain and compact steps has decided (if any).
+
+    So that a timed window runs the chosen step alone; ``advance(steps)`` steps the scene.
+    """
+    for _ in range(calls):
+        if engine._trial is None or engine.tuned is not None:
+            return
+        advance(steps)
 
 
 def clumps_job(args) -> dict:
@@ -145,6 +159,8 @@ def clumps_job(args) -> dict:
             if args.device == "cpu":
                 numba.set_num_threads(max(threads))
             sim._advance(200)  # compile, upload, the lattice starts to shake
+            if args.device == "cuda":
+                _trial_done(sim._advance, sim._gpu_engine)
             for t in threads:
                 if t is not None:
                     numba.set_num_threads(t)
@@ -161,7 +177,8 @@ def clumps_job(args) -> dict:
                        "loadavg": load_loadavg()}  # fmt: skip
                 if args.device == "cuda":
                     eng = sim._gpu_engine
-                    row.update(builds=eng.builds, skipped_launches=eng.skipped, chunk=eng.chunk)
+                    row.update(builds=eng.builds, skipped_launches=eng.skipped, chunk=eng.chunk,
+                               step=eng.step_scheme())  # fmt: skip
                 print(f"{args.device} {sim.bodies.n} screws x{t}: "
                       f"{row['clump_steps_per_s']:.3g} clump-steps/s", flush=True)  # fmt: skip
                 out["sizes"].append(row)
@@ -269,6 +286,7 @@ def gpu_job(args) -> dict:
             sim._advance(200)  # the bed starts to sit
             steps = int(max(200, min(4000, args.work / sim.spheres.n)))
             eng = sim._gpu_engine
+            _trial_done(sim._advance, eng)
             builds = eng.builds
             cuda.synchronize()
             t0 = time.perf_counter()
@@ -306,7 +324,7 @@ def gpu_job(args) -> dict:
                 sphere_steps_per_s=sim.spheres.n * steps / wall,
                 builds=eng.builds - builds, pairs_per_sphere=pairs_per,
                 contacts_per_sphere=2 * touching / sim.spheres.n, slots=eng.slots,
-                history_width=width, bytes_per_sphere_step=bytes_per,
+                history_width=width, bytes_per_sphere_step=bytes_per, step=eng.step_scheme(),
                 max_abs_v=float(np.max(np.abs(sim.spheres.v))),
                 finite=bool(np.all(np.isfinite(sim.spheres.x))),
                 gpu_memory_used_GiB=round(
@@ -441,14 +459,15 @@ def _replicas(blob: bytes, reps: int) -> list:
 
 def _time_batch(
     blob: bytes, reps: int, cycles: int, threads=None, max_registers=None, lanes: int = 1,
-    compact: bool = False,
+    compact: bool | None = False,
 ) -> dict:  # fmt: skip
     """One batch of ``reps`` replicas timed over ``cycles`` drive cycles (a row of the JSON).
 
     ``threads``: threads per block of the step launches; ``max_registers``: the step kernels
     compiled with at most this many registers (None: the defaults); ``lanes``: threads a sphere
     (:attr:`dem.engine.gpu.GpuEngine.lanes`); ``compact``: the step that gathers the touching
-    candidates first (:attr:`dem.engine.gpu.GpuEngine.compact`).
+    candidates first (:attr:`dem.engine.gpu.GpuEngine.compact`; None: the engine times it
+    against the plain step, as by default, before the timed cycles).
     """
     import types as pytypes
 
@@ -478,6 +497,7 @@ def _time_batch(
     kernel, _, block, _, _ = eng._step_kernel()
     eng._prepared.clear()
     batch.advance(10)  # compile, upload, first build
+    _trial_done(batch.advance, eng)
     host0, wait0 = eng.host_s, eng.wait_s
     t0 = time.perf_counter()
     v = batch.measure(cycles)
@@ -486,7 +506,7 @@ def _time_batch(
     n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
     row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
            "threads_per_block": block or eng.threads, "max_registers": max_registers,
-           "lanes": lanes, "compact": compact,
+           "lanes": lanes, "compact": compact, "step": eng.step_scheme(),
            "wall_s": round(wall, 2), "setup_s": round(setup, 2),
            "host_queueing_s": round(eng.host_s - host0, 3),
            "host_waiting_s": round(eng.wait_s - wait0, 3),
@@ -501,7 +521,9 @@ def _time_batch(
     except Exception:  # noqa: BLE001  (a report, not a result)
         pass
     row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
-    scheme = "compact" if compact else f"{lanes} lanes"
+    scheme = {True: "compact", None: "auto"}.get(compact, f"{lanes} lanes")
+    if compact is None:
+        scheme += f" ({eng.step_scheme()})"
     print(f"batch {reps} x {cycles} cycles, {scheme}, {block or eng.threads} threads/block, "
           f"registers {row.get('registers')}: {wall:.2f} s ({row['us_per_step']:.0f} us a step; "
           f"host queueing {row['host_queueing_s']:.2f} s, waiting {row['host_waiting_s']:.2f} s), "
@@ -529,8 +551,8 @@ def variants_job(args) -> dict:
     reps, cycles = args.batch[0], args.variant_cycles
     out = {"variants": [], "loadavg_start": load_loadavg()}
     for spec in args.batch_variants:
-        compact = spec.endswith("c")
-        spec_launch, _, lanes = spec.removesuffix("c").partition("x")
+        compact = {"c": True, "a": None}.get(spec[-1], False)
+        spec_launch, _, lanes = spec.rstrip("ca").partition("x")
         threads, _, regs = spec_launch.partition(":")
         try:
             row = _time_batch(
@@ -586,9 +608,10 @@ def main() -> None:
         default=[],
         help="cycles measured for each --batch count",
     )
-    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][xL|c]",
+    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][xL|c|a]",
                    help="time the first --batch count with T threads per block (the step "
-                   "kernel capped at R registers, L threads a sphere, or c: the compact step) "
+                   "kernel capped at R registers, L threads a sphere, c: the compact step, a: the "
+                   "engine's trial of the plain and compact steps) "
                    "for --variant-cycles each")  # fmt: skip
     p.add_argument(
         "--lanes",
@@ -597,9 +620,11 @@ def main() -> None:
         help="threads a sphere in the step (--gpu and --clumps on cuda)",
     )
     p.add_argument(
-        "--compact",
-        action="store_true",
-        help="the step that gathers touching candidates first (--gpu and --clumps on cuda)",
+        "--step",
+        choices=list(STEPS),
+        default="auto",
+        help="the step kernel (--gpu and --clumps on cuda): plain, compact (touching candidates "
+        "gathered first) or auto (the engine times both on the first chunks, the default)",
     )
     p.add_argument(
         "--mesh",

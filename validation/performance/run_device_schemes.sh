@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # What the next GPU loan should measure for issue 29, about 4 minutes: the step schemes of
 # dem/kernels/cuda/step.py on the 100-replica bed batch (4 cycles each; the fastest over 20):
-# one thread a sphere (step_kernel, the default), the compact step (GpuEngine.compact,
-# compact_step_kernel: a block's touching candidates gathered before the contact law), and 2 and
-# 4 threads a sphere (GpuEngine.lanes, lanes_step_kernel); then the Done-when sizes with the
+# one thread a sphere (step_kernel), the compact step (GpuEngine.compact = True,
+# compact_step_kernel: a block's touching candidates gathered before the contact law), the
+# engine's default (compact = None: it times both on its first chunks and keeps the faster), and 2
+# and 4 threads a sphere (GpuEngine.lanes, lanes_step_kernel); then the Done-when sizes with the
 # fastest (1e6 spheres, 1e5 screws), 1e5 spheres in a trough of triangles (gpu_bench --mesh:
 # mesh_step_kernel), and Nsight Compute on the fastest step kernel. warp_model.py counts what
 # each scheme should save (warp_model_sphere-bed.json). The baseline of the 50x (100 x the
@@ -16,15 +17,13 @@ PY=${1:-python3}
 BUDGET=${2:-240}
 . "$(dirname "$0")/device_common.sh"
 { date +%T; nvidia-smi -L; } 2>&1
-"$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 128c 128x2 128x4 --variant-cycles 4 \
-    --state $S --out "$OUT/schemes_batch.json" 2>&1 | quiet
+"$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 128c 128a 128x2 128x4 \
+    --variant-cycles 4 --state $S --out "$OUT/schemes_batch.json" 2>&1 | quiet
 echo "batch done at ${SECONDS} s"
 read -r L M K < <("$PY" -c "import json; b = json.load(open('$OUT/schemes_batch.json'))['best_full']
-print(b['lanes'], 'compact' if b['compact'] else 'plain', 'compact_step_kernel' if b['compact']
-      else 'step_kernel' if b['lanes'] == 1 else 'lanes_step_kernel')" 2>/dev/null \
-    || echo "1 plain step_kernel")
-C=""
-[ "$M" = compact ] && C=--compact
+k = b['step']['kernel']; print(b['lanes'], 'compact' if k == 'compact_step_kernel' else 'plain', k)" \
+    2>/dev/null || echo "1 plain step_kernel")
+C="--step $M"
 echo "fastest: lanes $L, $M, kernel $K"
 if [ "$(left)" -gt 60 ]; then
     "$PY" $B --gpu --sizes 1e6 --lanes "$L" $C --out "$OUT/schemes_spheres.json" 2>&1 | quiet \
@@ -41,7 +40,7 @@ fi
 echo "sizes done at ${SECONDS} s"
 if [ "$(left)" -gt 45 ] && [ "$K" != step_kernel ]; then
     V="128x$L"
-    [ -n "$C" ] && V=128c
+    [ "$M" = compact ] && V=128c
     NCU=$(command -v ncu || ls /opt/nvidia/nsight-compute/*/ncu 2>/dev/null | head -1)
     timeout $(($(left) - 5)) "$NCU" -k "regex:$K" --launch-skip 300 \
         --launch-count 1 --section SpeedOfLight --section Occupancy --section LaunchStats \
