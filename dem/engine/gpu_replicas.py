@@ -17,8 +17,11 @@ largest of their Verlet skins (which changes when lists are rebuilt, never a for
 replica's drive (amplitude, angle, phase of its components) and incline are its own: the engine
 gives each scene its own body acceleration g - s''(t) (``GpuEngine.drives``), so a sweep of the
 vibration angle or throw number at one frequency is one batch. Spheres or clumps (all replicas
-the same), flat walls, periodic. The instability checks run on the whole batch (a replica that
-blows up stops them all, naming its grain); each replica's velocity is measured on its own.
+the same), periodic, between flat walls or in one trough mesh (the same triangles for all: the
+U and V pans, a CAD trough; each sphere's mesh springs are its own, and the mesh, fixed in the
+trough frame, is one for the batch, indexed for the batch's skin). The instability checks run
+on the whole batch (a replica that blows up stops them all, naming its grain); each replica's
+velocity is measured on its own.
 
 Two ways to use it: :meth:`GpuReplicas.measure` (velocities of whole cycles, nothing else), or
 :meth:`GpuReplicas.settle` and :meth:`GpuReplicas.run`, after which every replica's own
@@ -29,6 +32,8 @@ unchanged (``dem run --replicas N --device cuda``, :mod:`dem.run.batch`).
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from dem import config
@@ -37,6 +42,7 @@ from dem.engine.simulation import Simulation, rest_speed
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.forces import N_WALLS
+from dem.kernels.mesh import MESH_SLOTS
 from dem.kernels.neighbours import OVERFLOW_PAIRS
 from dem.physics.drive import cycle_edge
 
@@ -55,7 +61,8 @@ class GpuReplicas:
 
     Args:
         sims: The replicas (:class:`~dem.engine.simulation.Simulation`, spheres or clumps, flat
-            walls, periodic), at the same step with the same law, step, trough and drive.
+            walls or one mesh, periodic), at the same step with the same law, step, trough and
+            drive period.
 
     """
 
@@ -64,11 +71,16 @@ class GpuReplicas:
         if not sims:
             raise ValueError("no replicas")
         clumps = sims[0].bodies is not None
+        mesh = sims[0].mesh
         for r, sim in enumerate(sims):
-            if sim.mesh is not None or sim.feeder is not None:
-                raise ValueError(f"replica {r}: the GPU batches flat periodic troughs only")
+            if sim.feeder is not None:
+                raise ValueError(f"replica {r}: the GPU batches periodic sections only (a feeder)")
             if (sim.bodies is not None) != clumps:
                 raise ValueError(f"replica {r} differs from replica 0 in its grains' shape")
+            if (sim.mesh is None) != (mesh is None) or (
+                mesh is not None and not np.array_equal(sim.mesh.tri, mesh.tri)
+            ):
+                raise ValueError(f"replica {r} differs from replica 0 in its trough mesh")
         _same(sims, "contact law", lambda s: s.law.params)
         _same(sims, "time step", lambda s: s.dt)
         _same(sims, "rotation", lambda s: s.rotation)
@@ -80,22 +92,12 @@ class GpuReplicas:
         self.counts = np.array([s.spheres.n for s in sims])
         self.start = np.concatenate([[0], np.cumsum(self.counts)])
         first = sims[0]
+        stacked = ("x", "v", "omega", "force", "torque", "radius", "mass", "inv_mass",
+                   "inv_inertia", "wall_hist")  # fmt: skip
+        if mesh is not None:
+            stacked += ("mesh_hist", "mesh_normal")
         spheres = Spheres(
-            **{
-                name: np.concatenate([getattr(s.spheres, name) for s in sims])
-                for name in (
-                    "x",
-                    "v",
-                    "omega",
-                    "force",
-                    "torque",
-                    "radius",
-                    "mass",
-                    "inv_mass",
-                    "inv_inertia",
-                    "wall_hist",
-                )
-            },  # fmt: skip
+            **{name: np.concatenate([getattr(s.spheres, name) for s in sims]) for name in stacked},
             body=np.arange(self.start[-1], dtype=np.int64),
         )
         bodies = None
@@ -108,7 +110,7 @@ class GpuReplicas:
             spheres, first.trough, first.law, first.dt, rotation=first.rotation,
             skin=max(s.skin for s in sims),
             reference_speed=first.reference_speed, timestep_limit=first.timestep_limit,
-            bodies=bodies,
+            bodies=bodies, mesh=None if mesh is None else copy.copy(mesh),  # indexed for its skin
         )  # fmt: skip
         sim.pairs = _stacked_pairs([s.pairs for s in sims], self.start, first.law.history_width)
         sim.step_index, sim.drive_start_step, sim.drive_on = (
@@ -201,6 +203,9 @@ class GpuReplicas:
             for name in ("x", "v", "omega", "force", "torque"):
                 getattr(rs.spheres, name)[:] = getattr(s, name)[a:b]
             rs.spheres.wall_hist[:] = s.wall_hist[N_WALLS * a : N_WALLS * b]
+            if sim.mesh is not None:
+                rs.spheres.mesh_hist[:] = s.mesh_hist[MESH_SLOTS * a : MESH_SLOTS * b]
+                rs.spheres.mesh_normal[:] = s.mesh_normal[MESH_SLOTS * a : MESH_SLOTS * b]
             if sim.bodies is not None:
                 c, d = int(self.bstart[r]), int(self.bstart[r + 1])
                 for name in ("x", "v", "q", "ang_mom", "omega", "force", "torque"):

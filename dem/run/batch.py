@@ -56,8 +56,6 @@ def batchable(case) -> str | None:
     """Why ``case``'s replicas cannot run as one GPU batch, or None when they can."""
     if case.run.device != "cuda":
         return "the case runs on the CPU"
-    if case.trough.mesh is not None:
-        return "the GPU batches flat troughs only (trough.mesh): each run goes alone"
     if case.feeder is not None:
         return "the GPU batches periodic sections only ([feeder])"
     return None

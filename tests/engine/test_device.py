@@ -175,14 +175,14 @@ def test_what_the_gpu_engine_lacks_is_refused_naming_its_key(
     check_device("cpu", case)
 
 
-def test_a_mesh_trough_passes_the_check_and_its_replicas_go_one_by_one(tmp_path, gpu):
-    """The GPU engine has trough meshes; its batches (replicas, sweeps) have flat troughs only,
-    so a mesh case's replicas run alone, each on the GPU."""
+def test_a_mesh_trough_passes_the_check_and_its_replicas_are_one_batch(tmp_path, gpu):
+    """The GPU engine has trough meshes, and so have its batches (replicas, sweeps); the
+    feeder's finite section is refused for both."""
     from dem.run.batch import batchable
 
     case = load_case(write_case(tmp_path / "pan"), U_PAN | {"run.device": "cuda"})
     check_device("cuda", case)
-    assert "trough.mesh" in batchable(case)
+    assert batchable(case) is None
     assert batchable(load_case(write_case(tmp_path / "flat"), {"run.device": "cuda"})) is None
 
 

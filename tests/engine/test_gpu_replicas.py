@@ -8,11 +8,12 @@ changes when a sphere's x is wrapped into the period, hence the last bits of the
 wrap x - L is exact, x + L is not): equal to 1e-9 of the largest value.
 """
 
+import copy
 import os
 
 import numpy as np
 import pytest
-from test_gpu_engine import _clump_pair, _pair
+from test_gpu_engine import _clump_pair, _mesh_pair, _pair
 
 from dem.engine.gpu_replicas import GpuReplicas
 from dem.errors import SimulationError
@@ -207,3 +208,46 @@ def test_clump_replicas_are_the_single_run_to_the_bit():
     alone.stats[:] = 0.0
     alone._advance(20)
     np.testing.assert_allclose(v, alone.cycle_velocity(), rtol=1e-12)
+
+
+def test_replicas_in_a_trough_mesh_are_the_single_run_to_the_bit():
+    """Two copies of 40 spheres that fell into a triangle pan on the CPU (so that they start on
+    the mesh with springs), stepped together through the GPU's mesh step and scattered: each
+    replica's spheres, mesh springs and their normals, pairs and momentum sums are the scene
+    stepped on alone by the CPU engine (the GPU's mesh step is the CPU's to the bit in the
+    simulator: tests/engine/test_gpu_engine.py)."""
+    alone = _mesh_pair("hertz_mindlin", 0.3, 0.5, "impact")[0]
+    alone.run(60)  # onto the pan
+    on_mesh = np.any(alone.spheres.mesh_normal != 0.0, axis=1).reshape(alone.spheres.n, -1)
+    assert np.count_nonzero(on_mesh.any(axis=1)) >= 5
+    copies = [copy.deepcopy(alone) for _ in range(2)]
+    for rs in copies:
+        rs.device = "cuda"
+    batch = GpuReplicas(copies)
+    assert batch.sim.mesh is not alone.mesh and batch.sim.spheres.mesh_hist.shape[0] == (
+        2 * alone.spheres.mesh_hist.shape[0]
+    )  # fmt: skip
+    steps = 12 if SIMULATOR else 40
+    assert batch.run(steps) == steps
+    alone.run(steps)
+    assert batch.step_scheme() == {"kernel": "mesh_step_kernel"}
+    for rs in copies:
+        _close(rs.spheres, alone.spheres, exact=True)
+        for name in ("mesh_hist", "mesh_normal"):
+            got, ref = getattr(rs.spheres, name), getattr(alone.spheres, name)
+            if SIMULATOR:
+                np.testing.assert_array_equal(got, ref)
+            else:
+                np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
+        k = alone.pairs.n_pairs
+        assert rs.pairs.n_pairs == k
+        np.testing.assert_array_equal(rs.pairs.pair_j[:k], alone.pairs.pair_j[:k])
+        np.testing.assert_allclose(rs.stats[:2], alone.stats[:2], rtol=1e-12)
+    assert np.any(copies[1].spheres.mesh_hist != 0.0)
+
+
+def test_replicas_must_share_the_trough_mesh():
+    flat = _pair(*LAW)[1]
+    pan = _mesh_pair("hertz_mindlin", 0.3, 0.5, "impact")[1]
+    with pytest.raises(ValueError, match="replica 1 differs from replica 0 in its trough mesh"):
+        GpuReplicas([flat, pan])
