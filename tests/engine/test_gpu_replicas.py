@@ -31,8 +31,8 @@ def _needs_cuda():
         pytest.skip("no GPU, and NUMBA_ENABLE_CUDASIM=1 (numba's CUDA simulator) is not set")
 
 
-def _close(batch, alone, exact):
-    for name in ("x", "v", "omega", "force", "torque", "wall_hist"):
+def _close(batch, alone, exact, names=("x", "v", "omega", "force", "torque", "wall_hist")):
+    for name in names:
         got, ref = getattr(batch, name), getattr(alone, name)
         if exact and SIMULATOR:
             np.testing.assert_array_equal(got, ref)
@@ -194,20 +194,22 @@ def test_clump_replicas_are_the_single_run_to_the_bit():
         alone.run(30)
         for rs in copies:
             _close(rs.spheres, alone.spheres, exact=True)
-            for name in ("x", "v", "q", "ang_mom", "omega", "force", "torque"):
-                got, ref = getattr(rs.bodies, name), getattr(alone.bodies, name)
-                if SIMULATOR:
-                    np.testing.assert_array_equal(got, ref)
-                else:
-                    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
-            k = alone.pairs.n_pairs
-            assert rs.pairs.n_pairs == k
-            np.testing.assert_array_equal(rs.pairs.hist[:k], alone.pairs.hist[:k])
-            np.testing.assert_allclose(rs.stats[:2], alone.stats[:2], rtol=1e-12)
+            _close(rs.bodies, alone.bodies, True, ("x", "v", "q", "ang_mom", "omega", "force",
+                                                   "torque"))  # fmt: skip
+            _same_pairs(rs, alone)
     v = batch.advance(20)
     alone.stats[:] = 0.0
     alone._advance(20)
     np.testing.assert_allclose(v, alone.cycle_velocity(), rtol=1e-12)
+
+
+def _same_pairs(rs, alone):
+    """A scattered replica's pair list, springs and momentum sums against the scene alone."""
+    k = alone.pairs.n_pairs
+    assert rs.pairs.n_pairs == k
+    np.testing.assert_array_equal(rs.pairs.pair_j[:k], alone.pairs.pair_j[:k])
+    np.testing.assert_array_equal(rs.pairs.hist[:k], alone.pairs.hist[:k])
+    np.testing.assert_allclose(rs.stats[:2], alone.stats[:2], rtol=1e-12)
 
 
 def test_replicas_in_a_trough_mesh_are_the_single_run_to_the_bit():
@@ -233,16 +235,8 @@ def test_replicas_in_a_trough_mesh_are_the_single_run_to_the_bit():
     assert batch.step_scheme() == {"kernel": "mesh_step_kernel"}
     for rs in copies:
         _close(rs.spheres, alone.spheres, exact=True)
-        for name in ("mesh_hist", "mesh_normal"):
-            got, ref = getattr(rs.spheres, name), getattr(alone.spheres, name)
-            if SIMULATOR:
-                np.testing.assert_array_equal(got, ref)
-            else:
-                np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
-        k = alone.pairs.n_pairs
-        assert rs.pairs.n_pairs == k
-        np.testing.assert_array_equal(rs.pairs.pair_j[:k], alone.pairs.pair_j[:k])
-        np.testing.assert_allclose(rs.stats[:2], alone.stats[:2], rtol=1e-12)
+        _close(rs.spheres, alone.spheres, True, ("mesh_hist", "mesh_normal"))
+        _same_pairs(rs, alone)
     assert np.any(copies[1].spheres.mesh_hist != 0.0)
 
 
