@@ -7,6 +7,7 @@ Plain Python (the builders run once per case); the numba sub-models are in
 :mod:`dem.kernels.contact.laws` and the contact routine in :mod:`dem.kernels.contact.force`.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -89,6 +90,7 @@ def damping_beta(restitution: float) -> float:
     return log_e / math.sqrt(log_e * log_e + math.pi * math.pi)
 
 
+@functools.lru_cache(maxsize=256)  # a pure function of two scalars: ~0.5 s of Python a call
 def normal_law_restitution(model: int, beta: float) -> float:
     """Normal restitution e_n that the normal law itself gives a free impact (no gravity).
 
