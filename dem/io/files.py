@@ -6,9 +6,15 @@ the write fails in the middle, often inside ``close`` where Python's OSError car
 name; the helper removes the part-written temporary file and raises an OSError that names the
 file being replaced, so ``dem`` can say which file and why in one line.
 
-The temporary file is made afresh (``O_EXCL | O_NOFOLLOW``): a link planted under its name is
-removed, never written through, and the rename replaces a link at ``NAME`` itself, not the file
-it points to. JSON files are strict JSON (:func:`json_text`): no ``NaN`` or ``Infinity``.
+Every file dem writes goes through :func:`replace_file` (or :func:`replace_text`,
+:func:`write_input`), every folder it makes inside an output folder through :func:`own_folder`:
+dem never writes, truncates or deletes through a link it did not make. A link (live or dangling)
+under a name dem writes is refused with an :class:`dem.errors.InputError` naming the option and
+the path; commands check their names at the door (:func:`refuse_links`) before any work, and the
+writers check again when they write. The temporary file is made afresh (``O_EXCL |
+O_NOFOLLOW``): a link planted under its name is removed, never written through, and the rename
+would replace a link planted at ``NAME`` after the check, not the file it points to. JSON files
+are strict JSON (:func:`json_text`): no ``NaN`` or ``Infinity``.
 """
 
 from __future__ import annotations
@@ -21,18 +27,67 @@ import stat
 from collections.abc import Callable
 from pathlib import Path
 
+from dem.errors import InputError
+from dem.io.freetext import input_text
 
-def replace_file(path: Path, write: Callable[[Path], None], suffix: str = ".tmp") -> None:
+#: The option named by a refused link when the caller names none.
+OUTPUT_KEY = "--out"
+
+
+def link_refused(path: Path, key: str = OUTPUT_KEY) -> InputError:
+    """The error for a link under a name dem writes (``key``: the option that chose the folder)."""
+    return InputError(
+        key, str(path), "a file or folder of dem's own, not a link (dem never writes or deletes "
+        "through a link it did not make): remove the link or choose another folder",
+    )  # fmt: skip
+
+
+def refuse_links(folder: Path, names, key: str = OUTPUT_KEY) -> None:
+    """Refuse a link, live or dangling, at ``folder`` / each of ``names``; before any work.
+
+    ``names`` may hold paths below ``folder`` (``frames/trough.vtp``): each folder on the way
+    is checked too.
+    """
+    folder = Path(folder)
+    for name in names:
+        path = folder
+        for part in Path(name).parts:
+            path = path / part
+            if path.is_symlink():
+                raise link_refused(path, key)
+
+
+def own_folder(path: Path, key: str = OUTPUT_KEY) -> Path:
+    """Make the folder ``path`` (and its parents) where dem writes; a link there is refused.
+
+    The parents are the caller's choice (a folder a user named may be a link); ``path`` itself
+    is a name dem chose inside it, and must be dem's own folder or not exist yet.
+    """
+    path = Path(path)
+    if path.is_symlink():
+        raise link_refused(path, key)
+    if path.exists() and not path.is_dir():
+        raise InputError(key, str(path), "a folder (this is a file): move it away")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def replace_file(
+    path: Path, write: Callable[[Path], None], suffix: str = ".tmp", *, key: str = OUTPUT_KEY
+) -> None:
     """Call ``write(tmp)`` on ``path`` + ``suffix``, then rename it over ``path``.
 
     ``tmp`` exists, empty, when ``write`` is called: a new file this call made, never a link.
 
     Raises:
+        InputError: ``path`` is a link, live or dangling (named by ``key``); nothing is written.
         OSError: The write or the rename failed; the temporary file is gone, ``path`` is as it
             was, and the error's ``filename`` is ``path``.
 
     """
     path = Path(path)
+    if path.is_symlink():
+        raise link_refused(path, key)
     tmp = path.with_name(path.name + suffix)
     try:
         _fresh(tmp)
@@ -56,9 +111,39 @@ def _fresh(tmp: Path) -> None:
     os.close(os.open(tmp, flags, 0o666))
 
 
-def replace_text(path: Path, text: str, encoding: str = "utf-8") -> None:
+def replace_text(
+    path: Path, text: str, encoding: str = "utf-8", *, key: str = OUTPUT_KEY, errors: str = "strict"
+) -> None:
     """:func:`replace_file` for a text file."""
-    replace_file(path, lambda tmp: tmp.write_text(text, encoding=encoding))
+    replace_file(path, lambda tmp: tmp.write_text(text, encoding=encoding, errors=errors), key=key)
+
+
+def append_text(path: Path, text: str, *, key: str = OUTPUT_KEY) -> None:
+    """Append ``text`` to dem's own file ``path`` (made by :func:`replace_text`), never to a link.
+
+    Opened without following a link (``O_NOFOLLOW``): a link planted in its place since is
+    refused, and its target is not written.
+    """
+    flags = os.O_WRONLY | os.O_APPEND | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as err:
+        if Path(path).is_symlink():
+            raise link_refused(Path(path), key) from None
+        raise OSError(err.errno, err.strerror, str(path)) from err
+    with os.fdopen(fd, "a", encoding="utf-8") as stream:
+        stream.write(text)
+
+
+def write_input(path: Path, lines, *, key: str = OUTPUT_KEY) -> Path:
+    """Write a file LAMMPS or LIGGGHTS reads (a deck, data, molecule, template or STL file).
+
+    Each line made inert (:func:`dem.io.freetext.input_line`: a name cannot start a command),
+    written whole (:func:`replace_text`); returns ``path``.
+    """
+    path = Path(path)
+    replace_text(path, input_text(lines), key=key)
+    return path
 
 
 def finite_or_none(value):

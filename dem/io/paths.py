@@ -44,6 +44,20 @@ def writable_path(key: str, path: str | Path, *, folder: bool) -> Path:
     return path
 
 
+def output_folder(key: str, given: str | Path | None, default: Path) -> Path:
+    """The output folder ``key`` names (``given``), else ``default``; checked before any work.
+
+    Checked by :func:`writable_path`. The folder a user names is theirs, a link too; the
+    default is a name dem chose inside the case folder (which may have come from anywhere), so
+    a link there is refused.
+    """
+    if given is None and Path(default).is_symlink():
+        from dem.io.files import link_refused
+
+        raise link_refused(Path(default), key)
+    return writable_path(key, default if given is None else given, folder=True)
+
+
 def plot_path(key: str, text: str, default_name: str) -> Path:
     """The figure path that option ``key`` names, refused before any work if it cannot be one.
 
@@ -56,6 +70,10 @@ def plot_path(key: str, text: str, default_name: str) -> Path:
     elif path.suffix.lower() != ".png":
         raise InputError(key, text, f"a .png file name, or an existing folder to write "
                          f"{default_name} in")  # fmt: skip
+    if path.is_symlink():  # refused now, not after the work the figure shows
+        from dem.io.files import link_refused
+
+        raise link_refused(path, key)
     return writable_path(key, path, folder=False)
 
 
@@ -63,8 +81,10 @@ def refuse_replacing(key: str, folder: Path, names, what: str = "a deck") -> Non
     """Raise :class:`InputError` where ``folder`` holds any of ``names`` (an earlier export).
 
     Called before anything is written, unless the caller's ``--overwrite`` asks to replace them.
+    A link under one of the names counts, dangling too (it would be replaced): the refusal of
+    links themselves, overwrite or not, is :func:`dem.io.files.refuse_links`.
     """
-    found = [n for n in names if (Path(folder) / n).exists()]
+    found = [n for n in names if os.path.lexists(Path(folder) / n)]
     if found:
         raise InputError(
             key, str(folder), f"a folder without {what}: it holds {', '.join(found)}, which the "

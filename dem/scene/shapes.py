@@ -377,14 +377,13 @@ def clump_from_file(
         raise InputError(exc.key, exc.value, exc.allowed, source=str(path)) from None
 
 
-def write_clump(path: str | Path, template: Template, *, frame: str = "body") -> None:
-    """Write a template's spheres as ``x y z r`` lines (m, full precision).
+def clump_lines(template: Template, *, frame: str = "body") -> list[str]:
+    """A template's spheres as ``x y z r`` lines (m, full precision) after a ``#`` header.
 
-    The file reads back with :func:`clump_from_file` and in LIGGGHTS
-    ``particletemplate/multisphere`` (scale 1).
+    Written by :func:`dem.io.liggghts.write_clump`; the file reads back with
+    :func:`clump_from_file` and in LIGGGHTS ``particletemplate/multisphere`` (scale 1).
 
     Args:
-        path: Output file.
         template: The template.
         frame: ``"body"`` (centre of mass, principal axes) or ``"input"``.
 
@@ -397,7 +396,7 @@ def write_clump(path: str | Path, template: Template, *, frame: str = "body") ->
         " ".join(repr(float(v)) for v in (*c, r))
         for c, r in zip(centres, template.radii, strict=True)
     ]
-    Path(path).write_text("\n".join(lines) + "\n", encoding="ascii")
+    return lines
 
 
 def _check_positive(key: str, value, unit: str) -> None:

@@ -7,6 +7,7 @@ import pytest
 
 from dem import config
 from dem.errors import InputError
+from dem.io.liggghts import write_clump
 from dem.physics import mass
 from dem.scene import shapes
 
@@ -244,7 +245,7 @@ def test_principal_axes_orthonormal_and_diagonalise(seed):
 def test_clump_file_round_trip(tmp_path):
     t = shapes.screw(**SCREW, mass=2.5e-3)
     path = tmp_path / "screw.multisphere"
-    shapes.write_clump(path, t)
+    write_clump(path, t)
     back = shapes.clump_from_file(path, mass=2.5e-3)
     assert back.name == "screw" and back.count == t.count
     assert np.array_equal(back.radii, t.radii)

@@ -17,7 +17,7 @@ import numpy as np
 from study import AS_MEASURED, CASE, fmt
 
 from dem import __version__
-from dem.io.liggghts import DECK_NAME
+from dem.io.liggghts import DECK_NAME, write_clump
 from dem.scene import shapes
 from dem.scene.case import load_case
 
@@ -104,7 +104,7 @@ def impact_deck(body: str, case, dt: float, deck_dir: Path) -> Path:
         ]
         members = []
     else:
-        shapes.write_clump(deck_dir / "grain.multisphere", grain, frame="body")
+        write_clump(deck_dir / "grain.multisphere", grain, frame="body")
         i1, i2, i3 = (fmt(v) for v in grain.moments)
         grain_lines = [
             "# grain.multisphere: members x y z r (m), body frame (centre of mass at the origin,",

@@ -40,6 +40,7 @@ import numpy as np
 
 from dem import __version__
 from dem.errors import InputError
+from dem.io.files import write_input
 from dem.io.lammps import pour
 from dem.io.lammps.contact import contact_models, convention_notes
 from dem.io.lammps.walls import Pan, flat_wall_lines, pan_planes, pan_wall_lines
@@ -130,8 +131,7 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
     if body is not None:
         lines += ["", "Molecules", ""]
         lines += [f"{i + 1} {int(body[i]) + 1}" for i in range(n)]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_input(path, lines, key="OUT_DIR")
 
 
 def _extent(scene: Scene) -> float:
@@ -155,8 +155,7 @@ def write_bodies(path: Path, bodies, inertia_space: np.ndarray, length: float) -
                   i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2], *bodies.v[b],
                   *bodies.ang_mom[b]]  # fmt: skip
         lines.append(f"{b + 1} " + " ".join(repr(float(u)) for u in values) + " 0 0 0")
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_input(path, lines, key="OUT_DIR")
 
 
 def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_steps: int,
@@ -285,5 +284,4 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         f"run {steps}",
     ]
     path = out / DECK_NAME
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_input(path, lines, key="OUT_DIR")

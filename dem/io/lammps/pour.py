@@ -40,6 +40,7 @@ import numpy as np
 from dem import __version__
 from dem.config import DEM_SETTLE_MAX_TIME, DEM_SETTLE_SPEED_FRACTION, GRAVITY
 from dem.errors import InputError
+from dem.io.files import write_input
 from dem.io.liggghts.drive import gravity_block
 from dem.io.liggghts.text import fmt
 from dem.scene.fill import clump_box_height, sphere_box_height
@@ -110,8 +111,7 @@ def write_molecule(path: Path, scene: Scene) -> Path:
         "",
         *(f"{i + 1} {row(g.density * 4.0 / 3.0 * math.pi * r**3)}" for i, r in enumerate(g.radii)),
     ]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_input(path, lines, key="OUT_DIR")
 
 
 def refuse_unpourable(scene: Scene) -> None:

@@ -9,7 +9,14 @@ settling as ``dem export liggghts`` does; :mod:`~dem.io.liggghts.launcher` runs 
 """
 
 from dem.io.liggghts.contact import MIN_HERTZ_RESTITUTION, damping_ratio
-from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, DUMP_FILES, VX_FILE, write_deck
+from dem.io.liggghts.deck import (
+    CLUMP_FILE,
+    DECK_NAME,
+    DUMP_FILES,
+    VX_FILE,
+    write_clump,
+    write_deck,
+)
 from dem.io.liggghts.feeder import BALANCE_FILE
 from dem.io.liggghts.geometry import MESH_FILE, mesh_fill_block, min_angle_deg, strip_top, write_stl
 from dem.io.liggghts.launcher import (
@@ -55,6 +62,7 @@ __all__ = [
     "read_balance",
     "run_liggghts",
     "strip_top",
+    "write_clump",
     "write_deck",
     "write_stl",
 ]

@@ -29,12 +29,14 @@ the mass-weighted mean), averaged over windows of ``sample_steps`` steps, goes t
 from __future__ import annotations
 
 import math
+import shlex
 from pathlib import Path
 from typing import NamedTuple
 
 from dem import __version__
 from dem.config import GRAVITY
 from dem.errors import InputError
+from dem.io.files import write_input
 from dem.io.liggghts.contact import contact_block
 from dem.io.liggghts.drive import drive_block, gravity_block, static_gravity
 from dem.io.liggghts.feeder import feeder_lines
@@ -42,7 +44,7 @@ from dem.io.liggghts.geometry import SKIN_FRACTION, Layout, layout, placement, w
 from dem.io.liggghts.text import fmt, prime_at_least
 from dem.scene.case import Case
 from dem.scene.resolved import Scene, resolve
-from dem.scene.shapes import write_clump
+from dem.scene.shapes import clump_lines
 
 #: LIGGGHTS version the decks are written for.
 LIGGGHTS_VERSION = "LIGGGHTS-PUBLIC 3.8.0"
@@ -202,9 +204,17 @@ def write_deck(
          f"run {steps}"],
     ]  # fmt: skip
     lines = [line for block in blocks for line in [*block, ""]]
-    deck = out / DECK_NAME
-    deck.write_text("\n".join(lines))
-    return deck
+    return write_input(out / DECK_NAME, lines, key="OUT_DIR")
+
+
+def write_clump(path: Path, template, *, frame: str = "body", key: str = "--out") -> Path:
+    """Write a clump template's members (:func:`dem.scene.shapes.clump_lines`) to ``path``.
+
+    The file LIGGGHTS's ``particletemplate/multisphere`` reads (``x y z r``, m), and
+    :func:`dem.scene.shapes.clump_from_file` reads back; written as every input file is
+    (:func:`dem.io.files.write_input`: no link followed, the template's name inert).
+    """
+    return write_input(path, clump_lines(template, frame=frame), key=key)
 
 
 def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
@@ -224,7 +234,7 @@ def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
         )  # fmt: skip
     g = scene.grain
     members = g.count
-    write_clump(out / CLUMP_FILE, g, frame="body")
+    write_clump(out / CLUMP_FILE, g, frame="body", key="OUT_DIR")
     i1, i2, i3 = (fmt(m) for m in g.moments)
     template = [
         f"# {CLUMP_FILE}: members x y z r (m) in the body frame (centre of mass at the origin,",
@@ -296,8 +306,8 @@ def _header_block(
         f"f = {d.frequency} Hz, phi = {d.angle} deg, A = {d.amplitude:.6g} m, "
         f"Gamma = {d.throw_number:.6g}, alpha = {t.inclination} deg",
         f"# made for {LIGGGHTS_VERSION} (Debian package 'liggghts')",
-        f"# run:  cd {out.name} && liggghts -in {DECK_NAME}",
-        f"#   or: cd {out.name} && mpirun -np 2 liggghts -in {DECK_NAME}",
+        f"# run:  cd {shlex.quote(out.name)} && liggghts -in {DECK_NAME}",
+        f"#   or: cd {shlex.quote(out.name)} && mpirun -np 2 liggghts -in {DECK_NAME}",
         f"# stages: fill {fill_steps} steps (static gravity), settle {times.settle_steps} driven "
         f"steps, measure {steps} driven steps; dt = {timestep} s",
         f"# output: {VX_FILE} (step, mean vx in m/s averaged over {times.sample_steps} steps), "

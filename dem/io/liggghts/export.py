@@ -17,11 +17,15 @@ from typing import NamedTuple
 
 from dem.config import DEM_EXPORT_SETTLE_CYCLES
 from dem.errors import InputError
+from dem.io.files import refuse_links
 from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, write_deck
 from dem.io.liggghts.geometry import MESH_FILE
 from dem.io.paths import refuse_replacing
 from dem.scene.case import Case
 from dem.scene.resolved import Scene, resolve
+
+#: The files ``dem export liggghts`` writes into its folder.
+DECK_FILES = (DECK_NAME, CLUMP_FILE, MESH_FILE)
 
 
 class ExportPlan(NamedTuple):
@@ -131,8 +135,9 @@ def export_deck(
 
     """
     out = Path(out_dir)
+    refuse_links(out, DECK_FILES, "OUT_DIR")
     if not overwrite:
-        refuse_replacing("OUT_DIR", out, (DECK_NAME, CLUMP_FILE, MESH_FILE))
+        refuse_replacing("OUT_DIR", out, DECK_FILES)
     return write_deck(
         plan.scene, out, timestep=plan.timestep, steps=plan.steps,
         settle_steps=plan.settle_steps, settle_note=plan.settle_note, dump=dump,

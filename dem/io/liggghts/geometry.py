@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.files import write_input
 from dem.io.liggghts.text import fmt
 from dem.scene.case import Case
 from dem.scene.mesh import load_mesh
@@ -62,7 +63,9 @@ FILL_VOLUME_FRACTION_CLUMPS = 0.08
 FEEDER_FILL_SCALE = 0.6
 
 
-def write_stl(path: str | Path, tri: np.ndarray, name: str = "trough") -> Path:
+def write_stl(
+    path: str | Path, tri: np.ndarray, name: str = "trough", *, key: str = "--out"
+) -> Path:
     """Write triangles as an ASCII STL file (LIGGGHTS 3.8 reads ASCII STL only).
 
     Args:
@@ -70,6 +73,7 @@ def write_stl(path: str | Path, tri: np.ndarray, name: str = "trough") -> Path:
         tri: Corners, (T, 3, 3), m; each triangle keeps its winding a -> b -> c, and its facet
             normal is (b - a) x (c - a) / |...|.
         name: The solid's name.
+        key: The option that named the folder, for a refused link.
 
     Coordinates are written exactly (shortest repr), so the file reads back to the same bits.
 
@@ -85,9 +89,7 @@ def write_stl(path: str | Path, tri: np.ndarray, name: str = "trough") -> Path:
         lines += ["  vertex " + " ".join(map(fmt, v)) for v in corners]
         lines += [" endloop", "endfacet"]
     lines.append(f"endsolid {name}")
-    out = Path(path)
-    out.write_text("\n".join(lines) + "\n")
-    return out
+    return write_input(Path(path), lines, key=key)
 
 
 def strip_top(tri: np.ndarray, y0: float, y1: float) -> float:
@@ -243,7 +245,7 @@ def layout(case: Case, out: Path, *, r_min: float, r_max: float, grain_volume: f
         mesh_top, wall_note = 0.0, []
     else:  # the column stands in the pan (mesh_fill_block); the box holds the mesh
         tri = load_mesh(t.mesh, length=t.length, source=source).tri
-        write_stl(out / MESH_FILE, tri)
+        write_stl(out / MESH_FILE, tri, key="OUT_DIR")
         try:
             fill_block = mesh_fill_block(tri, SKIN_FRACTION * r_min)
         except ValueError as exc:

@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 from typing import NamedTuple
 
+from dem.io.files import replace_text
 from dem.io.liggghts.deck import DECK_NAME
 from dem.io.liggghts.readers import LoopTime, liggghts_version, loop_times
 
@@ -105,7 +106,7 @@ def run_liggghts(
     # line) that are not UTF-8; its message must still reach the user
     done = subprocess.run(command, cwd=work, capture_output=True, text=True, errors="replace")
     wall = time.perf_counter() - t0
-    (work / log_name).write_text(done.stdout + done.stderr)
+    replace_text(work / log_name, done.stdout + done.stderr)
     loops = loop_times(done.stdout)
     if done.returncode != 0 or len(loops) < min_loops:
         raise LiggghtsError(
