@@ -9,7 +9,11 @@ command line and in the library.
 Ranges are physical where physics sets them (an angle, a restitution) and plausibility bounds
 elsewhere, wide enough for any vibratory conveyor or lab experiment (a frequency up to 100 kHz,
 a Young's modulus up to 10 TPa, diamond's is 1.2 TPa): a value of 1e300 is a typing error, and
-it would otherwise overflow deep inside a run instead of being named here.
+it would otherwise overflow deep inside a run instead of being named here. The same holds at the
+other end: a positive quantity has a smallest plausible value (a throw number of 0.001, a
+drive of 1 nm, a gel's 1 kPa, a density of 1 kg/m^3), below which the numbers a run reports
+(v / (A omega cos phi) over a vanishing drive, steps per cycle, a stiffness ratio) are
+noise divided by almost nothing.
 
 Each :class:`Quantity` checks a finite float; :meth:`Quantity.check` raises
 :class:`dem.errors.InputError` naming the key (the caller's spelling: ``drive.angle``,
@@ -83,6 +87,14 @@ def _non_negative(x: float) -> bool:
     return x >= 0.0
 
 
+#: Why a conveying velocity needs friction > 0 (the case reader and the point masses say it).
+FRICTIONLESS_WHY = (
+    "without friction nothing sets a grain's mean velocity along the trough: it keeps the one "
+    "it starts with (the drive starts at full speed), so the answer would be the start-up, not "
+    "transport"
+)
+
+
 def _unit_interval(x: float) -> bool:
     return 0.0 <= x <= 1.0
 
@@ -90,8 +102,8 @@ def _unit_interval(x: float) -> bool:
 QUANTITIES: dict[str, Quantity] = dict(
     [
         # drive and trough
-        _q("throw_number", "", lambda x: 0.0 < x <= 100.0,
-           "must be in (0, 100] (Gamma = A omega^2 sin(phi) / (g cos(alpha)))",
+        _q("throw_number", "", lambda x: 1.0e-3 <= x <= 100.0,
+           "must be in [0.001, 100] (Gamma = A omega^2 sin(phi) / (g cos(alpha)))",
            "throw number Gamma"),
         _q("angle", "deg", lambda x: 0.0 < x < 90.0,
            "vibration angle must be in (0, 90) degrees", "vibration angle phi, deg"),
@@ -113,20 +125,20 @@ QUANTITIES: dict[str, Quantity] = dict(
         _q("feed_rate", "kg/s", lambda x: 0.0 <= x <= 1.0e3,
            "feed rate must be in [0, 1000] kg/s (0: the initial charge is emptied)",
            "mass fed at the back of a finite feeder per second, kg/s"),
-        _q("frequency", "Hz", lambda x: 0.0 < x <= 1.0e5, "frequency must be in (0, 1e5] Hz",
+        _q("frequency", "Hz", lambda x: 0.01 <= x <= 1.0e5, "frequency must be in [0.01, 1e5] Hz",
            "drive frequency f, Hz"),
-        _q("amplitude", "m", lambda x: 0.0 < x <= 1.0, "amplitude must be in (0, 1] m",
+        _q("amplitude", "m", lambda x: 1.0e-9 <= x <= 1.0, "amplitude must be in [1e-9, 1] m",
            "drive amplitude A, m"),
-        _q("peak_acceleration", "g", lambda x: 0.0 < x <= 1.0e4,
-           "peak acceleration must be in (0, 1e4] (in g)",
+        _q("peak_acceleration", "g", lambda x: 1.0e-3 <= x <= 1.0e4,
+           "peak acceleration must be in [0.001, 1e4] (in g)",
            "peak trough acceleration A omega^2, in units of g"),
-        _q("drive_velocity", "m/s", lambda x: 0.0 < x <= 100.0,
-           "drive velocity must be in (0, 100] m/s", "drive velocity amplitude A omega, m/s"),
+        _q("drive_velocity", "m/s", lambda x: 1.0e-6 <= x <= 100.0,
+           "drive velocity must be in [1e-6, 100] m/s", "drive velocity amplitude A omega, m/s"),
         _q("length", "m", lambda x: 0.0 < x <= 1.0e3, "must be in (0, 1000] m", "length, m"),
         _q("width", "m", lambda x: 0.0 < x <= 1.0e3, "must be in (0, 1000] m", "width, m"),
         # material
-        _q("density", "kg/m^3", lambda x: 0.0 < x <= 1.0e5,
-           "density must be in (0, 1e5] kg/m^3", "grain density"),
+        _q("density", "kg/m^3", lambda x: 1.0 <= x <= 1.0e5,
+           "density must be in [1, 1e5] kg/m^3", "grain density"),
         _q("friction", "", lambda x: 0.0 <= x <= 1.0e12,
            "friction coefficient must be in [0, 1e12] (1e9 and up: ideal adhesion)",
            "Coulomb friction coefficient mu"),
@@ -137,12 +149,13 @@ QUANTITIES: dict[str, Quantity] = dict(
            "rolling friction must be in [0, 100]",
            "rolling friction coefficient"),
         # contact
-        _q("youngs_modulus", "Pa", lambda x: 0.0 < x <= 1.0e13,
-           "Young's modulus must be in (0, 1e13] Pa",
+        _q("youngs_modulus", "Pa", lambda x: 1.0e3 <= x <= 1.0e13,
+           "Young's modulus must be in [1e3, 1e13] Pa",
            "Young's modulus E, Pa"),
         _q("poisson_ratio", "", lambda x: -1.0 < x < 0.5,
            "Poisson ratio must satisfy -1 < nu < 0.5", "Poisson ratio nu"),
-        _q("stiffness", "N/m", lambda x: 0.0 < x <= 1.0e12, "stiffness must be in (0, 1e12] N/m",
+        _q("stiffness", "N/m", lambda x: 1.0e-3 <= x <= 1.0e12,
+           "stiffness must be in [1e-3, 1e12] N/m",
            "linear normal stiffness k_n, N/m"),
         _q("tangential_stiffness_ratio", "", lambda x: 0.0 < x <= 100.0,
            "k_t / k_n must be in (0, 100]",
@@ -153,13 +166,14 @@ QUANTITIES: dict[str, Quantity] = dict(
         # grains and run
         _q("radius", "m", lambda x: 1.0e-7 <= x <= 10.0, "radius must be in [1e-7, 10] m",
            "radius, m"),
-        _q("mass", "kg", lambda x: 0.0 < x <= 1.0e3, "mass must be in (0, 1000] kg",
+        _q("mass", "kg", lambda x: 1.0e-18 <= x <= 1.0e3, "mass must be in [1e-18, 1000] kg",
            "grain mass, kg"),
         _q("max_bumpiness", "", lambda x: 0.0 < x <= 1.0,
            "must satisfy 0 < b <= 1 (1: touching shank spheres; smaller: more spheres, at most "
            f"{MAX_GRAIN_SPHERES} per grain)",
            "screw resolution: deepest valley between shank spheres over the shank radius"),
-        _q("timestep", "s", lambda x: 0.0 < x <= 1.0, '"auto" or a time step in (0, 1] s',
+        _q("timestep", "s", lambda x: 1.0e-15 <= x <= 1.0,
+           '"auto" or a time step in [1e-15, 1] s',
            "time step dt, s"),
         # whole numbers (read as integers; accepts() sees the int)
         _q("count", "", lambda n: 1 <= n <= 10**9, "a whole number in [1, 1e9]",

@@ -11,6 +11,14 @@ from dem.cli.options import EXIT_USAGE, option_name
 from dem.cli.parser import build_parser
 from dem.errors import InputError, SimulationError
 
+#: What an interrupted write leaves behind, by command (the files are replaced whole or not).
+KEPT = {
+    "run": "what was written before it stays readable (results.h5 up to its last cycle; "
+    "--resume continues from the last checkpoint)",
+    "sweep": "every finished point's folder stays as it is, and a rerun skips them",
+    "optimum": "every finished run's folder stays as it is",
+}
+
 
 def _format_warning(message, category, filename, lineno, line=None) -> str:
     """One line per warning, as the command line's errors are: ``dem: warning: ...``."""
@@ -41,8 +49,8 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as err:  # disk full, permission, a vanished folder: one line, no traceback
         where = err.filename or "an output file"
         cause = err.strerror or str(err) or type(err).__name__
-        print(f"dem: error: cannot write or read {where}: {cause}; what was written before it "
-              "stays readable (results.h5 up to its last cycle)", file=sys.stderr)  # fmt: skip
+        kept = KEPT.get(args.command, "what was written before it stays as it was")
+        print(f"dem: error: cannot write or read {where}: {cause}; {kept}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("dem: interrupted", file=sys.stderr)

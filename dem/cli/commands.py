@@ -5,7 +5,11 @@ from pathlib import Path
 
 from dem.cli.options import check_numbers, option_name, parse_bounds, print_json, set_overrides
 from dem.errors import InputError
-from dem.io.paths import plot_path, writable_path
+from dem.io.files import own_folder, refuse_links, replace_text
+from dem.io.paths import output_folder, plot_path, writable_path
+
+#: The options that set a case key (errors in their values name the option, not ``--set``).
+ORIGINS = {"run.replicas": "--replicas", "run.device": "--device"}
 
 
 def cmd_thresholds(args) -> int:
@@ -49,10 +53,14 @@ def cmd_sweep(args) -> int:
     }
     if args.out:
         writable_path("--out", args.out, folder=False)
+        refuse_links(Path(args.out).parent, [Path(args.out).name])
     result = sweep(**values, impact=args.impact)
     if args.out:
-        with open(args.out, "w", encoding="utf-8") as stream:
-            write_csv(result, stream)
+        import io
+
+        text = io.StringIO()
+        write_csv(result, text)
+        replace_text(Path(args.out), text.getvalue())
         print(f"wrote {len(result['velocity_norm'])} rows to {args.out}", file=sys.stderr)
     else:
         write_csv(result, sys.stdout)
@@ -94,8 +102,8 @@ def cmd_run(args) -> int:
         overrides["run.replicas"] = args.replicas
     if args.device is not None:
         overrides["run.device"] = args.device
-    case = load_case(args.case_dir, overrides)
-    out = writable_path("--out", args.out or case.directory / "output", folder=True)
+    case = load_case(args.case_dir, overrides, ORIGINS)
+    out = output_folder("--out", args.out, case.directory / "output")
     try:
         summary = run_replicas(
             case, out, cycles=args.cycles, threads=args.threads, progress=True,
@@ -149,7 +157,7 @@ def cmd_plan(args) -> int:
     overrides = set_overrides(args.set)
     if args.device is not None:
         overrides["run.device"] = args.device
-    case = load_case(args.case_dir, overrides)
+    case = load_case(args.case_dir, overrides, ORIGINS)
     check_device(case.run.device, case)
     if args.suggest:
         from dem.run.plan import suggest
@@ -177,7 +185,7 @@ def cmd_dem_sweep(args) -> int:
 
     check_numbers(args)
     sets = [parse_set(text) for text in args.set]
-    out = writable_path("--out", args.out or Path(args.case_dir) / "sweep", folder=True)
+    out = output_folder("--out", args.out, Path(args.case_dir) / "sweep")
     result = run_sweep(
         args.case_dir, sets, out, scheduler=args.scheduler, workers=args.workers,
         threads=args.threads or 1, cycles=args.cycles, frames=args.frames, device=args.device,
@@ -200,7 +208,7 @@ def cmd_dem_optimum(args) -> int:
 
     check_numbers(args)
     bounds = parse_bounds(args.bounds, "LO:HI, two numbers")
-    out = writable_path("--out", args.out or Path(args.case_dir) / "optimum", folder=True)
+    out = output_folder("--out", args.out, Path(args.case_dir) / "optimum")
     result = bulk_optimum(
         args.case_dir, args.over, args.hold, out, bounds=bounds, tolerance=args.tolerance,
         max_runs=args.max_runs, scheduler=args.scheduler, workers=args.workers,
@@ -252,7 +260,7 @@ def cmd_export_liggghts(args) -> int:
 
 def cmd_export_lammps(args) -> int:
     """``dem export lammps``: the case as a LAMMPS deck from dem's settled fill (``--run``: run)."""
-    from dem.io.lammps.export import export_lammps, plan_lammps
+    from dem.io.lammps.export import DECK_FILES, RUN_FILES, export_lammps, plan_lammps
     from dem.io.lammps.launcher import LammpsError, LammpsMissing, run_lammps, summarize_run
     from dem.scene.case import load_case
 
@@ -260,6 +268,7 @@ def cmd_export_lammps(args) -> int:
     plan = plan_lammps(case, timestep=args.timestep, settle_cycles=args.settle_cycles,
                        from_run=args.from_run)  # fmt: skip
     out = writable_path("OUT_DIR", args.out_dir, folder=True)
+    refuse_links(out, (*DECK_FILES, *RUN_FILES), "OUT_DIR")  # before LAMMPS is looked for
     if args.run:  # say it now, not after the fill
         try:
             from dem.io.lammps.launcher import find_lammps
@@ -296,13 +305,23 @@ def cmd_calibrate(args) -> int:
     """``dem calibrate``: fit the tangential spring to eps_t, and write it back."""
     import time
 
-    from dem.scene.case import load_case
+    from dem.scene.case import CASE_FILE, load_case
     from dem.studies.answers import calibration_lines
-    from dem.studies.calibrate import EvaluationTrail, calibrate, write_calibration
+    from dem.studies.calibrate import (
+        EVALUATIONS_FILE,
+        EvaluationTrail,
+        calibrate,
+        write_calibration,
+    )
     from dem.studies.plots import calibration_figure
 
     case = load_case(args.case_dir)
     plot = plot_path("--plot", args.plot, "calibration.png") if args.plot else None
+    # every name calibrate writes in the case folder, checked for links before the first impact
+    names = ["output", f"output/{EVALUATIONS_FILE}"] + ([] if plot else ["output/calibration.png"])
+    if not args.dry_run:
+        names += [CASE_FILE, CASE_FILE + ".orig"]
+    refuse_links(case.directory, names, "CASE_DIR")
     print(
         f"dem calibrate {case.name}: eps_t target {case.wall_material.restitution_tangential:g}, "
         f"virtual impacts of one grain over the point mass's landings",
@@ -341,8 +360,7 @@ def cmd_calibrate(args) -> int:
             file=sys.stderr,
         )
     if plot is None:
-        plot = case.directory / "output" / "calibration.png"
-        plot.parent.mkdir(parents=True, exist_ok=True)
+        plot = own_folder(case.directory / "output", "CASE_DIR") / "calibration.png"
     calibration_figure(cal, case.wall_material.friction, plot)
     print(f"wrote {plot}")
     if not cal.fitted:

@@ -421,6 +421,42 @@ class ResultsWriter:
             raise ValueError(f"{self.path} is closed")
 
 
+def check_resumable(path: Path, n_cycles: int, n_frames: int, *, ragged: bool) -> None:
+    """Refuse, before a resumed run fills its trough, a results.h5 it could not continue.
+
+    The file must open, be of the format this dem writes (``ragged``: a finite feeder's), and
+    hold at least the ``n_cycles`` rows and ``n_frames`` frames the checkpoint counted (the run
+    trims it back to them). Otherwise :class:`InputError` naming the file and ``--overwrite``.
+    """
+    expected = RAGGED_VERSION if ragged else FORMAT_VERSION
+
+    def refuse(why: str) -> InputError:
+        return InputError(
+            "--resume", str(path), f"a results.h5 the interrupted run can continue ({why}): "
+            "run it again from the start with --overwrite",
+        )  # fmt: skip
+
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            version = int(f.attrs.get("format_version", -1))
+            if version != expected:
+                raise refuse(f"format version {version}, not {expected}")
+            cycles, frames = f["cycles"], f["frames"]
+            rows = [int(cycles[k].shape[0]) for k in cycles]
+            if n_cycles and (not rows or min(rows) < n_cycles):
+                raise refuse(f"{min(rows, default=0)} cycle rows, the checkpoint counted "
+                             f"{n_cycles}")  # fmt: skip
+            held = int(frames["time"].shape[0]) if "time" in frames else 0
+            if held < n_frames:
+                raise refuse(f"{held} frames, the checkpoint counted {n_frames}")
+    except InputError:
+        raise
+    except FileNotFoundError:
+        raise refuse("it is missing") from None
+    except (OSError, KeyError, ValueError, TypeError) as exc:
+        raise refuse(f"HDF5 cannot read it: {exc}") from None
+
+
 def _write_attr_tree(group: h5py.Group, tree: Mapping) -> None:
     for key, value in tree.items():
         key = str(key)

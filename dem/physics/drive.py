@@ -87,6 +87,24 @@ def velocity_scale(amplitude, frequency, angle):
     return _float_or_array(amplitude * omega(frequency) * np.cos(np.radians(angle)))
 
 
+def friction_relaxation_cycles(velocity_scale: float, frequency: float, friction: float,
+                               inclination: float = 0.0) -> float:  # fmt: skip
+    """Drive cycles the floor's friction needs to take the start-up velocity out of a grain.
+
+    The drive starts at full speed (s = A sin(omega t)), so a grain at rest on the floor starts
+    with a velocity of the drive's scale V = A omega cos(phi) relative to it, which only
+    friction removes: at most at the rate mu g cos(alpha) (the mean normal force is the
+    weight's), so it takes at least V / (mu g cos(alpha)) seconds, this many cycles:
+    f V / (mu g cos(alpha)). Infinite for mu = 0 (then nothing removes it). A run that settles
+    for fewer cycles measures the start-up, not transport; ``dem`` settles for
+    :data:`dem.config.DEM_FRICTION_RELAX_FACTOR` times this at least.
+    """
+    if friction <= 0.0:
+        return math.inf
+    g_normal = GRAVITY * math.cos(math.radians(inclination))
+    return frequency * velocity_scale / (friction * g_normal)
+
+
 def steps_per_cycle(frequency: float, dt: float) -> float:
     """Time steps in one drive cycle, 1 / (f dt); not a whole number in general."""
     return 1.0 / frequency / dt

@@ -24,7 +24,7 @@ import numpy as np
 from dem.config import GRAVITY
 from dem.physics.drive import Motion
 from dem.pointmass.stepped import step_motion
-from dem.pointmass.validate import check_friction, check_inclination, check_restitution
+from dem.pointmass.validate import check_inclination, check_restitution, check_transport_friction
 
 #: Time steps per drive cycle, cycles discarded and cycles averaged by :func:`velocity`.
 STEPS = 8000
@@ -89,7 +89,7 @@ def velocity(
     measured: int = MEASURED,
 ) -> EllipticResult:
     """Steady mean velocity of the point mass on ``motion`` (ramp ignored), alpha in degrees."""
-    check_friction(friction)
+    check_transport_friction(friction)
     check_inclination(inclination)
     check_restitution(eps_t, "eps_t")
     check_restitution(eps_n, "eps_n")

@@ -19,10 +19,10 @@ from dem.physics import drive
 from dem.pointmass import _kernel
 from dem.pointmass.validate import (
     check_angle,
-    check_friction,
     check_inclination,
     check_restitution,
     check_throw_number,
+    check_transport_friction,
 )
 
 #: Regime labels, indexed by the integer codes returned by :func:`velocities`.
@@ -169,7 +169,7 @@ def velocities(
     for key, values, check in (
         ("throw_number", g, check_throw_number),
         ("angle", phi, check_angle),
-        ("friction", mu, check_friction),
+        ("friction", mu, check_transport_friction),
         ("inclination", alpha, check_inclination),
         ("eps_t", et, check_restitution),
         ("eps_n", en, check_restitution),
@@ -278,7 +278,7 @@ def velocity(
     """
     check_throw_number(throw_number)
     check_angle(angle)
-    check_friction(friction)
+    check_transport_friction(friction)
     check_inclination(inclination)
     check_restitution(eps_t, "eps_t")
     check_restitution(eps_n, "eps_n")

@@ -4,7 +4,8 @@ Each raises :class:`dem.errors.InputError` naming the key (the caller's spelling
 the allowed range, in the same words the case reader and the command line use.
 """
 
-from dem.quantities import QUANTITIES
+from dem.errors import InputError
+from dem.quantities import FRICTIONLESS_WHY, QUANTITIES
 
 
 def check_throw_number(value: float, key: str = "throw_number") -> float:
@@ -20,6 +21,14 @@ def check_angle(value: float, key: str = "angle") -> float:
 def check_friction(value: float, key: str = "friction") -> float:
     """Coulomb friction coefficient mu >= 0."""
     return QUANTITIES["friction"].check(value, key)
+
+
+def check_transport_friction(value: float, key: str = "friction") -> float:
+    """Mu > 0, for a conveying velocity (the regime limits take mu = 0)."""
+    QUANTITIES["friction"].check(value, key)
+    if value == 0.0:
+        raise InputError(key, value, f"> 0 for a conveying velocity: {FRICTIONLESS_WHY}")
+    return value
 
 
 def check_inclination(value: float, key: str = "inclination") -> float:

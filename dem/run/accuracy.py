@@ -339,16 +339,16 @@ def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
     f_ok = cheap["timestep_fraction"]
     if case.run.timestep is not None and fraction < f_ok / FAR:
         advice.append(Advice("warn", "run.timestep",
-            f"{step.dt:.3g} s ({fraction:.2f} x limit) is far finer than the answer needs: "
+            f"{step.dt:.3g} s ({fraction:.3g} x limit) is far finer than the answer needs: "
             f"{f_ok:.2f} x limit ({f_ok * step.limit:.3g} s) stayed within "
             f"{TOLERANCE:.0%}", round_down(f_ok * step.limit)))  # fmt: skip
     elif fraction > f_ok * 1.001:
         advice.append(Advice("warn", "run.timestep",
-            f"{fraction:.2f} x limit is coarser than the study found accurate "
+            f"{fraction:.3g} x limit is coarser than the study found accurate "
             f"({f_ok:.2f} x limit)", round_down(f_ok * step.limit)))  # fmt: skip
     elif case.run.timestep is None and f_ok > FAR * fraction:
         advice.append(Advice("note", "run.timestep",
-            f"the automatic step is {fraction:.2f} x limit; {f_ok:.2f} x limit "
+            f"the automatic step is {fraction:.3g} x limit; {f_ok:.2f} x limit "
             f"(run.timestep = {f_ok * step.limit:.3g}) stayed within {TOLERANCE:.0%} at "
             f"{f_ok / fraction:.1f}x less cost", round_down(f_ok * step.limit)))  # fmt: skip
 
@@ -418,8 +418,8 @@ def advise_ladder(case, data, kind, advice) -> None:
 def write_study_data(path: Path, data: dict) -> None:
     """Write the study's summary where :func:`study_data` reads it (run_all.py calls this)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    from dem.io.files import finite_or_none
+    from dem.io.files import finite_or_none, replace_text
 
     text = json.dumps(finite_or_none(data), indent=1, sort_keys=True, allow_nan=False)
-    path.write_text(text + "\n")
+    replace_text(path, text + "\n")
     study_data.cache_clear()

@@ -69,7 +69,12 @@ def prepare_output(out_dir: Path, *, overwrite: bool, resume: bool) -> None:
 
 def refuse_links(out_dir: Path) -> None:
     """Refuse a symbolic link at any name dem writes in ``out_dir`` (checked before any change)."""
-    for name in RUN_OUTPUTS:
+    frames = out_dir / FRAMES_DIR
+    inside = []
+    if frames.is_dir() and not frames.is_symlink():  # the frames dem names, planted as links
+        inside = [f"{FRAMES_DIR}/{p.name}" for p in frames.iterdir()
+                  if p.is_symlink() and FRAME_FILE_RE.fullmatch(p.name)]  # fmt: skip
+    for name in (*RUN_OUTPUTS, *inside):
         path = out_dir / name
         if path.is_symlink():
             raise InputError(

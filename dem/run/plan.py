@@ -20,7 +20,7 @@ from typing import Any
 
 from dem import config
 from dem.physics import drive
-from dem.run import accuracy, cost, stiffness
+from dem.run import accuracy, cost, record, stiffness
 from dem.run.accuracy import Advice
 from dem.run.cost import format_duration, format_size, physical_memory
 from dem.scene.resolved import resolve
@@ -75,9 +75,9 @@ class Plan:
             f"case {self.case}",
             f"  grains            {self.grains} x {self.spheres_per_grain} sphere(s) = "
             f"{self.spheres} spheres",
-            f"  time step         {self.timestep:.3g} s = {self.timestep / self.timestep_limit:.2f}"
+            f"  time step         {self.timestep:.3g} s = {self.timestep / self.timestep_limit:.3g}"
             f" x stability limit {self.timestep_limit:.3g} s (automatic {self.timestep_auto:.3g})",
-            f"  steps per cycle   {self.steps_per_cycle:.0f}",
+            f"  steps per cycle   {_count(self.steps_per_cycle)}",
             f"  cycles            {self.settle_cycles} settling"
             f"{' (auto: estimated)' if self.settle_cycles_auto else ''} + {self.cycles} measured,"
             f" {self.steps:.3g} steps in all",
@@ -134,6 +134,9 @@ def plan(
         settle = cost.AUTO_SETTLE_CYCLES[pt.kind]
     else:
         settle = config.DEM_AUTO_SETTLE_MIN_CYCLES
+    floor = record.settle_floor(case)
+    if auto_settle:
+        settle = max(settle, floor)
     steps = int(cost.settle_steps(case, step.dt) + (settle + cycles) * per_cycle)
     particle_steps = float(spheres) * steps
     speed, source = cost.rate(case, threads, data)
@@ -173,6 +176,7 @@ def plan(
     else:
         expected, parts = math.nan, {}
         error_source = "no study data: dem/data/speed_accuracy.json is missing"
+    relax_advice(case, record.friction_floor(case), advice)
     if getattr(case, "feeder", None) is not None:
         text = (
             "a finite feeder's grain count changes as grains are fed and discharged: cost "
@@ -240,6 +244,46 @@ class Suggestion:
         return "\n".join(lines)
 
 
+def relax_advice(case, floor: int, advice: list[Advice]) -> None:
+    """Warn where the settle is shorter than the floor's friction needs (:func:`settle_floor`).
+
+    An explicit ``run.settle_cycles`` below it, or an automatic settle that would have to wait
+    longer than ``DEM_AUTO_SETTLE_MAX_CYCLES``: the run would measure the start-up velocity.
+    """
+    key = "wall.friction" if "friction" in case.wall.given else "material.friction"
+    mu = case.wall_material.friction
+    why = (
+        f"{key} = {mu:g} takes at least {floor / config.DEM_FRICTION_RELAX_FACTOR:.3g} drive "
+        "cycles to take the start-up velocity out of a grain (the drive starts at full speed)"
+    )
+    given = case.run.settle_cycles
+    if given is not None and given < floor:
+        advice.append(
+            Advice(
+                "warn",
+                "run.settle_cycles",
+                f"{why}: settle for {floor} cycles "
+                "at least, or the run measures the start-up, not transport",
+                floor,
+            )
+        )
+    elif given is None and floor > config.DEM_AUTO_SETTLE_MAX_CYCLES:
+        advice.append(
+            Advice(
+                "warn",
+                key,
+                f"{why}: more than the automatic settle waits "
+                f"({config.DEM_AUTO_SETTLE_MAX_CYCLES} cycles); set "
+                f"run.settle_cycles = {floor}, or check that {key} is right",
+            )
+        )
+
+
+def _count(n: float) -> str:
+    """A count in digits, or as 1.67e+13 where the digits would be a wall of them."""
+    return f"{n:.0f}" if n < 1e9 else f"{n:.3g}"
+
+
 def suggest(
     case_dir: str | Path,
     out_dir: str | Path,
@@ -262,6 +306,7 @@ def suggest(
     import shutil
 
     from dem.errors import InputError
+    from dem.io.files import refuse_links, replace_file, replace_text
     from dem.scene.case import CASE_FILE, load_case
     from dem.scene.tomledit import set_case_keys
 
@@ -269,7 +314,13 @@ def suggest(
     source = case_dir / CASE_FILE if case_dir.is_dir() else case_dir
     case_dir = source.parent
     out = Path(out_dir).expanduser().resolve()
-    if (out / CASE_FILE).exists():
+    # the case's own files (grain meshes...) go beside it: plain files only, never a link (a
+    # received case folder may hold one to a file of its receiver's), never through one
+    copied = [item for item in case_dir.iterdir()
+              if item.name not in (CASE_FILE, "README.md") and not item.is_symlink()
+              and item.is_file()]  # fmt: skip
+    refuse_links(out, [CASE_FILE, *(item.name for item in copied)], "--suggest")
+    if os.path.lexists(out / CASE_FILE):
         raise InputError("--suggest", str(out), "a folder without a case.toml (none is replaced)")
     if out == case_dir or case_dir in out.parents:
         raise InputError("--suggest", str(out), "a folder outside the case folder")
@@ -314,11 +365,10 @@ def suggest(
     if mesh is not None and "trough.mesh" not in changes:
         changes["trough.mesh"] = os.path.relpath(mesh, out)
     out.mkdir(parents=True, exist_ok=True)
-    for item in case_dir.iterdir():  # the case's own files (grain meshes...), not its outputs
-        if item.name in (CASE_FILE, "README.md") or item.is_dir():
-            continue  # the README describes the case as it was
-        if not (out / item.name).exists():
-            shutil.copy2(item, out / item.name)
+    for item in copied:  # not the README: it describes the case as it was
+        if not os.path.lexists(out / item.name):
+            replace_file(out / item.name, lambda tmp, item=item: shutil.copy2(item, tmp),
+                         key="--suggest")  # fmt: skip
     stamp = datetime.date.today().isoformat()
     as_filed = load_case(source) if overrides else case  # "was": the file's value, not --set's
     was = {k: _case_value(as_filed, k) for k in changes}
@@ -328,7 +378,7 @@ def suggest(
             name = key.rpartition(".")[2]
             if line.startswith(f"{name} = ") and line.endswith(f"# dem plan --suggest {stamp}"):
                 text_lines[i] = f"{line}, was {old}"
-    (out / CASE_FILE).write_text("\n".join(text_lines) + "\n", encoding="utf-8")
+    replace_text(out / CASE_FILE, "\n".join(text_lines) + "\n", key="--suggest")
     after = plan(load_case(out), threads=threads, cycles=cycles)
     return Suggestion(out / CASE_FILE, {k: v for k, v in changes.items()}, before, after)
 

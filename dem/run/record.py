@@ -13,11 +13,12 @@ before this record existed still resume.
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from dataclasses import dataclass, field
 
 from dem import config
-from dem.physics import measure
+from dem.physics import drive, measure
 
 #: Keys a checkpoint holds only once they have a value (older checkpoints lack some of them).
 _OPTIONAL = ("compile_wall_time_s", "fill_wall_time_s", "frames", "lab_frame", "settle_detected",
@@ -126,6 +127,29 @@ class CycleRow:
                 "measured": int(self.measured), **self.feeder}  # fmt: skip
 
 
+def friction_floor(case) -> int:
+    """Settling cycles the floor's friction needs at least.
+
+    ``DEM_FRICTION_RELAX_FACTOR`` times the cycles it takes to remove the drive's start-up
+    velocity from a grain (:func:`dem.physics.drive.friction_relaxation_cycles`); 10^9 for a
+    frictionless floor.
+    """
+    relax = drive.friction_relaxation_cycles(
+        case.drive.velocity_scale, case.drive.frequency, case.wall_material.friction,
+        case.trough.inclination,
+    )  # fmt: skip
+    return math.ceil(min(config.DEM_FRICTION_RELAX_FACTOR * relax, 1e9))
+
+
+def settle_floor(case) -> int:
+    """Fewest settling cycles of ``settle_cycles = "auto"``.
+
+    The transient test's minimum (``DEM_AUTO_SETTLE_MIN_CYCLES``), or the friction's
+    (:func:`friction_floor`), whichever is more.
+    """
+    return max(config.DEM_AUTO_SETTLE_MIN_CYCLES, friction_floor(case))
+
+
 def close_cycle(sim, case, progress: Progress) -> CycleRow:
     """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums.
 
@@ -145,9 +169,7 @@ def close_cycle(sim, case, progress: Progress) -> CycleRow:
         series.append(velocity)
         scale = case.drive.velocity_scale
         done = (
-            measure.steady(
-                series, config.DEM_AUTO_SETTLE_MIN_CYCLES, config.DEM_AUTO_SETTLE_TOLERANCE * scale
-            )
+            measure.steady(series, settle_floor(case), config.DEM_AUTO_SETTLE_TOLERANCE * scale)
             and len(series) >= case.drive.ramp_cycles
         )  # the start-up ramp is no steady state
         if done or len(series) >= config.DEM_AUTO_SETTLE_MAX_CYCLES:

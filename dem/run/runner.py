@@ -45,6 +45,7 @@ from dem.engine.threads import ThreadGuard, starting_threads
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
+from dem.io.hdf5 import check_resumable
 from dem.io.tables import write_cycles_csv
 from dem.physics.drive import cycle_edge
 from dem.run import plan, stiffness
@@ -130,9 +131,11 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
     checkpoint = out_dir / CHECKPOINT
 
     record = fingerprint(case)
-    if resume:  # the checkpoint is checked against the case before the fill
+    if resume:  # the checkpoint and results.h5 are checked against the case before the fill
         state, progress = read_checkpoint(checkpoint, record, settle=settle, cycles=cycles,
                                           frames=frames, lab_frame=lab_frame)  # fmt: skip
+        check_resumable(out_dir / RESULTS, progress.h5_cycles, progress.h5_frames,
+                        ragged=case.feeder is not None)  # fmt: skip
     with StopNow() as stop:
         t0 = time.perf_counter()
         compile_first(case, show)

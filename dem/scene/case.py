@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import replace
@@ -29,6 +30,7 @@ import numpy as np
 
 from dem.errors import InputError
 from dem.physics import tangential
+from dem.quantities import FRICTIONLESS_WHY, QUANTITIES
 from dem.scene.schema import DEFAULT_TANGENTIAL_STIFFNESS_RATIO, SCHEMA
 from dem.scene.spec import (
     Case,
@@ -99,7 +101,12 @@ def _read_mesh(t: Table) -> Path | None:
 
 
 def _check_inclination(trough: TroughSpec, floor: MaterialSpec, by_wall: bool, t: Table) -> None:
-    """Refuse a trough steeper than the floor's friction angle atan(mu), either way.
+    """Refuse a frictionless floor, and a trough steeper than its friction angle atan(mu).
+
+    Without friction on the floor nothing sets a grain's mean velocity along the trough: it
+    keeps the one it starts with (the drive starts at full speed, s = A sin(omega t), so a
+    grain at rest on the floor starts with v = A omega cos(phi) against it), and a run would
+    report that start-up as transport, with an error bar of zero.
 
     There no friction holds a grain on the floor: the bed slides downhill ever faster, the
     periodic section has no steady conveying velocity to measure, and the run would end only when
@@ -107,6 +114,8 @@ def _check_inclination(trough: TroughSpec, floor: MaterialSpec, by_wall: bool, t
     """
     limit = math.degrees(math.atan(floor.friction))
     key = "wall.friction" if by_wall else "material.friction"
+    if floor.friction == 0.0:
+        raise InputError(key, 0.0, f"> 0 on the floor: {FRICTIONLESS_WHY}", source=t.source)
     if abs(trough.inclination) > limit:
         raise t.error(
             "inclination", trough.inclination,
@@ -134,6 +143,13 @@ def _read_drive(t: Table, inclination: float) -> DriveSpec:
     spec = resolve_drive(
         frequency, angle, inclination, amplitude=amplitude, throw_number=throw_number
     )
+    gamma = QUANTITIES["throw_number"]
+    if amplitude is not None and not gamma.accepts(spec.throw_number):  # derived: in range too
+        raise t.error(
+            "amplitude", amplitude, f"an amplitude whose throw number A omega^2 sin(phi) / "
+            f"(g cos(alpha)) = {spec.throw_number:.4g} at f = {frequency:g} Hz and phi = "
+            f"{angle:g} deg {gamma.allowed}",
+        )  # fmt: skip
     return replace(spec, **second, ramp_cycles=t.read("ramp_cycles"))
 
 
@@ -333,14 +349,20 @@ def _build_grain(particles: ParticlesSpec, density: float | None, t: Table) -> P
     return replace(particles, grain=grain)
 
 
-def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Case:
+def load_case(
+    path: str | Path,
+    overrides: Mapping[str, Any] | None = None,
+    origins: Mapping[str, str] | None = None,
+) -> Case:
     """Read and validate a case.
 
     Args:
         path: A case directory (holding ``case.toml``) or the ``case.toml`` itself.
         overrides: Keys to set before validation, ``{"drive.angle": 30.0}`` (a study or a sweep
             point); the value None removes the key. Values are checked exactly as if they had
-            been written in the file.
+            been written in the file, and an error in one names where it came from instead of
+            the file: ``origins[key]`` (``"--replicas"``), else ``"--set"``.
+        origins: Where each override was given, for its errors.
 
     Returns:
         The validated case; relative paths in the file are resolved against its directory.
@@ -351,7 +373,22 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
             and the file.
 
     """
-    path = Path(path).expanduser().resolve()
+    try:
+        return _load_case(path, overrides)
+    except InputError as exc:
+        given = overrides or {}
+        if exc.key not in given or given[exc.key] is None:
+            raise
+        origin = (origins or {}).get(exc.key, "--set")
+        raise InputError(exc.key, exc.value, exc.allowed, source=origin) from None
+
+
+def _load_case(path: str | Path, overrides: Mapping[str, Any] | None) -> Case:
+    """:func:`load_case`, every error sourced in the file."""
+    try:
+        path = Path(path).expanduser().resolve()
+    except ValueError as exc:  # a NUL in the path
+        raise InputError("case", str(path), f"a path without NUL characters ({exc})") from None
     source = path / CASE_FILE if path.is_dir() else path
     if not source.is_file():
         raise InputError(
@@ -367,6 +404,12 @@ def load_case(path: str | Path, overrides: Mapping[str, Any] | None = None) -> C
         raise InputError(key, str(exc), "valid TOML syntax (https://toml.io)", where) from exc
     except UnicodeDecodeError as exc:
         raise InputError("file", str(exc), "UTF-8 encoded TOML", where) from exc
+    except RecursionError:  # tomllib recurses once per level of nested arrays or tables
+        raise InputError(
+            "file", f"values nested deeper than Python's recursion limit "
+            f"({sys.getrecursionlimit()})", "a case file of tables, keys and values (nested a "
+            "few levels at most)", where,
+        ) from None  # fmt: skip
     if overrides:
         _apply_overrides(data, overrides, where)
 

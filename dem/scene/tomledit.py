@@ -9,7 +9,6 @@ the rest of the file, its comments and its order, is kept. Reading and checking 
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
@@ -55,5 +54,28 @@ def _toml_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
-        return json.dumps(value)  # a TOML basic string
+        return toml_string(value)
     return repr(value)
+
+
+#: TOML's short escapes in a basic string.
+_SHORT_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f",
+                  "\r": "\\r"}  # fmt: skip
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string that reads back to the same text.
+
+    Quote and backslash escaped, and every control character TOML forbids raw (U+0000-U+001F,
+    U+007F) as an escape, so a value cannot end its line and start another key; other
+    characters are written as UTF-8 (JSON's surrogate-pair escapes are not TOML).
+    """
+    out = []
+    for ch in text:
+        if ch in _SHORT_ESCAPES:
+            out.append(_SHORT_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'

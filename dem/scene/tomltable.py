@@ -191,8 +191,16 @@ class Table:
             return None
         if not isinstance(value, str) or not value:
             raise self.error(key, value, "a file path relative to the case directory")
-        resolved = (self.directory / value).resolve()
-        if not resolved.is_file():
+        if "\x00" in value:  # the system refuses it (Python raises ValueError)
+            raise self.error(key, value, "a file path without NUL characters")
+        try:
+            resolved = (self.directory / value).resolve()
+            found = resolved.is_file()
+        except OSError as exc:  # a name too long, a loop of links
+            raise self.error(
+                key, value, f"a file path the system can open ({exc.strerror})"
+            ) from None
+        if not found:
             raise self.error(key, value, f"an existing file (no file at {resolved})")
         return resolved
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import InputError
-from dem.io.files import replace_file, replace_text
+from dem.io.files import append_text, own_folder, replace_file, replace_text
 from dem.physics.laws import TANGENTIAL_LAWS
 from dem.physics.search import golden_evaluations, golden_section
 from dem.pointmass import elliptic
@@ -489,17 +490,15 @@ class EvaluationTrail:
 
     def __init__(self, case):
         self.target = case.wall_material.restitution_tangential
-        self.path = case.directory / "output" / EVALUATIONS_FILE
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = own_folder(case.directory / "output", "CASE_DIR") / EVALUATIONS_FILE
         self.tried: list[tuple[float, float]] = []
-        with open(self.path, "w", encoding="utf-8") as fh:
-            fh.write("evaluation,tangential_stiffness_ratio,mean_eps_t,target_eps_t\n")
+        header = "evaluation,tangential_stiffness_ratio,mean_eps_t,target_eps_t\n"
+        replace_text(self.path, header, key="CASE_DIR")
 
     def record(self, kappa: float, eps: float, done: int) -> None:
         """Keep evaluation ``done``: k_t / k_n = ``kappa`` gave the mean eps_t ``eps``."""
         self.tried.append((kappa, eps))
-        with open(self.path, "a", encoding="utf-8") as fh:
-            fh.write(f"{done},{kappa:.6g},{eps:.6g},{self.target:g}\n")
+        append_text(self.path, f"{done},{kappa:.6g},{eps:.6g},{self.target:g}\n")
 
     def closest(self) -> tuple[float, float] | None:
         """(k_t / k_n, mean eps_t) of the evaluation nearest the target so far; None if none."""
@@ -530,8 +529,8 @@ def write_calibration(
         f"{case.wall_material.friction:g}, alpha {case.trough.inclination:g} deg",
     )
     original = source.with_name(CASE_FILE + ".orig")
-    if not original.exists():
-        replace_text(original, source.read_text(encoding="utf-8"))
+    if not os.path.lexists(original):
+        replace_text(original, source.read_text(encoding="utf-8"), key="CASE_DIR")
         if on_keep is not None:
             on_keep(original)
 
@@ -539,5 +538,5 @@ def write_calibration(
         tmp.write_text(text, encoding="utf-8")
         load_case(tmp)  # never replace a case with one that does not load
 
-    replace_file(source, write_checked)
+    replace_file(source, write_checked, key="CASE_DIR")
     return source

@@ -35,9 +35,11 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import InputError
-from dem.io.files import json_text, replace_text
+from dem.io.files import json_text, refuse_links, replace_text
 
 #: What can be scanned, and what may be held fixed for each (as ``dem pointmass optimum``).
+#: The files ``dem optimum`` writes beside its runs' folders.
+OPTIMUM_FILES = ("optimum.json", "optimum.csv", "optimum.png")
 OVER = {"drive.angle": ("throw_number", "amplitude"), "drive.throw_number": ("frequency",)}
 
 
@@ -247,6 +249,7 @@ def bulk_optimum(
     from dem import config
     from dem.studies.sweep import dask_client
 
+    refuse_links(out, OPTIMUM_FILES)
     client, cluster = dask_client(scheduler, workers or config.default_threads(), "dem optimum")
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -263,6 +266,7 @@ def bulk_optimum(
         for x, rep in batch:
             overrides = held | {over: float(x), "run.seed": case.run.seed + rep}
             folder = out / folder_name(counter[0], {over: x, "run.seed": case.run.seed + rep})
+            refuse_links(out, [folder.name])
             counter[0] += 1
             jobs.append(client.submit(run_point, str(case_dir), overrides, str(folder), cycles,
                                       1, False, pure=False))  # fmt: skip

@@ -16,6 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from dem.io.files import replace_file  # noqa: E402
+
 #: Quantities by key (a case key's last part, a point-mass input): (words with the symbol,
 #: the symbol alone, the unit; "" dimensionless).
 QUANTITY = {
@@ -96,7 +98,7 @@ def set_title(ax, text: str, fontsize: float = 9.0) -> None:
     ax.set_title(wrap_title(text, ax.figure, fontsize), fontsize=fontsize)
 
 
-def save(fig, path: str | Path) -> Path:
+def save(fig, path: str | Path, *, key: str = "--out") -> Path:
     """Lay out, write and close a figure; returns the path.
 
     Laid out so that titles, labels and legends stay inside the figure (tight layout, or the
@@ -107,8 +109,12 @@ def save(fig, path: str | Path) -> Path:
             warnings.simplefilter("ignore")  # tight_layout's warning on an odd axes mix
             fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, bbox_inches="tight", pad_inches=0.08)
-    plt.close(fig)
+    kind = path.suffix.lstrip(".").lower() or "png"
+    try:  # written whole to a fresh name and renamed: never through a link (dem.io.files)
+        replace_file(path, lambda tmp: fig.savefig(tmp, format=kind, bbox_inches="tight",
+                                                   pad_inches=0.08), key=key)  # fmt: skip
+    finally:
+        plt.close(fig)
     return path
 
 

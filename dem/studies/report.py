@@ -31,6 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.files import link_refused, own_folder, refuse_links, replace_text
+from dem.io.freetext import shown_text
 from dem.physics import measure
 from dem.studies import plots
 
@@ -59,6 +61,13 @@ COMPARISON_COLUMNS = (
     "mass_flow_rate",
     "particle_steps_per_s",
 )
+
+
+#: The files a report writes for each run (in its folder, or in its sub-folder of many runs).
+RUN_FILES = ("velocity_per_cycle.png", "pointmass_comparison.png", "discharge.png",
+             "bed_snapshot.png", "report.txt")  # fmt: skip
+#: The files a report of many runs writes beside the runs' sub-folders.
+COMPARISON_FILES = ("comparison.csv", "comparison.json", "comparison.txt", "comparison.png")
 
 
 def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -104,19 +113,28 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
         if not (d / SUMMARY).is_file():
             raise FileNotFoundError(f"{d / SUMMARY} not found: is {d} a dem run folder?")
     inputs = [(read_summary(d / SUMMARY), _load_results(d)) for d in out_dirs]
+    given = dest
     if dest is None:
         if len(out_dirs) == 1:
             dest = out_dirs[0] / "report"
         else:
             dest = Path(os.path.commonpath([d.resolve() for d in out_dirs])) / "report"
     dest = Path(dest)
-    dest.mkdir(parents=True, exist_ok=True)
     labels = _labels(out_dirs)
+    # every name the report writes checked for a link before anything is drawn or written: the
+    # default folder (a name dem chose), the runs' sub-folders and the files in them
+    names = list(COMPARISON_FILES) if len(out_dirs) > 1 else []
+    for label in labels:
+        run_names = RUN_FILES if len(out_dirs) == 1 else [f"{label}/{n}" for n in RUN_FILES]
+        names += run_names
+    if given is None and dest.is_symlink():  # OUT/report: a name dem chose
+        raise link_refused(dest)
+    refuse_links(dest, names)
+    dest.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     rows = []
     for label, d, (summary, results) in zip(labels, out_dirs, inputs, strict=True):
-        run_dest = dest if len(out_dirs) == 1 else dest / label
-        run_dest.mkdir(parents=True, exist_ok=True)
+        run_dest = dest if len(out_dirs) == 1 else own_folder(dest / label)
         files, row = _report_run(d, run_dest, label, summary, results)
         written += files
         rows.append(row)
@@ -366,7 +384,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
         cycles=summary.get("cycles"),
     )
     text = _run_text(label, d, summary, dem_err, ratio, notes)
-    (dest / "report.txt").write_text(text, encoding="ascii", errors="replace")
+    replace_text(dest / "report.txt", shown_text(text), encoding="ascii", errors="replace")
     files.append(dest / "report.txt")
     return files, row
 
@@ -469,7 +487,7 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
     for row in table:
         buf.write("  ".join(c.rjust(wd) for c, wd in zip(row, widths, strict=True)).rstrip() + "\n")
     txt_path = dest / "comparison.txt"
-    txt_path.write_text(buf.getvalue(), encoding="ascii", errors="replace")
+    replace_text(txt_path, shown_text(buf.getvalue()), encoding="ascii", errors="replace")
 
     labels, xlabel = [r["run"] for r in rows], ""
     for key in ("angle", "throw_number"):

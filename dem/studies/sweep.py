@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import logging
 import math
 import re
 import warnings
@@ -41,6 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dem.errors import InputError
+from dem.io.files import refuse_links, replace_file
 
 #: summary.json values gathered into the sweep table, beside the swept keys.
 COLUMNS = (
@@ -67,6 +69,8 @@ TABLE = "sweep"
 MAX_POINTS = 10_000
 #: The record of the case and options a finished point ran with, beside its summary.json.
 RECORD = "sweep_point.json"
+#: The files a sweep writes beside its points' folders.
+TABLE_FILES = (f"{TABLE}.csv", f"{TABLE}.json", f"{TABLE}.h5", f"{TABLE}.png")
 #: Swept keys whose points can share one GPU batch (``--device cuda``): each point's body
 #: acceleration is its own (:mod:`dem.engine.gpu_replicas`); law, section and period are shared.
 BATCH_KEYS = frozenset(
@@ -115,6 +119,8 @@ def parse_set(text: str) -> tuple[str, list]:
         if not all(float(v).is_integer() for v in numbers):
             raise InputError(f"--set {key}", values, "whole numbers") from None
         return key, [int(v) for v in numbers]
+    if all(re.fullmatch(r"\s*[+-]?\d+\s*", t) for t in re.split(r"[,:]", values)):
+        return key, [int(v) for v in numbers]  # written as integers: read as the file would
     return key, numbers
 
 
@@ -235,6 +241,20 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
         )  # fmt: skip
 
 
+def written_names(points: list[SweepPoint]) -> list[str]:
+    """Every name a sweep writes under its folder, checked for links at the door.
+
+    The table, the figure, the points' folders, and what ``dem run`` and the record write in
+    each.
+    """
+    from dem.run.output import RUN_OUTPUTS
+
+    names = [*TABLE_FILES]
+    for p in points:
+        names += [p.name] + [f"{p.name}/{n}" for n in (RECORD, *RUN_OUTPUTS)]
+    return names
+
+
 def status(point: SweepPoint) -> str:
     """Whether a point is "done" (summary.json), "interrupted" (a checkpoint) or "new"."""
     from dem.run.output import CHECKPOINT, SUMMARY
@@ -261,6 +281,7 @@ def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
 
     case = load_case(case_dir, overrides | device_override(device))
     point = SweepPoint(0, overrides, Path(folder))
+    refuse_links(point.folder.parent, [point.name, f"{point.name}/{RECORD}"])
     resume = status(point) == "interrupted"
     (point.folder / RECORD).unlink(missing_ok=True)
     with warnings.catch_warnings():  # the sweep warns once, for its first point
@@ -291,6 +312,7 @@ def run_sweep(
     """
     case_dir, out = Path(case_dir), Path(out)
     points = plan_points(case_dir, sets, out, cycles=cycles, frames=frames, device=device)
+    refuse_links(out, written_names(points))
     check_finished(points, out)
     todo = [p for p in points if status(p) != "done"]
     skipped = len(points) - len(todo)
@@ -321,8 +343,7 @@ def run_sweep(
             for future in as_completed(futures):
                 p = futures[future]
                 if future.status == "error":
-                    err = future.exception()
-                    failed[p.name] = f"{type(err).__name__}: {err}"
+                    failed[p.name] = failure_text(future.exception(), p.folder)
                     if bar is not None:
                         bar.write(f"dem sweep: point {p.name} failed: {failed[p.name]}")
                 if bar is not None:
@@ -380,6 +401,19 @@ def _run_as_batch(case_dir: Path, todo: list[SweepPoint], cycles, frames: bool,
     return True
 
 
+def failure_text(err: BaseException, folder: Path) -> str:
+    """Why a point failed, in one line: the error's type and message.
+
+    For an OSError, the file it could not write (the point's folder where the system names
+    none, as on a full disk).
+    """
+    if isinstance(err, OSError):
+        where = err.filename or f"a file in {folder}"
+        return f"{type(err).__name__}: cannot write or read {where}: {err.strerror or err}"
+    text = str(err).strip().splitlines()
+    return f"{type(err).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
 def dask_client(scheduler: str | None, workers: int, command: str):
     """A Dask client and its local cluster (None with ``scheduler``); close both.
 
@@ -397,8 +431,10 @@ def dask_client(scheduler: str | None, workers: int, command: str):
             cause = (str(err).splitlines() or [""])[0] or type(err).__name__
             raise InputError("--scheduler", scheduler, f"the address of a running dask scheduler "
                              f"that answers ({cause})") from None  # fmt: skip
+    # a failing task is logged by its worker as a warning with the task and a traceback: the
+    # sweep says why a point failed in one line of its own, so only errors are let through
     cluster = LocalCluster(n_workers=max(1, workers), threads_per_worker=1, processes=True,
-                           dashboard_address=None)  # fmt: skip
+                           dashboard_address=None, silence_logs=logging.ERROR)  # fmt: skip
     return Client(cluster), cluster
 
 
@@ -465,19 +501,23 @@ def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Pat
     meta["columns"] = {c: {"unit": units[c], "meaning": meaning.get(c, "")} for c in columns}
     path = write_csv(out / f"{TABLE}.csv", columns, ([r[f] for f in fields] for r in rows),
                      meta=meta, command="dem sweep")  # fmt: skip
-    with h5py.File(out / f"{TABLE}.h5", "w") as h5:
-        g = h5.create_group(TABLE)
-        for f in fields:
-            values = [r[f] for r in rows]
-            name = names[f]
-            if all(isinstance(v, (int, float)) or v is None for v in values) and not all(
-                isinstance(v, bool) for v in values
-            ):
-                g[name] = np.array([math.nan if v is None else float(v) for v in values])
-            else:
-                g[name] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
-            g[name].attrs["unit"] = units[name]
-        g.attrs["columns"] = json.dumps(columns)
+
+    def write_h5(tmp: Path) -> None:
+        with h5py.File(tmp, "w") as h5:
+            g = h5.create_group(TABLE)
+            for f in fields:
+                values = [r[f] for r in rows]
+                name = names[f]
+                if all(isinstance(v, (int, float)) or v is None for v in values) and not all(
+                    isinstance(v, bool) for v in values
+                ):
+                    g[name] = np.array([math.nan if v is None else float(v) for v in values])
+                else:
+                    g[name] = np.array([str(v) for v in values], dtype=h5py.string_dtype())
+                g[name].attrs["unit"] = units[name]
+            g.attrs["columns"] = json.dumps(columns)
+
+    replace_file(out / f"{TABLE}.h5", write_h5)
     return path
 
 

@@ -20,12 +20,12 @@ SWEEP = ["pointmass", "sweep", "--throw-number", "1.5", "--angle", "25", "--fric
     "argv, needle",
     [
         # the velocity's --frequency was taken as given: -60 Hz gave a negative velocity
-        (VELOCITY + ["--frequency", "-60"], "--frequency = -60.0: frequency must be in (0, 1e5]"),
+        (VELOCITY + ["--frequency", "-60"], "--frequency = -60.0: frequency must be in [0.01, 1e5"),
         (VELOCITY + ["--frequency", "0"], "--frequency = 0.0"),
         (VELOCITY + ["--frequency", "1e9"], "--frequency = 1000000000.0"),
         (VELOCITY + ["--frequency", "nan"], "not a finite number"),
         # options the chosen hold does not use were ignored whatever their value
-        (OPTIMUM + ["--amplitude", "-1"], "--amplitude = -1.0: amplitude must be in (0, 1] m"),
+        (OPTIMUM + ["--amplitude", "-1"], "--amplitude = -1.0: amplitude must be in [1e-9, 1] m"),
         (OPTIMUM + ["--drive-velocity", "0"], "--drive-velocity = 0.0"),
         (OPTIMUM + ["--peak-acceleration", "1e9"], "--peak-acceleration = 1000000000.0"),
         (OPTIMUM + ["--angle", "95"], "--angle = 95.0"),

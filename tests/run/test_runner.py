@@ -73,7 +73,7 @@ def _wait_for_frames(out: Path, frames: int, proc: subprocess.Popen, limit: floa
 
 
 @pytest.mark.integration
-def test_interrupt_and_resume_is_bit_identical(tmp_path):
+def test_interrupt_and_resume_is_bit_identical(tmp_path, monkeypatch):
     case_dir = _case_dir(tmp_path)
     case = load_case(case_dir)
     reference = run_case(case, tmp_path / "straight", progress=False, threads=1)
@@ -100,6 +100,22 @@ def test_interrupt_and_resume_is_bit_identical(tmp_path):
         run_case(case, out, progress=False, threads=1, resume=True)
     (out / "checkpoint.npz").write_bytes(saved)
     assert (out / "results.h5").read_bytes() == h5
+    # a damaged results.h5 is refused before the fill (hardening round 4, item 10), naming the
+    # file and --overwrite; the checkpoint and the file stay as they were
+    from dem.engine import setup
+
+    def no_fill(*args, **kwargs):
+        raise AssertionError("the trough was filled before results.h5 was checked")
+
+    for damaged in (h5[: len(h5) // 2], b"not HDF5 at all"):
+        (out / "results.h5").write_bytes(damaged)
+        monkeypatch.setattr(setup, "from_case", no_fill)
+        with pytest.raises(InputError, match=r"results.h5.*--overwrite"):
+            run_case(case, out, progress=False, threads=1, resume=True)
+        monkeypatch.undo()
+        assert (out / "results.h5").read_bytes() == damaged
+        assert (out / "checkpoint.npz").read_bytes() == saved
+    (out / "results.h5").write_bytes(h5)
 
     resumed = run_case(case, out, progress=False, threads=1, resume=True)
     assert resumed["per_cycle_velocity"] == reference["per_cycle_velocity"]

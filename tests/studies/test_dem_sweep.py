@@ -76,6 +76,11 @@ def test_two_points_run_on_dask_and_a_rerun_recomputes_nothing(tmp_path, capsys)
         assert np.array_equal(h5["sweep/drive.angle_deg"][:], [20.0, 30.0])
         assert h5["sweep/mean_velocity_m_s"].attrs["unit"] == "m/s"
     assert (out / "sweep.png").stat().st_size > 0
+    # every name written is one the sweep checks for links at the door (hardening round 4)
+    from dem.studies.sweep import SweepPoint, written_names
+
+    walked = set(written_names([SweepPoint(0, {}, out / r["point"]) for r in rows]))
+    assert {str(f.relative_to(out)) for f in out.rglob("*")} <= walked
     stamps = {r["point"]: (out / r["point"] / SUMMARY).stat().st_mtime_ns for r in rows}
     capsys.readouterr()
     assert main(args + ["--json"]) == 0
