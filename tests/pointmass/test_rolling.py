@@ -181,3 +181,41 @@ def test_the_brute_force_twin_rolls_down_an_incline_as_the_model_says():
         _, ends = brute_rolling(gamma, phi, mu, 4.0, steps=2000, transient=10, measured=4)
         drift = rolling.velocity(gamma, phi, mu, 4.0).drift_per_cycle
         assert ends[1, 0] - ends[0, 0] == pytest.approx(drift, rel=2e-3)
+
+
+def test_the_command_gives_the_rolling_sphere(capsys):
+    import json
+
+    from dem.cli import main
+
+    argv = ["pointmass", "velocity", "--throw-number", "1.8", "--angle", "15", "--friction",
+            "0.2", "--json"]  # fmt: skip
+    assert main([*argv, "--grain", "rolling-sphere"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    expected = rolling.velocity(1.8, 15.0, 0.2)  # Coulomb-bounded, "centre", solid sphere
+    assert out["velocity_norm"] == expected.velocity_norm and out["grain"] == "rolling-sphere"
+    assert (out["impact"], out["landing"], out["inertia_factor"]) == ("coulomb", "centre", 0.4)
+    assert (
+        out["pointmass_velocity_norm"]
+        == pointmass.velocity(1.8, 15.0, 0.2, impact="coulomb").velocity_norm
+    )
+    argv_k = [*argv, "--grain", "rolling-sphere", "--inertia-factor", "0.6667"]
+    assert main([*argv_k, "--landing", "contact", "--impact", "paper"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert (
+        out["velocity_norm"]
+        == rolling.velocity(
+            1.8, 15.0, 0.2, 0.0, 0.8, 0.0, 0.6667, landing="contact", impact="paper"
+        ).velocity_norm
+    )
+    # the point mass keeps its default landing law (the paper's)
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["impact"] == "paper"
+    assert main(argv[:-1] + ["--grain", "rolling-sphere", "--frequency", "60"]) == 0
+    text = capsys.readouterr().out
+    assert "rolling sphere, I = 0.4 m r^2" in text and "m/s at 60 Hz" in text
+    # options of the rolling sphere only, and its range, are refused with their names
+    assert main([*argv, "--landing", "contact"]) == 2
+    assert "--landing = 'contact': only with --grain rolling-sphere" in capsys.readouterr().err
+    assert main([*argv, "--grain", "rolling-sphere", "--inertia-factor", "0"]) == 2
+    assert "--inertia-factor = 0.0: moment of inertia factor" in capsys.readouterr().err
