@@ -153,9 +153,9 @@ def plan(
     if data and away:
         expected, parts = math.nan, {}
         measure = (
-            f"dem run {case.directory} compares one grain with its reference "
-            "(reference_velocity_norm in summary.json: the Coulomb-bounded point mass, or the "
-            "rolling sphere for a sphere free to roll)"
+            f"dem run {case.directory} compares one grain with its reference (summary.json's "
+            "reference names it: the Coulomb-bounded point mass, or the rolling sphere for a "
+            "sphere free to roll)"
             if grains == 1
             else f"dem sweep {case.directory} --set contact.youngs_modulus=A,B,C (and "
             "run.timestep, trough.length, run.seed) measures it"

@@ -34,7 +34,6 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
     stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
     d = case.drive
     pm_norm, pm_method = pointmass_reference(case)
-    bounded = pointmass_bounded(case)
     total_mass = sim.total_mass
     flow = measure.mass_flow_rate(total_mass, stat.mean, case.trough.length)
     feeder = feeder_summary(case, sim, progress)
@@ -89,8 +88,8 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "feeder": feeder,
         "pointmass_velocity_norm": pm_norm,
         "pointmass_method": pm_method,
-        "pointmass_bounded_velocity_norm": bounded,
-        **reference_fields(case, pm_norm, bounded),
+        "pointmass_bounded_velocity_norm": pointmass_bounded(case),
+        **reference_fields(case),
         "dem_version": provenance["versions"]["dem"],
         "git_commit": provenance["git_commit"],
         "provenance": provenance,
@@ -214,14 +213,15 @@ def pointmass_rolling(case) -> float | None:
     ).velocity_norm  # fmt: skip
 
 
-def reference_fields(case, pm_norm: float, bounded: float | None) -> dict:
+def reference_fields(case) -> dict:
     """The summary's single-grain references: the rolling sphere, and which one applies and why.
 
-    ``reference`` is ``"rolling"`` (spheres free to roll: :func:`pointmass_rolling`),
+    ``reference`` names the summary key ``<reference>_velocity_norm`` that holds the applicable
+    reference: ``"pointmass_rolling"`` (spheres free to roll: :func:`pointmass_rolling`),
     ``"pointmass_bounded"`` (grains that cannot roll, line drive), ``"pointmass"`` (grains that
-    cannot roll, two-component drive: the stepped point mass) or ``"none"`` (spheres free to roll
-    where no rolling steady state exists or is computed); ``reference_velocity_norm`` is that
-    reference's v_norm (None for ``"none"``) and ``reference_reason`` says why in words.
+    cannot roll, two-component drive: the stepped point mass), or None (spheres free to roll
+    where no rolling steady state exists or is computed); ``reference_reason`` says why in
+    words.
     """
     from dem.pointmass import rolling
 
@@ -236,23 +236,23 @@ def reference_fields(case, pm_norm: float, bounded: float | None) -> dict:
         else:
             why = ("particles.rotation = false: the spheres cannot roll, they slide as blocks "
                    "(the point mass's DEM twin)")  # fmt: skip
-        if bounded is not None:
-            return out | {"reference": "pointmass_bounded", "reference_velocity_norm": bounded,
+        if case.drive.is_single:
+            return out | {"reference": "pointmass_bounded",
                           "reference_reason": why + "; its landings capped by Coulomb, as the "
                           "DEM's contacts are"}  # fmt: skip
-        return out | {"reference": "pointmass", "reference_velocity_norm": pm_norm,
+        return out | {"reference": "pointmass",
                       "reference_reason": why + "; a two-component drive: the point mass "
                       "stepped in time on the same motion"}  # fmt: skip
     rolls = "the grains are spheres free to rotate: a single one rolls where the point mass sticks"
     if not case.drive.is_single:
-        return out | {"reference": "none", "reference_velocity_norm": None,
+        return out | {"reference": None,
                       "reference_reason": rolls + "; the rolling sphere is computed for line "
                       "drives only, and the point mass (the sphere with its rotation locked) "
                       "is no reference for a grain that rolls"}  # fmt: skip
     if roll is None:
         k = rolling.SOLID_SPHERE
         a = GRAVITY * math.sin(math.radians(abs(case.trough.inclination))) / (1.0 + k)
-        return out | {"reference": "none", "reference_velocity_norm": None,
+        return out | {"reference": None,
                       "reference_reason": rolls + f"; on a trough inclined by "
                       f"{case.trough.inclination:g} deg a free sphere has no steady state: "
                       f"whatever the drive it rolls downhill at g sin(alpha) / (1 + 2/5) = "
@@ -268,8 +268,7 @@ def reference_fields(case, pm_norm: float, bounded: float | None) -> dict:
     if case.wall_material.rolling_friction > 0.0:
         why += (f"; the wall's rolling friction ({case.wall_material.rolling_friction:g}) is "
                 "not in the rolling model")  # fmt: skip
-    return out | {"reference": "rolling", "reference_velocity_norm": roll,
-                  "reference_reason": why}  # fmt: skip
+    return out | {"reference": "pointmass_rolling", "reference_reason": why}
 
 
 def components(case) -> list[dict]:
