@@ -29,17 +29,18 @@ the contact point's reduced tangential mass; it holds while |F| <= mu N, and the
 moves with dv/dt = a / (1 + k) (5/7 a for a solid sphere). *Slipping*: F = -mu N sgn(sigma)
 (kinetic friction opposing the slip). *Flight* (N would be negative, Gamma > 1): F = 0, the
 spin is carried unchanged and the centre moves ballistically in the accelerating frame.
-*Landing*: a normal impulse P = (1 + eps_n) m |v_n| (eps_n = 0: the sphere stays on the floor)
+*Landing*: a normal impulse J_n = (1 + eps_n) m |v_n| (eps_n = 0: the sphere stays on the floor)
 and a tangential impulse J on the contact point, by one of two landing laws (:data:`LANDINGS`):
 
 - ``"centre"`` (the default): the paper's eps_t, the ratio of the centre's tangential velocity
   after a landing to before it (the README's definition, which the DEM's impact-aware contact
-  law delivers): J = -m (1 - eps_t) sigma, but never past rolling, |J| <= m_t |sigma|
-  (a sphere free to roll keeps at least 1 / (1 + k) of its slip's share, 5/7 for a solid one);
+  law delivers): J = -m (1 - eps_t) sigma, but never past rolling, |J| <= m_t |sigma| (so a
+  sphere landing without spin keeps at least 1 / (1 + k) of its centre's velocity, 5/7 for a
+  solid one);
 - ``"contact"``: eps_t on the contact point's slip, sigma -> eps_t sigma: J = -m_t (1 - eps_t)
   sigma (Walton's tangential restitution).
 
-Under ``impact="coulomb"`` (the default; :data:`dem.pointmass.model.IMPACT_LAWS`) |J| <= mu P,
+Under ``impact="coulomb"`` (the default; :data:`dem.pointmass.model.IMPACT_LAWS`) |J| <= mu J_n,
 as in the Coulomb-bounded point mass, the DEM's reference; ``"paper"`` leaves J uncapped. A
 landing with eps_n > 0 starts a Zeno sequence of ever smaller bounces, handled as the point mass
 handles it (the cap then applies to their summed normal impulse).
