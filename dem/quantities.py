@@ -148,6 +148,10 @@ QUANTITIES: dict[str, Quantity] = dict(
         _q("rolling_friction", "", lambda x: 0.0 <= x <= 100.0,
            "rolling friction must be in [0, 100]",
            "rolling friction coefficient"),
+        _q("inertia_factor", "", lambda x: 0.0 < x <= 1.0e6,
+           "moment of inertia factor must be in (0, 1e6]: I = factor m r^2 (0.4 a solid "
+           "sphere, 2/3 a thin shell)",
+           "moment of inertia factor k = I / (m r^2) of a round grain about its rolling axis"),
         # contact
         _q("youngs_modulus", "Pa", lambda x: 1.0e3 <= x <= 1.0e13,
            "Young's modulus must be in [1e3, 1e13] Pa",

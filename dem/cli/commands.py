@@ -26,16 +26,32 @@ def cmd_thresholds(args) -> int:
 
 
 def cmd_velocity(args) -> int:
-    """``dem pointmass velocity``: the point mass's conveying velocity at one drive."""
+    """``dem pointmass velocity``: the point mass's (or a rolling sphere's) velocity at a drive."""
     from dem import pointmass
     from dem.pointmass.answers import velocity_answer
 
     check_numbers(args)
-    r = pointmass.velocity(
-        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n,
-        impact=args.impact,
-    )  # fmt: skip
-    result, lines = velocity_answer(r, args.frequency)
+    if args.grain == "rolling-sphere":
+        from dem.pointmass import rolling
+        from dem.pointmass.answers import rolling_answer
+
+        drive = (args.throw_number, args.angle, args.friction, args.inclination, args.eps_t,
+                 args.eps_n)  # fmt: skip
+        impact = args.impact or "coulomb"
+        k = rolling.SOLID_SPHERE if args.inertia_factor is None else args.inertia_factor
+        r = rolling.velocity(*drive, k, landing=args.landing or "centre", impact=impact)
+        pm = pointmass.velocity(*drive, impact=impact).velocity_norm
+        result, lines = rolling_answer(r, args.frequency, pm)
+    else:
+        for option in ("--inertia-factor", "--landing"):
+            value = getattr(args, option[2:].replace("-", "_"))
+            if value is not None:
+                raise InputError(option, value, "only with --grain rolling-sphere")
+        r = pointmass.velocity(
+            args.throw_number, args.angle, args.friction, args.inclination, args.eps_t,
+            args.eps_n, impact=args.impact or "paper",
+        )  # fmt: skip
+        result, lines = velocity_answer(r, args.frequency)
     if args.json:
         print_json(result)
     else:

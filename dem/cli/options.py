@@ -21,6 +21,7 @@ QUANTITY_OF = {
     "--drive-velocity": "drive_velocity",
     "--eps-t": "restitution",
     "--eps-n": "restitution",
+    "--inertia-factor": "inertia_factor",
     "--cycles": "cycles",
     "--threads": "threads",
     "--replicas": "replicas",

@@ -66,8 +66,28 @@ def pointmass_parser(sub) -> None:
     p.add_argument("--frequency", type=number,
                    help="also give the velocity in m/s at this drive frequency f, Hz; "
                    + QUANTITIES["frequency"].allowed)  # fmt: skip
+    p.add_argument(
+        "--grain",
+        choices=("point", "rolling-sphere"),
+        default="point",
+        help="point: the paper's point mass (default); rolling-sphere: a round grain "
+        "free to roll, the reference of spheres whose rotation is free "
+        "(dem.pointmass.rolling; its landings Coulomb-bounded unless --impact paper)",
+    )
+    p.add_argument(
+        "--inertia-factor",
+        type=number,
+        help="rolling-sphere: I / (m r^2), default 0.4 (a solid sphere); "
+        + QUANTITIES["inertia_factor"].allowed,
+    )
+    p.add_argument(
+        "--landing",
+        choices=("centre", "contact"),
+        help="rolling-sphere: eps_t of the centre's velocity, never past rolling "
+        "(centre, the default: the DEM's law) or of the contact point's slip",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(func=c.cmd_velocity)
+    p.set_defaults(func=c.cmd_velocity, impact=None)  # --impact's default depends on --grain
 
     p = pms.add_parser(
         "sweep",

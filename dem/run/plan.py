@@ -156,8 +156,9 @@ def plan(
     if data and away:
         expected, parts = math.nan, {}
         measure = (
-            f"dem run {case.directory} compares one grain with the point mass "
-            "(pointmass_bounded_velocity_norm in summary.json)"
+            f"dem run {case.directory} compares one grain with its reference (summary.json's "
+            "reference names it: the Coulomb-bounded point mass, or the rolling sphere for a "
+            "sphere free to roll)"
             if grains == 1
             else f"dem sweep {case.directory} --set contact.youngs_modulus=A,B,C (and "
             "run.timestep, trough.length, run.seed) measures it"
@@ -171,7 +172,8 @@ def plan(
     elif data:  # one grain: the bed study says nothing of its error; the ladder does
         expected, parts = math.nan, {}
         error_source = ("one grain: compare it with the point mass (validation/single-grain, "
-                        "validation/single-screw)")  # fmt: skip
+                        "validation/single-screw), or a sphere free to roll with the rolling "
+                        "sphere (validation/rolling-sphere)")  # fmt: skip
         accuracy.advise_ladder(case, data, kind, advice)
     else:
         expected, parts = math.nan, {}

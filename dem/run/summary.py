@@ -3,10 +3,11 @@
 :func:`summarize` gathers what a finished run reports: the conveying velocity over the measured
 cycles with its error bar (:func:`dem.physics.measure.conveying_velocity`), the mass flow, a
 finite feeder's discharge, the drive and materials used, the point-mass reference on the same
-drive (:func:`pointmass_reference`, and :func:`pointmass_bounded`, the DEM's own reference),
-cost figures and provenance. :func:`fingerprint` flattens the resolved case into the record a
-checkpoint keeps, so that ``--resume`` refuses a changed case (:func:`fingerprint_changes` names
-what).
+drive (:func:`pointmass_reference`, and :func:`pointmass_bounded`, the DEM's own reference), the
+rolling sphere beside them where the grains can roll, and which reference applies and why
+(:func:`reference_fields`), cost figures and provenance. :func:`fingerprint` flattens the
+resolved case into the record a checkpoint keeps, so that ``--resume`` refuses a changed case
+(:func:`fingerprint_changes` names what).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import math
 
 import numpy as np
 
+from dem.config import GRAVITY
 from dem.engine.simulation import Simulation
 from dem.physics import measure
 from dem.provenance import record
@@ -87,6 +89,7 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "pointmass_velocity_norm": pm_norm,
         "pointmass_method": pm_method,
         "pointmass_bounded_velocity_norm": pointmass_bounded(case),
+        **reference_fields(case),
         "dem_version": provenance["versions"]["dem"],
         "git_commit": provenance["git_commit"],
         "provenance": provenance,
@@ -167,6 +170,105 @@ def pointmass_bounded(case) -> float | None:
         case.drive.throw_number, case.drive.angle, m.friction, case.trough.inclination,
         m.restitution_tangential, m.restitution_normal, impact="coulomb",
     ).velocity_norm  # fmt: skip
+
+
+def grains_roll(case) -> bool:
+    """Whether the case's grains can roll: spheres with ``particles.rotation`` on.
+
+    Screws and clumps are not claimed (a screw lying across the trough rolls on its shank, but
+    it is no sphere and it need not lie across), nor spheres whose rotation is locked (blocks,
+    the point mass's DEM twin).
+    """
+    return case.particles.shape == "sphere" and case.particles.rotation
+
+
+def start_momentum(case) -> float:
+    """P of :mod:`dem.pointmass.rolling` for a grain at rest on the trough as the drive starts.
+
+    Such a grain has the trough's velocity along x in the laboratory, s'_x(0), and no spin, so
+    P = s'_x(0) / (A omega cos phi): 1 for a line drive, 0 for a ramped one.
+    """
+    motion = case.drive.motion
+    return float(motion.velocity(0.0)[0]) / motion.velocity_scale
+
+
+def pointmass_rolling(case) -> float | None:
+    """The rolling sphere's v_norm on the case's line drive and level trough, else None.
+
+    :func:`dem.pointmass.rolling.velocity` with the wall's friction and restitutions (the grain
+    touches only the floor), a solid sphere (k = 2/5, as the DEM's spheres), the ``"centre"``
+    landing (the impact-aware law's: eps_t of the centre's velocity, never past rolling), each
+    landing capped by Coulomb, and the case's start (:func:`start_momentum`). None for grains
+    that cannot roll (:func:`grains_roll`), a two-component drive, or an inclined trough (where
+    a free sphere has no steady state).
+    """
+    from dem.pointmass import rolling
+
+    if not grains_roll(case) or not case.drive.is_single or case.trough.inclination != 0.0:
+        return None
+    m = case.wall_material
+    return rolling.velocity(
+        case.drive.throw_number, case.drive.angle, m.friction, 0.0, m.restitution_tangential,
+        m.restitution_normal, inertia_factor=rolling.SOLID_SPHERE, momentum=start_momentum(case),
+    ).velocity_norm  # fmt: skip
+
+
+def reference_fields(case) -> dict:
+    """The summary's single-grain references: the rolling sphere, and which one applies and why.
+
+    ``reference`` names the summary key ``<reference>_velocity_norm`` that holds the applicable
+    reference: ``"pointmass_rolling"`` (spheres free to roll: :func:`pointmass_rolling`),
+    ``"pointmass_bounded"`` (grains that cannot roll, line drive), ``"pointmass"`` (grains that
+    cannot roll, two-component drive: the stepped point mass), or None (spheres free to roll
+    where no rolling steady state exists or is computed); ``reference_reason`` says why in
+    words.
+    """
+    from dem.pointmass import rolling
+
+    roll = pointmass_rolling(case)
+    out = {"pointmass_rolling_velocity_norm": roll}
+    pt = case.particles
+    if not grains_roll(case):
+        if pt.shape != "sphere":
+            why = (f"the grains are {pt.shape}s: no rolling reference is claimed for them (a "
+                   "rolling model is for round grains), so the single grain's reference is the "
+                   "point mass")  # fmt: skip
+        else:
+            why = ("particles.rotation = false: the spheres cannot roll, they slide as blocks "
+                   "(the point mass's DEM twin)")  # fmt: skip
+        if case.drive.is_single:
+            return out | {"reference": "pointmass_bounded",
+                          "reference_reason": why + "; its landings capped by Coulomb, as the "
+                          "DEM's contacts are"}  # fmt: skip
+        return out | {"reference": "pointmass",
+                      "reference_reason": why + "; a two-component drive: the point mass "
+                      "stepped in time on the same motion"}  # fmt: skip
+    rolls = "the grains are spheres free to rotate: a single one rolls where the point mass sticks"
+    if not case.drive.is_single:
+        return out | {"reference": None,
+                      "reference_reason": rolls + "; the rolling sphere is computed for line "
+                      "drives only, and the point mass (the sphere with its rotation locked) "
+                      "is no reference for a grain that rolls"}  # fmt: skip
+    if roll is None:
+        k = rolling.SOLID_SPHERE
+        a = GRAVITY * math.sin(math.radians(abs(case.trough.inclination))) / (1.0 + k)
+        return out | {"reference": None,
+                      "reference_reason": rolls + f"; on a trough inclined by "
+                      f"{case.trough.inclination:g} deg a free sphere has no steady state: "
+                      f"whatever the drive it rolls downhill at g sin(alpha) / (1 + 2/5) = "
+                      f"{a:.3g} m/s^2 on average (dem.pointmass.rolling), so no single grain "
+                      "conveys at a steady velocity"}  # fmt: skip
+    why = (rolls + ", so its reference is the rolling sphere (dem.pointmass.rolling: solid, "
+           "I = 2/5 m r^2, the wall's friction and restitutions, landings capped by Coulomb; the "
+           "point mass is the same sphere with its rotation locked)")  # fmt: skip
+    p = start_momentum(case)
+    if p != 1.0:
+        why += (f"; started by a ramped drive, so with a momentum about the contact line of "
+                f"P = {p:g} (not the 1 of a drive switched on at phase 0)")  # fmt: skip
+    if case.wall_material.rolling_friction > 0.0:
+        why += (f"; the wall's rolling friction ({case.wall_material.rolling_friction:g}) is "
+                "not in the rolling model")  # fmt: skip
+    return out | {"reference": "pointmass_rolling", "reference_reason": why}
 
 
 def components(case) -> list[dict]:

@@ -39,9 +39,17 @@ def run_summary_lines(s: dict) -> list[str]:
     paper, bounded = s.get("pointmass_velocity_norm"), s.get("pointmass_bounded_velocity_norm")
     if paper is not None:
         text = f"{paper:.3f} (paper's model)"
+        # spheres free to roll: the rolling sphere, or none (their reference is None)
+        rolls = s.get("reference", "") in ("pointmass_rolling", None)
         if bounded is not None and abs(bounded - paper) > 5e-4:
-            text += f", {bounded:.3f} (Coulomb-bounded, the DEM's reference)"
+            role = ")" if rolls else ", the DEM's reference)"
+            text += f", {bounded:.3f} (Coulomb-bounded{role}"
         line("point mass", text + " in v_norm")
+    if s.get("pointmass_rolling_velocity_norm") is not None:
+        line("rolling sphere", f"{s['pointmass_rolling_velocity_norm']:.3f} in v_norm (the "
+             "reference of grains that roll: reference_reason in summary.json)")  # fmt: skip
+    elif "reference_reason" in s and s["reference"] is None:
+        line("rolling sphere", "no reference: " + s["reference_reason"])
     flow = with_error(s["mass_flow_rate"], s.get("mass_flow_rate_stderr")
                       or abs(s["mass_flow_rate"] * s["mean_velocity_stderr"]
                              / (s["mean_velocity"] or float("nan"))), "kg/s")  # fmt: skip
