@@ -1,7 +1,7 @@
-"""Chung and Ooi's (2011) eight impact-level benchmarks, every law dem ships, against analytic.
+"""Chung and Ooi's (2011) eight impact-level benchmarks, every law dem ships, against theory.
 
-    .venv/bin/python validation/contact-benchmarks/benchmarks.py            # everything, ~10 min
-    .venv/bin/python validation/contact-benchmarks/benchmarks.py --short    # CI's form, ~1 min
+    .venv/bin/python validation/contact-benchmarks/benchmarks.py            # everything, ~2.5 min
+    .venv/bin/python validation/contact-benchmarks/benchmarks.py --short    # CI's form, ~40 s
     .venv/bin/python validation/contact-benchmarks/benchmarks.py --report-only  # tables, figures
 
 Y.C. Chung and J.Y. Ooi, "Benchmark tests for verifying discrete element modelling codes at
