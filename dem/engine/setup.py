@@ -49,6 +49,8 @@ def from_grains(
     spins: np.ndarray | None = None,
     timestep: float | None = None,
     impact_speed: float | None = None,
+    radii: np.ndarray | None = None,
+    densities: np.ndarray | None = None,
 ) -> Simulation:
     """The case's grains at chosen poses and velocities (the case's count is not used).
 
@@ -68,9 +70,15 @@ def from_grains(
         impact_speed: Speed of the hardest impact expected, m/s, for the automatic step and
             the instability check; default the drive speed plus the fastest grain plus a
             fall from the highest grain.
+        radii: Spheres only: each sphere's radius, (G,), m; default ``particles.radius``.
+        densities: Spheres only: each sphere's density, (G,), kg/m^3; default
+            ``material.density``. With ``radii``, spheres of several sizes and materials (a
+            collision of two different spheres); the contact law stays the case's (one E and
+            nu: :func:`dem.kernels.contact.equivalent_material` gives the pair's).
 
     The time step follows :func:`dem.scene.timestep.timestep_for` with these grains' count and
-    impact speed; a given step above the stability limit raises InputError naming ``run.timestep``.
+    impact speed (with ``radii`` or ``densities``: the smallest over the kinds of sphere); a
+    given step above the stability limit raises InputError naming ``run.timestep``.
 
     """
     # the scene's own step is the fill's, not these grains': theirs is taken (and checked) below
@@ -85,23 +93,47 @@ def from_grains(
         top = float(np.max(positions[:, 2])) if n else 0.0
         fastest = float(np.max(np.linalg.norm(velocities, axis=1))) if n else 0.0
         impact_speed = impact_speed_for(case, top, fastest)
-    step = timestep_for(case, timestep=timestep, impact_speed=impact_speed, grains=n, law=scene.law)
+    sizes = None
+    if radii is not None or densities is not None:
+        if case.particles.clumps:
+            raise ValueError("radii and densities are for spheres: a clump's are its template's")
+        pt, mat = case.particles, case.material
+        radii = np.broadcast_to(np.asarray(pt.radius if radii is None else radii, float), (n,))
+        densities = np.broadcast_to(
+            np.asarray(mat.density if densities is None else densities, float), (n,)
+        )
+        sizes = (radii.copy(), densities.copy())
+        steps = [
+            timestep_for(
+                replace(case, particles=replace(pt, radius=float(r)),
+                        material=replace(mat, density=float(rho))),
+                timestep=timestep, impact_speed=impact_speed, grains=n, law=scene.law,
+            )
+            for r, rho in sorted(set(zip(sizes[0].tolist(), sizes[1].tolist(), strict=True)))
+        ]  # fmt: skip
+        step = min(steps, key=lambda s: (s.dt, s.limit))
+        step = step._replace(limit=min(s.limit for s in steps), auto=min(s.auto for s in steps))
+    else:
+        step = timestep_for(
+            case, timestep=timestep, impact_speed=impact_speed, grains=n, law=scene.law
+        )
     if spins is not None:
         if not case.particles.rotation:
             raise ValueError("spins need particles.rotation = true: the grains cannot turn")
         spins = np.asarray(spins, dtype=np.float64).reshape(n, 3)
-    return _build(scene, positions, orientations, velocities, step, impact_speed, spins)
+    return _build(scene, positions, orientations, velocities, step, impact_speed, spins, sizes)
 
 
 def _build(
-    scene, positions, orientations, velocities, step, reference_speed, spins=None
+    scene, positions, orientations, velocities, step, reference_speed, spins=None, sizes=None
 ) -> Simulation:
     case = scene.case
     pt, mat = case.particles, case.material
     n = positions.shape[0]
     bodies = None
     if not pt.clumps:
-        spheres = Spheres.create(positions, pt.radius, mat.density)
+        radius, density = (pt.radius, mat.density) if sizes is None else sizes
+        spheres = Spheres.create(positions, radius, density)
         if velocities is not None:
             spheres.v[:] = velocities
         if spins is not None:

@@ -61,14 +61,17 @@ class Spheres:
     mesh_normal: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @classmethod
-    def create(cls, positions: np.ndarray, radius: np.ndarray | float, density: float) -> Spheres:
-        """Spheres at rest at ``positions`` (n, 3), of radius (n,) or scalar, density kg/m^3."""
+    def create(
+        cls, positions: np.ndarray, radius: np.ndarray | float, density: np.ndarray | float
+    ) -> Spheres:
+        """Spheres at rest at ``positions`` (n, 3): radius (m), density (kg/m^3), (n,) or scalar."""
         x = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3).copy()
         n = x.shape[0]
         r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,)).copy()
-        if np.any(r <= 0) or density <= 0:
+        rho = density if np.ndim(density) == 0 else np.asarray(density, dtype=np.float64)
+        if np.any(r <= 0) or np.any(np.asarray(rho) <= 0):
             raise ValueError("radius and density must be positive")
-        mass = sphere_mass(density, r)
+        mass = sphere_mass(rho, r)
         inertia = 0.4 * mass * r**2
         return cls(
             x=x,

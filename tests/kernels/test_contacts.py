@@ -293,3 +293,24 @@ def test_settle_failure_names_the_incline_and_only_advises_eps_n_where_it_helps(
     message = str(info.value)
     assert "inclined 20 deg" in message
     assert "restitution_normal" not in message
+
+
+def test_equivalent_material_is_the_contact_of_two_materials():
+    """An Al2O3 sphere on an Al-alloy wall (Chung and Ooi's tests 4-6): the one material whose
+    contact with itself has the pair's Hertz modulus Y* and Mindlin modulus G*, so dem's
+    one-material law is that contact; between the two Poisson ratios (kappa = 4 G*/Y* is a
+    weighted mean of each material's own), symmetric, itself for one material."""
+    e1, nu1, e2, nu2 = 3.8e11, 0.23, 7.0e10, 0.33
+    y_star, g_star = contact.contact_moduli(e1, nu1, e2, nu2)
+    assert y_star == pytest.approx(1.0 / ((1 - nu1**2) / e1 + (1 - nu2**2) / e2), rel=1e-15)
+    g1, g2 = e1 / (2 * (1 + nu1)), e2 / (2 * (1 + nu2))
+    assert g_star == pytest.approx(1.0 / ((2 - nu1) / g1 + (2 - nu2) / g2), rel=1e-14)
+    youngs, nu = contact.equivalent_material(e1, nu1, e2, nu2)
+    assert nu1 < nu < nu2
+    p = contact.make_params(model="hertz_mindlin", youngs_modulus=youngs, poisson_ratio=nu)
+    assert p[contact.P_YSTAR] == pytest.approx(y_star, rel=1e-14)
+    assert p[contact.P_GSTAR] == pytest.approx(g_star, rel=1e-14)
+    assert contact.equivalent_material(e2, nu2, e1, nu1) == pytest.approx((youngs, nu), rel=1e-14)
+    assert contact.equivalent_material(e2, nu2, e2, nu2) == pytest.approx((e2, nu2), rel=1e-14)
+    # a rigid partner leaves the sphere's own compliance
+    assert contact.contact_moduli(e2, nu2, math.inf, 0.3)[0] == pytest.approx(e2 / (1 - nu2**2))

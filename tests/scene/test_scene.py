@@ -110,3 +110,37 @@ def test_a_changed_case_is_resolved_anew(case):
     other = resolve(few)
     assert isinstance(other, Scene) and other.case is few
     assert other.step == timestep_for(few) != scene.step  # one grain: no sphere-sphere contact
+
+
+@pytest.mark.validation
+def test_from_grains_places_spheres_of_several_sizes_and_materials(case):
+    """Two different spheres (a collision benchmark): each its own radius, mass and inertia;
+    the step the smallest of each kind's own; the case's own kind gives the case's step."""
+    x = [[0.01, 0.0, 0.004], [0.02, 0.0, 0.004]]
+    radii, densities = (1.0e-3, 0.5e-3), (2500.0, 7800.0)
+    sim = setup.from_grains(case, x, radii=radii, densities=densities)
+    np.testing.assert_array_equal(sim.spheres.radius, radii)
+    masses = [rho * 4.0 / 3.0 * math.pi * r**3 for r, rho in zip(radii, densities, strict=True)]
+    np.testing.assert_allclose(sim.spheres.mass, masses, rtol=1e-15)
+    np.testing.assert_allclose(
+        sim.spheres.inv_inertia, 1.0 / (0.4 * np.array(masses) * np.array(radii) ** 2), rtol=1e-15
+    )
+    kinds = [
+        setup.from_grains(
+            dataclasses.replace(
+                case,
+                particles=dataclasses.replace(case.particles, radius=r),
+                material=dataclasses.replace(case.material, density=rho),
+            ),
+            x,
+        )
+        for r, rho in zip(radii, densities, strict=True)
+    ]
+    assert sim.dt == min(k.dt for k in kinds)
+    assert sim.timestep_limit == min(k.timestep_limit for k in kinds)
+    own = setup.from_grains(case, x, radii=case.particles.radius)
+    default = setup.from_grains(case, x)
+    assert own.dt == default.dt
+    assert np.array_equal(own.spheres.mass, default.spheres.mass)
+    with pytest.raises(ValueError, match="spheres"):
+        setup.from_grains(load_case(CASES / "screw-trough"), [[0.01, 0.0, 0.01]], radii=[1e-3])

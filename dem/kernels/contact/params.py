@@ -318,6 +318,47 @@ def youngs_modulus_from_star(y_star: float, poisson_ratio: float) -> float:
     return y_star * 2.0 * (1.0 - poisson_ratio**2)
 
 
+def contact_moduli(e1: float, nu1: float, e2: float, nu2: float) -> tuple[float, float]:
+    """(Y*, G*) of a contact between two elastic materials (E_i Pa, nu_i), Pa.
+
+    Hertz's and Mindlin's effective moduli: 1/Y* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (the
+    normal stiffness S_n = 2 Y* a) and 1/G* = (2 - nu1)/G1 + (2 - nu2)/G2 with
+    G_i = E_i / (2 (1 + nu_i)) (the no-slip tangential stiffness 8 G* a, Mindlin 1949). For
+    one material they are :func:`youngs_star` and E / (4 (2 - nu)(1 + nu)), what
+    :func:`make_params` packs. A rigid body is E = inf (its terms vanish).
+    """
+    inv_y = (1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2
+    inv_g = 2.0 * (2.0 - nu1) * (1.0 + nu1) / e1 + 2.0 * (2.0 - nu2) * (1.0 + nu2) / e2
+    return 1.0 / inv_y, 1.0 / inv_g
+
+
+def equivalent_material(e1: float, nu1: float, e2: float, nu2: float) -> tuple[float, float]:
+    """(E, nu) of the one material whose contact with itself has the moduli of materials 1 and 2.
+
+    dem's laws take one ``youngs_modulus`` and ``poisson_ratio`` per case and pack the contact
+    of two bodies of that material (:func:`make_params`: Y* = E / (2 (1 - nu^2)),
+    G* = E / (4 (2 - nu)(1 + nu))). A sphere of material 1 against a wall or a sphere of
+    material 2 has the moduli of :func:`contact_moduli`; since only Y* and G* enter Hertz's
+    normal force and Mindlin's tangential stiffness, the material with the same two is the
+    same contact. Its Poisson ratio follows from the stiffness ratio kappa = k_t / S_n =
+    4 G* / Y*, which is 2 (1 - nu) / (2 - nu) for one material: nu = (2 - 2 kappa) / (2 - kappa);
+    then E = 2 (1 - nu^2) Y*. Of two equal materials it returns the material itself.
+
+    Raises:
+        ValueError: The pair's kappa has no one-material equivalent with -1 < nu < 1/2.
+
+    """
+    y_star, g_star = contact_moduli(e1, nu1, e2, nu2)
+    kappa = 4.0 * g_star / y_star
+    nu = (2.0 - 2.0 * kappa) / (2.0 - kappa)
+    if not -1.0 < nu < 0.5:
+        raise ValueError(
+            f"k_t / S_n = {kappa:.4g} of this pair has no one-material equivalent "
+            f"(its Poisson ratio would be {nu:.4g}, outside (-1, 0.5))"
+        )
+    return 2.0 * (1.0 - nu * nu) * y_star, nu
+
+
 def rayleigh_time(radius: float, density: float, youngs_modulus: float, poisson: float) -> float:
     """Rayleigh time pi R sqrt(rho / G) / (0.1631 nu + 0.8766), G = Y / (2 (1 + nu)), s."""
     shear = youngs_modulus / (2.0 * (1.0 + poisson))
