@@ -262,9 +262,12 @@ def reference_fields(case) -> dict:
            "I = 2/5 m r^2, the wall's friction and restitutions, landings capped by Coulomb; the "
            "point mass is the same sphere with its rotation locked)")  # fmt: skip
     p = start_momentum(case)
-    if p != 1.0:
-        why += (f"; started by a ramped drive, so with a momentum about the contact line of "
-                f"P = {p:g} (not the 1 of a drive switched on at phase 0)")  # fmt: skip
+    start = ("a drive switched on at phase 0" if p == 1.0
+             else "a ramped drive (not the 1 of a drive switched on at phase 0)")  # fmt: skip
+    why += (f"; a lone free sphere keeps its momentum about the contact line (friction and "
+            f"landings act at the contact), so its mean velocity is set by how it started, "
+            f"P = {p:g} for {start}, not by the drive alone: contacts with other grains in a "
+            "bed, or rolling friction, remove that memory")  # fmt: skip
     if case.wall_material.rolling_friction > 0.0:
         why += (f"; the wall's rolling friction ({case.wall_material.rolling_friction:g}) is "
                 "not in the rolling model")  # fmt: skip
