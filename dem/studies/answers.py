@@ -57,7 +57,17 @@ def run_summary_lines(s: dict) -> list[str]:
          "per m of width)")  # fmt: skip
     lines += feeder_lines(s.get("feeder"))  # the discharge: a feeder's answer
     stiff = s.get("stiffness")
-    if stiff:
+    if stiff and stiff.get("single_grain"):
+        ratio = f"(omega / omega_c)^2 = {stiff['compliance']:.2g}"
+        within = (f"expected within {stiff['expected_error']:.2g} in v_norm of the rigid "
+                  f"reference {stiff['reference_velocity_norm']:.3g}")  # fmt: skip
+        if stiff["converged"]:
+            line("stiffness", f"stiff enough for the rigid grain's answer, {ratio}: {within}")
+        else:
+            line("stiffness", f"TOO SOFT for the rigid grain's answer: {ratio}, {within}, more "
+                 f"than the {stiff['allowed_error']:.2g} allowed; set {stiff['key']} >= "
+                 f"{stiff['value']:.3g}")  # fmt: skip
+    elif stiff:
         sign = "<=" if stiff["converged"] else ">"
         ratio = f"(omega / omega_bed)^2 = {stiff['compliance']:.2g} {sign} "
         ratio += f"{stiff['compliance_limit']:.2g}"
