@@ -23,6 +23,7 @@ from dem.pointmass.validate import (
     check_restitution,
     check_throw_number,
     check_transport_friction,
+    checked_arrays,
 )
 
 #: Regime labels, indexed by the integer codes returned by :func:`velocities`.
@@ -163,19 +164,14 @@ def velocities(
     The points run in parallel (numba prange); non-periodic points are rerun from
     ``PM_SPREAD_STARTS`` starting phases to give their mean and spread.
     """
-    inputs = (throw_number, angle, friction, inclination, eps_t, eps_n)
-    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in inputs))
-    g, phi, mu, alpha, et, en = (a.ravel() for a in arrays)
-    for key, values, check in (
-        ("throw_number", g, check_throw_number),
-        ("angle", phi, check_angle),
-        ("friction", mu, check_transport_friction),
-        ("inclination", alpha, check_inclination),
-        ("eps_t", et, check_restitution),
-        ("eps_n", en, check_restitution),
-    ):
-        for value in np.unique(values):
-            check(float(value), key)
+    g, phi, mu, alpha, et, en = checked_arrays({
+        "throw_number": (throw_number, check_throw_number),
+        "angle": (angle, check_angle),
+        "friction": (friction, check_transport_friction),
+        "inclination": (inclination, check_inclination),
+        "eps_t": (eps_t, check_restitution),
+        "eps_n": (eps_n, check_restitution),
+    })  # fmt: skip
     bounded = np.full(g.shape, IMPACT_LAWS[check_impact(impact)])
     params = np.column_stack(
         [g, np.tan(np.radians(phi)), np.tan(np.radians(alpha)), mu, et, en, bounded]

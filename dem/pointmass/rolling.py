@@ -90,10 +90,11 @@ from dem.errors import InputError
 from dem.pointmass import model
 from dem.pointmass.validate import (
     check_angle,
-    check_friction,
     check_inclination,
     check_restitution,
     check_throw_number,
+    check_transport_friction,
+    checked_arrays,
 )
 from dem.quantities import QUANTITIES
 
@@ -264,21 +265,16 @@ def velocities(
     """
     check_landing(landing)
     model.check_impact(impact)
-    inputs = (throw_number, angle, friction, inclination, eps_t, eps_n, inertia_factor, momentum)
-    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in inputs))
-    g, phi, mu, alpha, et, en, k, p = (a.ravel() for a in arrays)
-    for key, values, check in (
-        ("throw_number", g, check_throw_number),
-        ("angle", phi, check_angle),
-        ("friction", mu, check_friction),
-        ("inclination", alpha, check_inclination),
-        ("eps_t", et, check_restitution),
-        ("eps_n", en, check_restitution),
-        ("inertia_factor", k, check_inertia_factor),
-        ("momentum", p, check_momentum),
-    ):
-        for value in np.unique(values):
-            check(float(value), key)
+    g, phi, mu, alpha, et, en, k, p = checked_arrays({
+        "throw_number": (throw_number, check_throw_number),
+        "angle": (angle, check_angle),
+        "friction": (friction, check_transport_friction),
+        "inclination": (inclination, check_inclination),
+        "eps_t": (eps_t, check_restitution),
+        "eps_n": (eps_n, check_restitution),
+        "inertia_factor": (inertia_factor, check_inertia_factor),
+        "momentum": (momentum, check_momentum),
+    })  # fmt: skip
     # the slip is the point mass at mu' and eps_t' (module docstring)
     slip = model.velocities(
         g, phi, slip_friction(mu, k), alpha, slip_restitution(et, k, landing), en, impact
@@ -356,7 +352,7 @@ def velocity(
     """
     check_throw_number(throw_number)
     check_angle(angle)
-    check_friction(friction)
+    check_transport_friction(friction)
     check_inclination(inclination)
     check_restitution(eps_t, "eps_t")
     check_restitution(eps_n, "eps_n")

@@ -4,6 +4,10 @@ Each raises :class:`dem.errors.InputError` naming the key (the caller's spelling
 the allowed range, in the same words the case reader and the command line use.
 """
 
+from collections.abc import Callable
+
+import numpy as np
+
 from dem.errors import InputError
 from dem.quantities import FRICTIONLESS_WHY, QUANTITIES
 
@@ -44,3 +48,17 @@ def check_restitution(value: float, key: str) -> float:
 def check_positive(value: float, key: str) -> float:
     """A strictly positive quantity of the table named ``key`` (frequency, amplitude...)."""
     return QUANTITIES[key].check(value, key)
+
+
+def checked_arrays(inputs: dict[str, tuple[object, Callable[[float, str], float]]]) -> list:
+    """The inputs broadcast together and flattened, each distinct value checked by its key.
+
+    ``inputs`` maps a key (as errors name it) to (value or array, its check): the vectorised
+    point-mass functions take scalars and arrays alike and refuse any bad element by name.
+    """
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v, _ in inputs.values()))
+    flat = [a.ravel() for a in arrays]
+    for (key, (_, check)), values in zip(inputs.items(), flat, strict=True):
+        for value in np.unique(values):
+            check(float(value), key)
+    return flat

@@ -18,7 +18,6 @@ Coulomb-bounded point mass at the same drive and material.
 """
 
 import argparse
-import csv
 import dataclasses
 import json
 import math
@@ -41,6 +40,7 @@ from dem.pointmass import rolling  # noqa: E402
 from dem.scene.case import load_case  # noqa: E402
 from dem.studies.calibrate import measure_impact  # noqa: E402
 from validation._lib.header import results_header  # noqa: E402
+from validation._lib.tables import read_rows, write_rows  # noqa: E402
 
 SETTLE, CYCLES = 30, 20
 #: Drives chosen (not drawn) where the two landing laws of the rolling sphere differ most over
@@ -199,24 +199,11 @@ def run_impacts():
 
 
 def write_csv(rows, name):
-    path = HERE / name
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {path}")
+    print(f"wrote {write_rows(HERE / name, rows)}")
 
 
 def read_csv(name):
-    with open(HERE / name) as fh:
-        rows = list(csv.DictReader(fh))
-    for r in rows:
-        for k, v in r.items():
-            try:
-                r[k] = float(v)
-            except ValueError:
-                r[k] = {"True": True, "False": False}.get(v, v)
-    return rows
+    return read_rows(HERE / name)
 
 
 def run_drives():

@@ -14,22 +14,21 @@ against c, from which ``dem plan`` and the summary take the single grain's warni
 
 from __future__ import annotations
 
-import csv
 import json
 import sys
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-
-from _lib.header import results_header  # noqa: E402
+sys.path.insert(0, str(HERE.parents[1]))
 
 from dem import pointmass  # noqa: E402
 from dem.run.runner import run_case  # noqa: E402
 from dem.run.stiffness import bed_mode  # noqa: E402
 from dem.scene.case import load_case  # noqa: E402
 from dem.scene.resolved import resolve  # noqa: E402
+from validation._lib.header import results_header  # noqa: E402
+from validation._lib.tables import write_rows  # noqa: E402
 
 CASE = HERE.parents[1] / "cases" / "single-sphere"
 #: (Gamma, phi deg, mu, alpha deg): level sliding drives, and uphill near the threshold (the
@@ -63,10 +62,7 @@ def main() -> None:
                 "error_per_compliance": (dem_v - pm) / c, "settle_cycles": s["settle_cycles"],
             })  # fmt: skip
             print(json.dumps(rows[-1]), flush=True)
-    with open(HERE / "results.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows(HERE / "results.csv", rows)
     worst = max(abs(r["error_per_compliance"]) for r in rows)
     doc = results_header("validation/single-grain-stiffness/run.py", dated=True)
     doc |= {"wall_time_s": time.time() - started, "worst_error_per_compliance": worst,

@@ -27,11 +27,10 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-
-from _lib.header import results_header  # noqa: E402
+sys.path.insert(0, str(HERE.parents[1]))
 
 from dem.physics import measure  # noqa: E402
+from validation._lib.header import results_header  # noqa: E402
 
 Z = 3.0
 RUNS = 1000
