@@ -158,6 +158,39 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     assert hist[0, 3] > 0.0
 
 
+def _wall_impact(e_n, vz=-0.3, vx=0.2, dt=1.0e-6, steps=4000):
+    """Step one wall contact of a locked sphere by hand (no gravity): the normal forces and the
+    normal velocity after ``steps`` steps or at separation."""
+    p = ContactLaw.from_case(_case("hertz_mindlin", 2.0e9, e_n=e_n)).params
+    hist = np.zeros((1, contact.HISTORY_WIDTH["impact"]))
+    x, forces = 0.0, []
+    for _ in range(steps):
+        x += -vz * dt
+        if x <= 0.0:
+            break
+        f = contact.contact_force(
+            1, p, 0.0, 0.0, 1.0, x, vx, 0.0, vz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            RADIUS - x, 0.0, RADIUS - x, 0.0, MASS, RADIUS, hist, 0, dt,
+        )  # fmt: skip
+        forces.append(f[9])
+        vz += f[2] / MASS * dt
+        vx += f[0] / MASS * dt
+    return np.array(forces), vz, x
+
+
+def test_a_plastic_impact_returns_no_normal_speed_and_never_pulls():
+    """eps_n = 0 under the impact law is perfectly plastic (contact.plastic_normal): the impact
+    stops the approach, takes back only the last step's overshoot (one step's pull, at most one
+    step's force) and leaves the sphere at rest in its dent; the law before left e_n = 0.135."""
+    forces, vz, x = _wall_impact(0.0)
+    assert abs(vz) < 1e-12 and x > 0.0, "at rest in the dent, no rebound"
+    pulls = forces[forces < 0.0]
+    assert len(pulls) == 1 and -pulls[0] < 0.05 * forces.max()
+    # eps_n > 0: the material law's own rebound, as before (dem.kernels.contact.params)
+    forces, vz, _ = _wall_impact(0.5)
+    assert vz == pytest.approx(0.5 * 0.3, rel=0.05)
+
+
 @pytest.mark.validation
 def test_the_kernels_reset_the_whole_history_row_when_a_contact_breaks():
     case = _case()
@@ -197,6 +230,17 @@ def test_hopping_block_follows_the_coulomb_bounded_point_mass(gamma, e_t):
     case = _case(value=1.6e7, e_t=e_t).with_drive(angle=25.0, throw_number=gamma)
     v = _block_velocity(case)
     assert v == pytest.approx(coulomb_bounded_velocity(gamma, 25.0, 0.35, e_t), abs=0.02)
+
+
+@pytest.mark.validation
+@pytest.mark.parametrize("gamma", [1.2, 1.8, 5.5])
+def test_a_lone_hertz_grain_at_the_shipped_stiffness_follows_the_bounded_point_mass(gamma):
+    """Issue 46 item 2 (validation/hopping-bias): one sphere on Hertz's law at the beds' 2e9 Pa,
+    rotation locked, eps_n = 0, nothing calibrated, is within 1 % of the Coulomb-bounded point
+    mass, where the dashpot's eps_n = 0 left it 2-5 % fast."""
+    case = _case("hertz_mindlin", 2.0e9).with_drive(angle=25.0, throw_number=gamma)
+    pm = pointmass.velocity(gamma, 25.0, 0.35, 0.0, 0.8, 0.0, impact="coulomb").velocity_norm
+    assert _block_velocity(case, settle=30) == pytest.approx(pm, rel=0.01)
 
 
 def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
