@@ -179,13 +179,12 @@ def _wall_impact(e_n, vz=-0.3, vx=0.2, dt=1.0e-6, steps=4000):
 
 
 def test_a_plastic_impact_returns_no_normal_speed_and_never_pulls():
-    """eps_n = 0 under the impact law is perfectly plastic (contact.plastic_normal): the impact
-    stops the approach, takes back only the last step's overshoot (one step's pull, at most one
-    step's force) and leaves the sphere at rest in its dent; the law before left e_n = 0.135."""
+    """eps_n = 0 under the impact law is perfectly plastic (contact.plastic_normal): the material
+    law stops the approach, its last step capped at the force that stops it within the step, and
+    the sphere rests in its dent, never pulled; the law before left e_n = 0.135."""
     forces, vz, x = _wall_impact(0.0)
     assert abs(vz) < 1e-12 and x > 0.0, "at rest in the dent, no rebound"
-    pulls = forces[forces < 0.0]
-    assert len(pulls) == 1 and -pulls[0] < 0.05 * forces.max()
+    assert forces.min() >= 0.0
     # eps_n > 0: the material law's own rebound, as before (dem.kernels.contact.params)
     forces, vz, _ = _wall_impact(0.5)
     assert vz == pytest.approx(0.5 * 0.3, rel=0.05)

@@ -173,16 +173,17 @@ def test_the_impact_core_is_a_function_of_scalars(plastic):
         n, vt = _random_contact(rng)
         vn, fn = rng.normal(0.0, 0.3), abs(rng.normal(0.0, 2.0))
         h = [compiled, python]
+        stopped = False
         if plastic:
             normal = (vn, 2e-4, p[contact.P_STICK_RATE], p[contact.P_STICK_ZETA], 1e-6)
             fa = contact.plastic_normal(fn, *normal, compiled[3], compiled[4])
             fb = contact.plastic_normal.py_func(fn, *normal, python[3], python[4])
             assert fa == fb
             h = [(*compiled[:3], fa[1], compiled[4]), (*python[:3], fb[1], python[4])]
-            fn = fa[0]
+            fn, stopped = fa[0], fa[3]
         state = (*n, vn, fn, *vt, 3e5, 1e-4, 1e-6)
-        a = contact.impact_tangential(*args, *state, *h[0], plastic)
-        b = contact.impact_tangential.py_func(*args, *state, *h[1], plastic)
+        a = contact.impact_tangential(*args, *state, *h[0], plastic, stopped)
+        b = contact.impact_tangential.py_func(*args, *state, *h[1], plastic, stopped)
         assert a == b
         compiled, python = a[3:], b[3:]
         if plastic:

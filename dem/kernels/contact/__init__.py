@@ -76,11 +76,12 @@ with the tangential force F_t by one of two conventions (``[contact] tangential`
   With eps_n = 0 the contact is perfectly plastic (:func:`plastic_normal`; ``P_PLASTIC``): the
   normal dashpot alone would return e_n = 0.135 of the approach speed, or, pulling, catch the
   grain back and hold it after its load has gone (a lone Hertz grain at 2e9 Pa hopped 2-5 % fast
-  for it, validation/hopping-bias). So it never pulls, its impact ends with the normal relative
-  velocity zero (normal impulse m* |v_n0|: e_n = 0 above; the impact ends when the approach
-  stops), and it unloads rigidly on a normal stick sized by the step like the tangential one,
-  capped by the material force and by zero: Walton and Braun's elastic-plastic contact with the
-  stiffest unloading branch the step resolves. h4 then holds the normal stick's force.
+  for it, validation/hopping-bias). So it never pulls; the material law stops the approach, its
+  last step capped at the force that stops it within the step (normal impulse m* |v_n0|: e_n = 0
+  above; the impact ends in that step); and it then unloads rigidly on a normal stick sized by
+  the step (:data:`dem.config.DEM_NORMAL_STICK_RATE`), from zero force, capped by the material
+  force and by zero: Walton and Braun's elastic-plastic contact with the stiffest unloading
+  branch the step resolves. h4 then holds the normal stick's force.
 
 Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directional torque):
 w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
@@ -155,6 +156,7 @@ from dem.kernels.contact.params import (
     P_MU,
     P_MU_ROLL,
     P_NORMAL_E,
+    P_NORMAL_STICK_RATE,
     P_PLASTIC,
     P_SLIP_ARM,
     P_STICK_RATE,
@@ -210,6 +212,7 @@ __all__ = [
     "P_MU",
     "P_MU_ROLL",
     "P_NORMAL_E",
+    "P_NORMAL_STICK_RATE",
     "P_PLASTIC",
     "P_SLIP_ARM",
     "P_STICK_RATE",

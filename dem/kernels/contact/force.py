@@ -29,6 +29,7 @@ from dem.kernels.contact.params import (
     P_MASS_T,
     P_MU,
     P_MU_ROLL,
+    P_NORMAL_STICK_RATE,
     P_PLASTIC,
     P_SLIP_ARM,
     P_STICK_RATE,
@@ -90,13 +91,15 @@ def contact_core(
     if tangential == IMPACT:
         plastic = p[P_PLASTIC] != 0.0
         fs = h4
+        stopped = False
         if plastic:  # eps_n = 0: the perfectly plastic contact; h4 holds its stick's force
-            fn, h3, fs = plastic_normal(fn, vn, p[P_MASS_N] * m_eff, p[P_STICK_RATE],
-                                        p[P_STICK_ZETA], dt, h3, h4)  # fmt: skip
+            fn, h3, fs, stopped = plastic_normal(fn, vn, p[P_MASS_N] * m_eff,
+                                                 p[P_NORMAL_STICK_RATE], p[P_STICK_ZETA], dt,
+                                                 h3, h4)  # fmt: skip
         ftx, fty, ftz, h0, h1, h2, h3, h4 = impact_tangential(
             p[P_IMPACT_RATIO], p[P_IMPACT_CAP], p[P_MU], p[P_MASS_T], p[P_STICK_RATE],
             p[P_STICK_ZETA], nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt,
-            h0, h1, h2, h3, h4, plastic,
+            h0, h1, h2, h3, h4, plastic, stopped,
         )  # fmt: skip
         if plastic:
             h4 = fs

@@ -132,7 +132,7 @@ def spring_step(s0, s1, s2, vtx, vty, vtz, nx, ny, nz, dt):
 @numba.njit(**NUMBA_OPTIONS)
 def impact_tangential(
     impact_ratio, impact_cap, mu, mass_t, stick_rate, stick_zeta,
-    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4, plastic,
+    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4, plastic, stopped,
 ):  # fmt: skip
     """Tangential sub-model "impact" (module docstring): force and the contact's new history.
 
@@ -144,7 +144,7 @@ def impact_tangential(
     or the stick's spring s (enduring). Parameters: ``impact_ratio`` (1 - eps_t) / (1 + e_n),
     ``impact_cap`` the largest c, ``mu``, ``mass_t`` f_t, ``stick_rate`` alpha and
     ``stick_zeta`` of the stick, ``plastic`` True for the perfectly plastic normal contact
-    (eps_n = 0), whose impact ends when its approach has stopped (v_n >= 0: it has no
+    (eps_n = 0), whose impact ends in the step its approach stops (``stopped``: it has no
     restitution phase), else when the separating speed stops growing.
 
     Returns (F_t, h) as eight floats.
@@ -188,7 +188,7 @@ def impact_tangential(
         theta = phase - 1.0 + dt * math.sqrt(kn / m_eff)
         slip = vtx * cx + vty * cy + vtz * cz
         if plastic:
-            over = vn >= 0.0
+            over = stopped
         else:
             over = vn > 0.0 and vn <= h4
         stuck = slip <= 0.0 and cx * cx + cy * cy + cz * cz > 0.0
@@ -217,33 +217,38 @@ def plastic_normal(fn, vn, m_n, stick_rate, stick_zeta, dt, phase, fs):
 
     - while the contact approaches (an impact, phase > 0, a new contact with v_n < 0, or -2:
       the impact's slip has stopped but the approach goes on) the force is the material law's,
-      never below zero: the approach is stopped by Hertz's (or the linear) spring and damping;
-    - in the step its approach has stopped (v_n >= 0) the force takes the relative normal
-      velocity back to zero, -m_n v_n / dt (the last step's overshoot, at most one step's
-      increment), and the elastic energy the impact stored is dissipated: the normal impulse
-      of the impact is m* v_n0, Newton's impact law with eps_n = 0;
-    - after that (enduring) the contact unloads rigidly: a stick spring-dashpot sized by the
-      time step (the tangential stick's alpha and zeta, :data:`dem.config.DEM_STICK_RATE`,
-      k = m_n (alpha / dt)^2, gamma = 2 zeta alpha m_n / dt) from zero force at that step,
-      capped at the material force (loading beyond the dent follows the material law, the
-      spring reset to match) and at zero (it never pulls; the anchor follows a grain that
-      leaves). As dt shrinks it converges to a rigid support.
+      but never more than m_n |v_n| / dt, the force that stops the approach within the step
+      (velocity Verlet changes v_n by F dt / m_n from this half step to the next), and never
+      below zero: the approach is stopped by Hertz's (or the linear) spring and damping, and
+      the normal impulse of the impact is m* |v_n0|, Newton's impact law with eps_n = 0;
+    - in the step the approach stops (the cap binds, or v_n >= 0) the elastic energy the impact
+      stored is dissipated, and the contact then unloads rigidly: a stick spring-dashpot sized
+      by the time step (``stick_rate`` alpha_n, :data:`dem.config.DEM_NORMAL_STICK_RATE`, and the
+      tangential stick's zeta: k = m_n (alpha_n / dt)^2, gamma = 2 zeta alpha_n m_n / dt) from
+      zero force, capped at the
+      material force (loading beyond the dent follows the material law, the spring reset to
+      match) and at zero (it never pulls; the anchor follows a grain that leaves). As dt
+      shrinks it converges to a rigid support.
 
     This is Walton and Braun's elastic-plastic contact with an unloading branch as stiff as the
     step resolves (its restitution sqrt(k_load / k_unload) -> 0). ``m_n`` is the contact's
     normal effective mass f_n m*, ``phase`` the contact's phase (h3 of
     :func:`impact_tangential`), ``fs`` the stick's spring force (h4; 0 for a new contact).
 
-    Returns (F_n, phase, fs): the normal force, N, the phase (-2 becomes -1 when the approach
-    stops) and the stick's new spring force, N.
+    Returns (F_n, phase, fs, stopped): the normal force, N, the phase (-2 becomes -1 when the
+    approach stops), the stick's new spring force, N, and whether the approach stopped in this
+    step (the impact's end, :func:`impact_tangential`).
     """
     if fn < 0.0:
         fn = 0.0
     approaching = phase > 0.0 or phase == -2.0 or (phase == 0.0 and vn < 0.0)
     if approaching:
-        if vn < 0.0:
-            return fn, phase, 0.0
-        return -m_n * vn / dt, (-1.0 if phase == -2.0 else phase), 0.0
+        stop = -m_n * vn / dt
+        if fn < stop:
+            return fn, phase, 0.0, False
+        if stop < 0.0:
+            stop = 0.0
+        return stop, (-1.0 if phase == -2.0 else phase), 0.0, True
     ks = m_n * stick_rate * stick_rate / (dt * dt)
     gs = 2.0 * stick_zeta * stick_rate * m_n / dt
     fs -= ks * vn * dt
@@ -254,7 +259,7 @@ def plastic_normal(fn, vn, m_n, stick_rate, stick_zeta, dt, phase, fs):
     if f < 0.0:
         f = 0.0
         fs = gs * vn
-    return f, phase, fs
+    return f, phase, fs, False
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)

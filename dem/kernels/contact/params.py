@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from dem.config import (
+    DEM_NORMAL_STICK_RATE,
     DEM_STICK_DAMPING_RATIO,
     DEM_STICK_RATE,
     DEM_TANGENTIAL_DAMPING_RATIO,
@@ -50,7 +51,8 @@ P_DAMP_T_SCALE = 22  #: tangential dashpot: B_t
 P_SLIP_ARM = 23  #: 1.0: the slip velocity takes the full radii (:data:`SLIP_LEVER_ARMS`), else 0.0
 P_PLASTIC = 24  #: "impact" with eps_n = 0: 1.0, the perfectly plastic normal contact, else 0.0
 P_MASS_N = 25  #: "impact", plastic: f_n, the normal stick's effective mass f_n m*
-N_PARAMS = 26
+P_NORMAL_STICK_RATE = 26  #: "impact", plastic: alpha_n, the normal stick's rate (rad per step)
+N_PARAMS = 27
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
@@ -144,6 +146,7 @@ def make_params(
     restitution_tangential: float = 0.8,
     stick_rate: float = DEM_STICK_RATE,
     stick_damping_ratio: float = DEM_STICK_DAMPING_RATIO,
+    normal_stick_rate: float = DEM_NORMAL_STICK_RATE,
     beta: float | None = None,
 ) -> np.ndarray:
     """Pack a law's sub-model coefficients into the kernels' ``params`` array, (N_PARAMS,).
@@ -154,8 +157,9 @@ def make_params(
     ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
     ``tangential_damping_ratio`` zeta_t is used by "coulomb" only, ``tangential_mass_factor`` f_t
     by "coulomb" and "impact"; "impact" uses ``restitution_tangential`` eps_t, ``stick_rate``
-    alpha and ``stick_damping_ratio``, and with eps_n = 0 ``normal_mass_factor`` f_n (its
-    plastic normal contact's effective mass f_n m*, :func:`_impact_params`). ``beta`` overrides
+    alpha and ``stick_damping_ratio``, and with eps_n = 0 ``normal_mass_factor`` f_n and
+    ``normal_stick_rate`` alpha_n (its plastic normal contact's stick: effective mass f_n m*,
+    alpha_n rad a step, :func:`_impact_params`). ``beta`` overrides
     the damping parameter derived from ``restitution`` (over-critical damping, beta < -1, for
     studies). ``wall_lever_arm`` is a key
     of :data:`WALL_LEVER_ARMS`, ``slip_lever_arm`` one of :data:`SLIP_LEVER_ARMS`.
@@ -186,6 +190,7 @@ def make_params(
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
     p[P_MASS_N] = normal_mass_factor
+    p[P_NORMAL_STICK_RATE] = normal_stick_rate
     p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
     p[P_SLIP_ARM] = SLIP_LEVER_ARMS[slip_lever_arm]
     _normal_params(p, model)
