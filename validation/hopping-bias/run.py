@@ -6,6 +6,7 @@ Regenerates the CSV files, results.json and the figures of this folder (README.m
     .venv/bin/python validation/hopping-bias/run.py cause      # per-step traces, ~1 min
     .venv/bin/python validation/hopping-bias/run.py stiffness  # E and dt scans, ~8 min
     .venv/bin/python validation/hopping-bias/run.py screw      # the locked screw, ~1 min
+    .venv/bin/python validation/hopping-bias/run.py stick      # the normal stick's rate, ~3 min
     .venv/bin/python validation/hopping-bias/run.py beds       # shipped beds, 2 fills, ~12 min
     .venv/bin/python validation/hopping-bias/run.py all
     .venv/bin/python validation/hopping-bias/run.py figures    # redraw from the CSV files
@@ -525,6 +526,61 @@ def run_screw():
     return rows
 
 
+# --- the normal stick's rate ----------------------------------------------------------------------
+
+
+#: The plastic contact's normal stick rates compared (rad a step; the default is
+#: dem.config.DEM_NORMAL_STICK_RATE).
+NORMAL_STICK_RATES = (0.25, 0.35, 0.5)
+
+
+@contextlib.contextmanager
+def normal_stick(rate):
+    """Within it, laws are built with the plastic contact's normal stick at ``rate``."""
+    defaults = dict(_MAKE_PARAMS.__kwdefaults__)
+    _MAKE_PARAMS.__kwdefaults__["normal_stick_rate"] = rate
+    try:
+        yield
+    finally:
+        _MAKE_PARAMS.__kwdefaults__.clear()
+        _MAKE_PARAMS.__kwdefaults__.update(defaults)
+
+
+def run_stick():
+    """The normal stick's rate: screws at rest on a floor tilted to 0.9 of the friction angle
+    (drive off, 0.1 s after their fill came to rest; 40 screws in a short section, as
+    tests/physics/test_impact_law.py, and the shipped 200), each contact carrying the tangential
+    stick too; and the lone grain at Gamma 1.8."""
+    from dem.engine.setup import from_case
+
+    incline = math.degrees(math.atan(0.9 * 0.35))
+    rows = []
+    for rate in NORMAL_STICK_RATES:
+        with normal_stick(rate):
+            for count, keys in ((40, {"particles.count": 40, "trough.length": 0.05,
+                                      "trough.width": 0.04}), (200, {})):  # fmt: skip
+                t0 = time.perf_counter()
+                case = load_case(ROOT / "cases" / "screw-trough",
+                                 {**keys, "trough.inclination": incline})  # fmt: skip
+                sim = from_case(case)
+                sim.settle()
+                speeds = []
+                for _ in range(10):
+                    sim.run(round(0.01 / sim.dt))
+                    speeds.append(sim.rms_speed())
+                rows.append({"normal_stick_rate": rate, "what": f"{count} screws at rest, tilted",
+                             "rms_speed_m_s": speeds[-1], "largest_rms_speed_m_s": max(speeds),
+                             "wall_time_s": round(time.perf_counter() - t0, 1)})  # fmt: skip
+                print(rows[-1], flush=True)
+            g = grain_row("plastic", 1.8, group="stick")
+            rows.append({"normal_stick_rate": rate, "what": "one grain, Gamma 1.8, v_norm",
+                         "rms_speed_m_s": g["dem_velocity_norm"], "largest_rms_speed_m_s": "",
+                         "wall_time_s": g["wall_time_s"]})  # fmt: skip
+            print(rows[-1], flush=True)
+    write_csv(rows, "stick.csv")
+    return rows
+
+
 # --- the shipped beds ----------------------------------------------------------------------------
 
 
@@ -704,14 +760,14 @@ def figures():
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parts_all = ("drives", "cause", "stiffness", "screw", "beds")
+    parts_all = ("drives", "cause", "stiffness", "screw", "stick", "beds")
     parser.add_argument("part", choices=(*parts_all, "all", "figures"))
     args = parser.parse_args()
     parts = parts_all if args.part == "all" else (args.part,)
     path = HERE / "results.json"
     record = json.loads(path.read_text()) if path.exists() else {}
     run = {"drives": run_drives, "cause": run_cause, "stiffness": run_stiffness,
-           "screw": run_screw, "beds": run_beds}  # fmt: skip
+           "screw": run_screw, "stick": run_stick, "beds": run_beds}  # fmt: skip
     for part in parts:
         if part == "figures":
             continue
