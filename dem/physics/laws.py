@@ -305,6 +305,8 @@ class ContactLaw:
             out["stick_damping_ratio"] = float(p[contact.P_STICK_ZETA])
             out["normal_law_restitution"] = float(p[contact.P_NORMAL_E])
             out["plastic"] = bool(p[contact.P_PLASTIC])
+            if out["plastic"]:
+                out["normal_stick_rate"] = float(p[contact.P_NORMAL_STICK_RATE])
         f_w = float(p[contact.P_WALL_ARM])
         out["wall_lever_arm"] = next(k for k, v in contact.WALL_LEVER_ARMS.items() if v == f_w)
         a = float(p[contact.P_SLIP_ARM])

@@ -242,12 +242,13 @@ def test_a_lone_hertz_grain_at_the_shipped_stiffness_follows_the_bounded_point_m
     assert _block_velocity(case, settle=30) == pytest.approx(pm, rel=0.01)
 
 
-def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
+def _tilted_screw_bed_speed(monkeypatch, **sticks) -> float:
     """rms speed of 40 screws at rest on a floor tilted to 0.9 of the friction angle, drive
     off, 0.1 s after their fill came to rest (validation/impact-law stick_creep.csv is the
-    200-screw version)."""
-    if stick_rate is not None:
-        defaults = dict(contact.make_params.__kwdefaults__, stick_rate=stick_rate)
+    200-screw version); ``sticks``: ``stick_rate`` or ``normal_stick_rate`` other than the
+    defaults."""
+    if sticks:
+        defaults = dict(contact.make_params.__kwdefaults__, **sticks)
         monkeypatch.setattr(contact.make_params, "__kwdefaults__", defaults)
     incline = math.degrees(math.atan(0.9 * 0.35))
     case = load_case("cases/screw-trough", {
@@ -264,8 +265,11 @@ def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
 def test_a_screw_bed_at_rest_below_the_friction_angle_stays_at_rest_under_the_default_stick(
     monkeypatch,
 ):
-    """The default stick (0.5 rad a step) holds a bed whose screws share several sticking
-    contacts; a stick past the explicit limit (1.2 rad a step) chatters against its Coulomb cap
-    and never rests (no instability guard sees it: the cap bounds it)."""
+    """The default sticks (0.5 rad a step tangential, 0.25 normal: eps_n = 0's plastic contact)
+    hold a bed whose screws share several sticking contacts; a tangential stick past the
+    explicit limit (1.2 rad a step) chatters against its Coulomb cap and never rests (no
+    instability guard sees it: the cap bounds it), and so does a normal stick of 0.5 beside the
+    tangential one (validation/hopping-bias, run.py stick)."""
     assert _tilted_screw_bed_speed(monkeypatch) < 1e-9
     assert _tilted_screw_bed_speed(monkeypatch, stick_rate=1.2) > 1e-6
+    assert _tilted_screw_bed_speed(monkeypatch, normal_stick_rate=0.5) > 1e-6
