@@ -78,6 +78,14 @@ DEM_TANGENTIAL_DAMPING_RATIO = 0.3
 #: by the Coulomb cap; at (0.5, 0.5) it rests to 1e-14 m/s, as at 0.2.
 DEM_STICK_RATE = 0.5
 DEM_STICK_DAMPING_RATIO = 0.5
+#: ``"impact"`` with eps_n = 0: the plastic contact's normal stick (its rigid unloading,
+#: dem.kernels.contact.plastic_normal), angular frequency DEM_NORMAL_STICK_RATE / dt on the
+#: contact's normal mass, damping ratio DEM_STICK_DAMPING_RATIO. Chosen by the same bed as the
+#: tangential stick (validation/hopping-bias, ``run.py stick``): 40 screws at rest on a floor
+#: tilted to 0.9 of the friction angle, whose contacts now carry both sticks, rest to 4e-20 m/s
+#: (rms) at 0.25 and 5e-16 at 0.35, and chatter at 2e-3 m/s at 0.5 (200 screws: 7e-20, 5e-20,
+#: 2e-9); the lone grain's v_norm moves by less than 1e-6 between 0.25 and 0.5.
+DEM_NORMAL_STICK_RATE = 0.25
 #: Driven cycles before measuring in an exported deck of a case whose ``run.settle_cycles`` is
 #: "auto" and no earlier dem run reports the detected number: the shipped bulk cases' detected
 #: transients were 6-12 cycles (their summary.json), so 20 covers them with margin.

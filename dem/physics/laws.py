@@ -109,13 +109,14 @@ def _liggghts_coefficients(case) -> dict:
 
 
 def _impact_coefficients(case) -> dict:
-    """f_t of the grain; the impact ratio and the stick follow from eps_n, eps_t and dt."""
+    """f_t and f_n of the grain; the impact ratio and the sticks follow from eps_n, eps_t, dt."""
     pt = case.particles
     factor = tangential_fit.tangential_mass_factor(pt.shape, pt.rotation, pt.grain)
     return {
         "tangential_stiffness_ratio": 0.0,
         "tangential_damping_ratio": 0.0,
         "tangential_mass_factor": factor,
+        "normal_mass_factor": tangential_fit.normal_mass_factor(pt.shape, pt.rotation, pt.grain),
     }
 
 
@@ -162,8 +163,9 @@ TANGENTIAL_LAWS = {
         liggghts_as="liggghts",
         liggghts_note=(
             "the case's impact-aware tangential law ([contact] tangential = 'impact': "
-            "eps_t per impact, then a rigid stick) has no LIGGGHTS equivalent; this deck uses "
-            "LIGGGHTS's history law, as dem's tangential = 'liggghts'"
+            "eps_t per impact, then a rigid stick; with eps_n = 0 a perfectly plastic normal "
+            "contact that never pulls) has no LIGGGHTS equivalent; this deck uses LIGGGHTS's "
+            "history law, as dem's tangential = 'liggghts'"
         ),
         calibration=(
             "contact.tangential = 'impact' delivers eps_t by construction (each impact "
@@ -302,6 +304,9 @@ class ContactLaw:
             out["stick_rate"] = float(p[contact.P_STICK_RATE])
             out["stick_damping_ratio"] = float(p[contact.P_STICK_ZETA])
             out["normal_law_restitution"] = float(p[contact.P_NORMAL_E])
+            out["plastic"] = bool(p[contact.P_PLASTIC])
+            if out["plastic"]:
+                out["normal_stick_rate"] = float(p[contact.P_NORMAL_STICK_RATE])
         f_w = float(p[contact.P_WALL_ARM])
         out["wall_lever_arm"] = next(k for k, v in contact.WALL_LEVER_ARMS.items() if v == f_w)
         a = float(p[contact.P_SLIP_ARM])

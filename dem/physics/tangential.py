@@ -191,3 +191,16 @@ def tangential_mass_factor(shape: str, rotation: bool, template=None) -> float:
     if shape == "sphere":
         return 2.0 / 7.0
     return float(template.contact_mass() / template.mass)
+
+
+def normal_mass_factor(shape: str, rotation: bool, template=None) -> float:
+    """f_n: the normal effective mass of a contact over its m* (the plastic contact's stick).
+
+    A sphere pushed along the normal through its centre moves as its whole mass, rolling or
+    not: 1. Rotation locked: 1. A clump that rotates: its contact mass over its mass, as
+    :func:`tangential_mass_factor` (the smallest effective mass of any surface point in any
+    direction, so that the stick sized by the step stays within the step's limit).
+    """
+    if not rotation or shape == "sphere":
+        return 1.0
+    return float(template.contact_mass() / template.mass)

@@ -265,7 +265,9 @@ def test_run_case_writes_summary(tmp_path):
     assert math.isfinite(summary["mean_velocity"])
     # the tangential coefficients the run used: the impact law's, rolling spheres
     assert on_disk["tangential"] == "impact" and on_disk["tangential_mass_factor"] == 2 / 7
-    assert on_disk["stick_rate"] > 0.0 and on_disk["normal_law_restitution"] > 0.0
+    assert on_disk["stick_rate"] > 0.0 and on_disk["normal_stick_rate"] > 0.0
+    # eps_n = 0: the plastic contact, whose impacts return none of the approach speed
+    assert on_disk["plastic"] and on_disk["normal_law_restitution"] == 0.0
 
 
 @pytest.mark.validation

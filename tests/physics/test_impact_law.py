@@ -158,6 +158,38 @@ def test_force_is_continuous_at_the_switch_and_a_new_contact_starts_an_impact():
     assert hist[0, 3] > 0.0
 
 
+def _wall_impact(e_n, vz=-0.3, vx=0.2, dt=1.0e-6, steps=4000):
+    """Step one wall contact of a locked sphere by hand (no gravity): the normal forces and the
+    normal velocity after ``steps`` steps or at separation."""
+    p = ContactLaw.from_case(_case("hertz_mindlin", 2.0e9, e_n=e_n)).params
+    hist = np.zeros((1, contact.HISTORY_WIDTH["impact"]))
+    x, forces = 0.0, []
+    for _ in range(steps):
+        x += -vz * dt
+        if x <= 0.0:
+            break
+        f = contact.contact_force(
+            1, p, 0.0, 0.0, 1.0, x, vx, 0.0, vz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            RADIUS - x, 0.0, RADIUS - x, 0.0, MASS, RADIUS, hist, 0, dt,
+        )  # fmt: skip
+        forces.append(f[9])
+        vz += f[2] / MASS * dt
+        vx += f[0] / MASS * dt
+    return np.array(forces), vz, x
+
+
+def test_a_plastic_impact_returns_no_normal_speed_and_never_pulls():
+    """eps_n = 0 under the impact law is perfectly plastic (contact.plastic_normal): the material
+    law stops the approach, its last step capped at the force that stops it within the step, and
+    the sphere rests in its dent, never pulled; the law before left e_n = 0.135."""
+    forces, vz, x = _wall_impact(0.0)
+    assert abs(vz) < 1e-12 and x > 0.0, "at rest in the dent, no rebound"
+    assert forces.min() >= 0.0
+    # eps_n > 0: the material law's own rebound, as before (dem.kernels.contact.params)
+    forces, vz, _ = _wall_impact(0.5)
+    assert vz == pytest.approx(0.5 * 0.3, rel=0.05)
+
+
 @pytest.mark.validation
 def test_the_kernels_reset_the_whole_history_row_when_a_contact_breaks():
     case = _case()
@@ -199,12 +231,24 @@ def test_hopping_block_follows_the_coulomb_bounded_point_mass(gamma, e_t):
     assert v == pytest.approx(coulomb_bounded_velocity(gamma, 25.0, 0.35, e_t), abs=0.02)
 
 
-def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
+@pytest.mark.validation
+@pytest.mark.parametrize("gamma", [1.2, 1.8, 5.5])
+def test_a_lone_hertz_grain_at_the_shipped_stiffness_follows_the_bounded_point_mass(gamma):
+    """Issue 46 item 2 (validation/hopping-bias): one sphere on Hertz's law at the beds' 2e9 Pa,
+    rotation locked, eps_n = 0, nothing calibrated, is within 1 % of the Coulomb-bounded point
+    mass, where the dashpot's eps_n = 0 left it 2-5 % fast."""
+    case = _case("hertz_mindlin", 2.0e9).with_drive(angle=25.0, throw_number=gamma)
+    pm = pointmass.velocity(gamma, 25.0, 0.35, 0.0, 0.8, 0.0, impact="coulomb").velocity_norm
+    assert _block_velocity(case, settle=30) == pytest.approx(pm, rel=0.01)
+
+
+def _tilted_screw_bed_speed(monkeypatch, **sticks) -> float:
     """rms speed of 40 screws at rest on a floor tilted to 0.9 of the friction angle, drive
     off, 0.1 s after their fill came to rest (validation/impact-law stick_creep.csv is the
-    200-screw version)."""
-    if stick_rate is not None:
-        defaults = dict(contact.make_params.__kwdefaults__, stick_rate=stick_rate)
+    200-screw version); ``sticks``: ``stick_rate`` or ``normal_stick_rate`` other than the
+    defaults."""
+    if sticks:
+        defaults = dict(contact.make_params.__kwdefaults__, **sticks)
         monkeypatch.setattr(contact.make_params, "__kwdefaults__", defaults)
     incline = math.degrees(math.atan(0.9 * 0.35))
     case = load_case("cases/screw-trough", {
@@ -221,8 +265,11 @@ def _tilted_screw_bed_speed(monkeypatch, stick_rate=None) -> float:
 def test_a_screw_bed_at_rest_below_the_friction_angle_stays_at_rest_under_the_default_stick(
     monkeypatch,
 ):
-    """The default stick (0.5 rad a step) holds a bed whose screws share several sticking
-    contacts; a stick past the explicit limit (1.2 rad a step) chatters against its Coulomb cap
-    and never rests (no instability guard sees it: the cap bounds it)."""
+    """The default sticks (0.5 rad a step tangential, 0.25 normal: eps_n = 0's plastic contact)
+    hold a bed whose screws share several sticking contacts; a tangential stick past the
+    explicit limit (1.2 rad a step) chatters against its Coulomb cap and never rests (no
+    instability guard sees it: the cap bounds it), and so does a normal stick of 0.5 beside the
+    tangential one (validation/hopping-bias, run.py stick)."""
     assert _tilted_screw_bed_speed(monkeypatch) < 1e-9
     assert _tilted_screw_bed_speed(monkeypatch, stick_rate=1.2) > 1e-6
+    assert _tilted_screw_bed_speed(monkeypatch, normal_stick_rate=0.5) > 1e-6

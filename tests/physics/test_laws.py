@@ -155,13 +155,16 @@ def test_coefficients_are_the_formulas_of_the_docstring(model, tangential):
         assert (kn, gn, kt, gt) == pytest.approx((want_kn, want_gn, want_kt, want_gt), rel=1e-12)
 
 
-def test_the_impact_core_is_a_function_of_scalars():
-    """impact_tangential runs as plain Python on floats (as in numba's CUDA simulator) and gives
-    the compiled result bit for bit over a random sequence of contact states."""
+@pytest.mark.parametrize("plastic", [False, True])
+def test_the_impact_core_is_a_function_of_scalars(plastic):
+    """impact_tangential and plastic_normal run as plain Python on floats (as in numba's CUDA
+    simulator) and give the compiled result bit for bit over a random sequence of contact
+    states, the plastic contact's (eps_n = 0) and the other's."""
     p = contact.make_params(
-        model="hertz_mindlin", youngs_modulus=5e7, restitution=0.0, friction=0.35,
-        tangential="impact", tangential_mass_factor=1.0,
+        model="hertz_mindlin", youngs_modulus=5e7, restitution=0.0 if plastic else 0.3,
+        friction=0.35, tangential="impact", tangential_mass_factor=1.0,
     )  # fmt: skip
+    assert p[contact.P_PLASTIC] == float(plastic)
     args = (p[contact.P_IMPACT_RATIO], p[contact.P_IMPACT_CAP], p[contact.P_MU],
             p[contact.P_MASS_T], p[contact.P_STICK_RATE], p[contact.P_STICK_ZETA])  # fmt: skip
     rng = np.random.default_rng(5)
@@ -169,10 +172,22 @@ def test_the_impact_core_is_a_function_of_scalars():
     for _ in range(200):
         n, vt = _random_contact(rng)
         vn, fn = rng.normal(0.0, 0.3), abs(rng.normal(0.0, 2.0))
+        h = [compiled, python]
+        stopped = False
+        if plastic:
+            normal = (vn, 2e-4, p[contact.P_STICK_RATE], p[contact.P_STICK_ZETA], 1e-6)
+            fa = contact.plastic_normal(fn, *normal, compiled[3], compiled[4])
+            fb = contact.plastic_normal.py_func(fn, *normal, python[3], python[4])
+            assert fa == fb
+            h = [(*compiled[:3], fa[1], compiled[4]), (*python[:3], fb[1], python[4])]
+            fn, stopped = fa[0], fa[3]
         state = (*n, vn, fn, *vt, 3e5, 1e-4, 1e-6)
-        a = contact.impact_tangential(*args, *state, *compiled)
-        b = contact.impact_tangential.py_func(*args, *state, *python)
+        a = contact.impact_tangential(*args, *state, *h[0], plastic, stopped)
+        b = contact.impact_tangential.py_func(*args, *state, *h[1], plastic, stopped)
         assert a == b
         compiled, python = a[3:], b[3:]
+        if plastic:
+            compiled = (*compiled[:4], fa[2])
+            python = (*python[:4], fb[2])
         if rng.random() < 0.1:  # the contact breaks: its history is reset
             compiled = python = (0.0, 0.0, 0.0, 0.0, 0.0)

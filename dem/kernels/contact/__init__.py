@@ -73,6 +73,16 @@ with the tangential force F_t by one of two conventions (``[contact] tangential`
 
   A contact that breaks (its history reset to zeros) starts a new impact when it re-forms.
 
+  With eps_n = 0 the contact is perfectly plastic (:func:`plastic_normal`; ``P_PLASTIC``): the
+  normal dashpot alone would return e_n = 0.135 of the approach speed, or, pulling, catch the
+  grain back and hold it after its load has gone (a lone Hertz grain at 2e9 Pa hopped 2-5 % fast
+  for it, validation/hopping-bias). So it never pulls; the material law stops the approach, its
+  last step capped at the force that stops it within the step (normal impulse m* |v_n0|: e_n = 0
+  above; the impact ends in that step); and it then unloads rigidly on a normal stick sized by
+  the step (:data:`dem.config.DEM_NORMAL_STICK_RATE`), from zero force, capped by the material
+  force and by zero: Walton and Braun's elastic-plastic contact with the stiffest unloading
+  branch the step resolves. h4 then holds the normal stick's force.
+
 Optional rolling resistance (LIGGGHTS ``rolling_model cdt``, constant directional torque):
 w_r = omega_i - omega_j without its normal part; tau_i -= mu_r |F_n| R* w_r / |w_r|,
 tau_j += the same.
@@ -115,6 +125,7 @@ from dem.kernels.contact.laws import (
     law_coefficients,
     liggghts_tangential,
     normal_scale,
+    plastic_normal,
     rolling_cdt,
     spring_step,
 )
@@ -140,10 +151,13 @@ from dem.kernels.contact.params import (
     P_KT_COEF,
     P_KT_RATIO,
     P_LIMIT_FORCE,
+    P_MASS_N,
     P_MASS_T,
     P_MU,
     P_MU_ROLL,
     P_NORMAL_E,
+    P_NORMAL_STICK_RATE,
+    P_PLASTIC,
     P_SLIP_ARM,
     P_STICK_RATE,
     P_STICK_ZETA,
@@ -193,10 +207,13 @@ __all__ = [
     "P_KT_COEF",
     "P_KT_RATIO",
     "P_LIMIT_FORCE",
+    "P_MASS_N",
     "P_MASS_T",
     "P_MU",
     "P_MU_ROLL",
     "P_NORMAL_E",
+    "P_NORMAL_STICK_RATE",
+    "P_PLASTIC",
     "P_SLIP_ARM",
     "P_STICK_RATE",
     "P_STICK_ZETA",
@@ -228,6 +245,7 @@ __all__ = [
     "normal_law_restitution",
     "normal_scale",
     "pair_arms",
+    "plastic_normal",
     "rayleigh_time",
     "tangent_stiffness",
     "youngs_modulus_from_star",

@@ -15,6 +15,7 @@ from dem.kernels.contact.laws import (
     impact_tangential,
     law_coefficients,
     liggghts_tangential,
+    plastic_normal,
     rolling_cdt,
     spring_step,
 )
@@ -24,9 +25,12 @@ from dem.kernels.contact.params import (
     P_IMPACT_CAP,
     P_IMPACT_RATIO,
     P_LIMIT_FORCE,
+    P_MASS_N,
     P_MASS_T,
     P_MU,
     P_MU_ROLL,
+    P_NORMAL_STICK_RATE,
+    P_PLASTIC,
     P_SLIP_ARM,
     P_STICK_RATE,
     P_STICK_ZETA,
@@ -61,7 +65,8 @@ def contact_core(
             (``[contact] slip_lever_arm``).
         m_eff, r_eff: m*, kg, and R*, m.
         h0, h1, h2, h3, h4: The contact's history (:data:`HISTORY_WIDTH`): the spring s (h0..h2);
-            "impact" adds its phase and the previous normal velocity (h3, h4), which the other
+            "impact" adds its phase and the previous normal velocity (h3, h4; with eps_n = 0
+            h4 is the plastic contact's stick force, :func:`plastic_normal`), which the other
             laws pass through unchanged.
         dt: Time step, s.
 
@@ -84,11 +89,20 @@ def contact_core(
     vtz = vrz - vn * nz - (wx * ny - wy * nx)
     tangential = p[P_TANGENTIAL]
     if tangential == IMPACT:
+        plastic = p[P_PLASTIC] != 0.0
+        fs = h4
+        stopped = False
+        if plastic:  # eps_n = 0: the perfectly plastic contact; h4 holds its stick's force
+            fn, h3, fs, stopped = plastic_normal(fn, vn, p[P_MASS_N] * m_eff,
+                                                 p[P_NORMAL_STICK_RATE], p[P_STICK_ZETA], dt,
+                                                 h3, h4)  # fmt: skip
         ftx, fty, ftz, h0, h1, h2, h3, h4 = impact_tangential(
             p[P_IMPACT_RATIO], p[P_IMPACT_CAP], p[P_MU], p[P_MASS_T], p[P_STICK_RATE],
             p[P_STICK_ZETA], nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt,
-            h0, h1, h2, h3, h4,
+            h0, h1, h2, h3, h4, plastic, stopped,
         )  # fmt: skip
+        if plastic:
+            h4 = fs
     else:
         # tangential spring: increment, then project onto the current tangent plane
         sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)

@@ -1,7 +1,7 @@
 """The contact sub-models as numba functions of scalars.
 
 The normal size factor and the four coefficients, the "coulomb", "liggghts" and "impact"
-tangential laws, rolling resistance.
+tangential laws, the "impact" law's plastic normal contact (eps_n = 0), rolling resistance.
 
 Scalars in, scalars out, so the same functions can run inside GPU kernels; their constants come
 from the parameter array laid out by :mod:`dem.kernels.contact.params`.
@@ -132,16 +132,20 @@ def spring_step(s0, s1, s2, vtx, vty, vtz, nx, ny, nz, dt):
 @numba.njit(**NUMBA_OPTIONS)
 def impact_tangential(
     impact_ratio, impact_cap, mu, mass_t, stick_rate, stick_zeta,
-    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4,
+    nx, ny, nz, vn, fn, vtx, vty, vtz, kn, m_eff, dt, h0, h1, h2, h3, h4, plastic, stopped,
 ):  # fmt: skip
     """Tangential sub-model "impact" (module docstring): force and the contact's new history.
 
     History (5 floats): h3 is the phase (0 a new contact, 1 + theta an impact, theta the radians
-    of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring), h4 the
-    normal velocity v_n = v_r . n of the previous step, (h0, h1, h2) the impact's force ratio
-    vector c (impact) or the stick's spring s (enduring). Parameters: ``impact_ratio``
-    (1 - eps_t) / (1 + e_n), ``impact_cap`` the largest c, ``mu``, ``mass_t`` f_t,
-    ``stick_rate`` alpha and ``stick_zeta`` of the stick.
+    of the local normal oscillation sqrt(k_n / m*) since first touch, -1 enduring; -2 enduring
+    while a plastic contact's approach goes on, :func:`plastic_normal`), h4 the normal velocity
+    v_n = v_r . n of the previous step (a plastic contact keeps its normal stick's force there
+    instead, :func:`plastic_normal`), (h0, h1, h2) the impact's force ratio vector c (impact)
+    or the stick's spring s (enduring). Parameters: ``impact_ratio`` (1 - eps_t) / (1 + e_n),
+    ``impact_cap`` the largest c, ``mu``, ``mass_t`` f_t, ``stick_rate`` alpha and
+    ``stick_zeta`` of the stick, ``plastic`` True for the perfectly plastic normal contact
+    (eps_n = 0), whose impact ends in the step its approach stops (``stopped``: it has no
+    restitution phase), else when the separating speed stops growing.
 
     Returns (F_t, h) as eight floats.
     """
@@ -183,17 +187,79 @@ def impact_tangential(
         ftz = -fnp * cz
         theta = phase - 1.0 + dt * math.sqrt(kn / m_eff)
         slip = vtx * cx + vty * cy + vtz * cz
-        over = vn > 0.0 and vn <= h4
+        if plastic:
+            over = stopped
+        else:
+            over = vn > 0.0 and vn <= h4
         stuck = slip <= 0.0 and cx * cx + cy * cy + cz * cz > 0.0
         if not (over or stuck or theta > IMPACT_MAX_PHASE):
             return ftx, fty, ftz, cx, cy, cz, 1.0 + theta, vn
-        # switch to the enduring stick, its spring set so that the force is continuous
+        # switch to the enduring stick, its spring set so that the force is continuous; a
+        # plastic contact whose approach goes on marks it (-2, :func:`plastic_normal`)
+        after = -2.0 if plastic and not over else -1.0
         return (ftx, fty, ftz, -(ftx + gs * vtx) / ks, -(fty + gs * vty) / ks,
-                -(ftz + gs * vtz) / ks, -1.0, vn)  # fmt: skip
+                -(ftz + gs * vtz) / ks, after, vn)  # fmt: skip
     # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
     sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)
     ftx, fty, ftz, sx, sy, sz = coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz)
-    return ftx, fty, ftz, sx, sy, sz, -1.0, vn
+    return ftx, fty, ftz, sx, sy, sz, phase, vn
+
+
+@numba.njit(**NUMBA_OPTIONS)
+def plastic_normal(fn, vn, m_n, stick_rate, stick_zeta, dt, phase, fs):
+    """The "impact" law's normal force with eps_n = 0: a perfectly plastic contact.
+
+    A contact of eps_n = 0 returns none of its approach speed, and no contact pulls. The
+    material law (``fn``: the spring and its damping, F_n = k_n delta - gamma_n v_n) alone
+    cannot do both: its dashpot leaves a rebound of e_n = 0.135 of the approach speed when the
+    force is not let pull, and pulls the grains back together when it is (then it also holds
+    them after the load has gone). So:
+
+    - while the contact approaches (an impact, phase > 0, a new contact with v_n < 0, or -2:
+      the impact's slip has stopped but the approach goes on) the force is the material law's,
+      but never more than m_n |v_n| / dt, the force that stops the approach within the step
+      (velocity Verlet changes v_n by F dt / m_n from this half step to the next), and never
+      below zero: the approach is stopped by Hertz's (or the linear) spring and damping, and
+      the normal impulse of the impact is m* |v_n0|, Newton's impact law with eps_n = 0;
+    - in the step the approach stops (the cap binds, or v_n >= 0) the elastic energy the impact
+      stored is dissipated, and the contact then unloads rigidly: a stick spring-dashpot sized
+      by the time step (``stick_rate`` alpha_n, :data:`dem.config.DEM_NORMAL_STICK_RATE`, and the
+      tangential stick's zeta: k = m_n (alpha_n / dt)^2, gamma = 2 zeta alpha_n m_n / dt) from
+      zero force, capped at the
+      material force (loading beyond the dent follows the material law, the spring reset to
+      match) and at zero (it never pulls; the anchor follows a grain that leaves). As dt
+      shrinks it converges to a rigid support.
+
+    This is Walton and Braun's elastic-plastic contact with an unloading branch as stiff as the
+    step resolves (its restitution sqrt(k_load / k_unload) -> 0). ``m_n`` is the contact's
+    normal effective mass f_n m*, ``phase`` the contact's phase (h3 of
+    :func:`impact_tangential`), ``fs`` the stick's spring force (h4; 0 for a new contact).
+
+    Returns (F_n, phase, fs, stopped): the normal force, N, the phase (-2 becomes -1 when the
+    approach stops), the stick's new spring force, N, and whether the approach stopped in this
+    step (the impact's end, :func:`impact_tangential`).
+    """
+    if fn < 0.0:
+        fn = 0.0
+    approaching = phase > 0.0 or phase == -2.0 or (phase == 0.0 and vn < 0.0)
+    if approaching:
+        stop = -m_n * vn / dt
+        if fn < stop:
+            return fn, phase, 0.0, False
+        if stop < 0.0:
+            stop = 0.0
+        return stop, (-1.0 if phase == -2.0 else phase), 0.0, True
+    ks = m_n * stick_rate * stick_rate / (dt * dt)
+    gs = 2.0 * stick_zeta * stick_rate * m_n / dt
+    fs -= ks * vn * dt
+    f = fs - gs * vn
+    if f > fn:
+        f = fn
+        fs = fn + gs * vn
+    if f < 0.0:
+        f = 0.0
+        fs = gs * vn
+    return f, phase, fs, False
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)

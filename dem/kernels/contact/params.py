@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from dem.config import (
+    DEM_NORMAL_STICK_RATE,
     DEM_STICK_DAMPING_RATIO,
     DEM_STICK_RATE,
     DEM_TANGENTIAL_DAMPING_RATIO,
@@ -48,7 +49,10 @@ P_KT_COEF = 20  #: tangential spring: C_kt, k_t = C_kt a
 P_DAMP_T = 21  #: tangential dashpot: C_dt, gamma_t = C_dt sqrt(B_t a m*)
 P_DAMP_T_SCALE = 22  #: tangential dashpot: B_t
 P_SLIP_ARM = 23  #: 1.0: the slip velocity takes the full radii (:data:`SLIP_LEVER_ARMS`), else 0.0
-N_PARAMS = 24
+P_PLASTIC = 24  #: "impact" with eps_n = 0: 1.0, the perfectly plastic normal contact, else 0.0
+P_MASS_N = 25  #: "impact", plastic: f_n, the normal stick's effective mass f_n m*
+P_NORMAL_STICK_RATE = 26  #: "impact", plastic: alpha_n, the normal stick's rate (rad per step)
+N_PARAMS = 27
 
 #: Tangential conventions (the case's ``contact.tangential``) -> value of ``params[P_TANGENTIAL]``.
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
@@ -136,11 +140,13 @@ def make_params(
     tangential: str = "coulomb",
     tangential_damping_ratio: float = DEM_TANGENTIAL_DAMPING_RATIO,
     tangential_mass_factor: float = 1.0,
+    normal_mass_factor: float = 1.0,
     wall_lever_arm: str = "surface",
     slip_lever_arm: str = "contact",
     restitution_tangential: float = 0.8,
     stick_rate: float = DEM_STICK_RATE,
     stick_damping_ratio: float = DEM_STICK_DAMPING_RATIO,
+    normal_stick_rate: float = DEM_NORMAL_STICK_RATE,
     beta: float | None = None,
 ) -> np.ndarray:
     """Pack a law's sub-model coefficients into the kernels' ``params`` array, (N_PARAMS,).
@@ -151,8 +157,11 @@ def make_params(
     ``tangential_stiffness_ratio`` is kappa = k_t / k_n (linear; Hertz with "coulomb": k_t / S_n);
     ``tangential_damping_ratio`` zeta_t is used by "coulomb" only, ``tangential_mass_factor`` f_t
     by "coulomb" and "impact"; "impact" uses ``restitution_tangential`` eps_t, ``stick_rate``
-    alpha and ``stick_damping_ratio``. ``beta`` overrides the damping parameter derived from
-    ``restitution`` (over-critical damping, beta < -1, for studies). ``wall_lever_arm`` is a key
+    alpha and ``stick_damping_ratio``, and with eps_n = 0 ``normal_mass_factor`` f_n and
+    ``normal_stick_rate`` alpha_n (its plastic normal contact's stick: effective mass f_n m*,
+    alpha_n rad a step, :func:`_impact_params`). ``beta`` overrides
+    the damping parameter derived from ``restitution`` (over-critical damping, beta < -1, for
+    studies). ``wall_lever_arm`` is a key
     of :data:`WALL_LEVER_ARMS`, ``slip_lever_arm`` one of :data:`SLIP_LEVER_ARMS`.
     """
     if model not in MODELS:
@@ -180,6 +189,8 @@ def make_params(
     p[P_TANGENTIAL] = TANGENTIAL[tangential]
     p[P_ZETA_T] = tangential_damping_ratio
     p[P_MASS_T] = tangential_mass_factor
+    p[P_MASS_N] = normal_mass_factor
+    p[P_NORMAL_STICK_RATE] = normal_stick_rate
     p[P_WALL_ARM] = WALL_LEVER_ARMS[wall_lever_arm]
     p[P_SLIP_ARM] = SLIP_LEVER_ARMS[slip_lever_arm]
     _normal_params(p, model)
@@ -263,10 +274,18 @@ def _tangential_params(p: np.ndarray, model: str, tangential: str) -> None:
 
 
 def _impact_params(p, model, restitution, restitution_tangential, stick_rate, stick_zeta) -> None:
-    """Tangential sub-model "impact": the force ratio, its cap, e_n and the stick's alpha, zeta."""
+    """Tangential sub-model "impact": the force ratio, its cap, e_n and the stick's alpha, zeta.
+
+    With eps_n = 0 the contact is perfectly plastic (``P_PLASTIC``,
+    :func:`dem.kernels.contact.laws.plastic_normal`): its impacts return none of the approach
+    speed, so e_n = 0 there; otherwise e_n is the normal law's own restitution
+    (:func:`normal_law_restitution`).
+    """
     if not 0.0 <= restitution_tangential <= 1.0:
         raise ValueError(f"eps_t must lie in [0, 1], got {restitution_tangential}")
-    e_n = normal_law_restitution(MODELS[model], p[P_BETA])
+    plastic = restitution == 0.0
+    p[P_PLASTIC] = 1.0 if plastic else 0.0
+    e_n = 0.0 if plastic else normal_law_restitution(MODELS[model], p[P_BETA])
     friction = p[P_MU]
     p[P_IMPACT_RATIO] = (1.0 - restitution_tangential) / (1.0 + e_n)
     p[P_IMPACT_CAP] = min(friction, friction * (1.0 + restitution) / (1.0 + e_n))
