@@ -130,6 +130,7 @@ LOOP_OPTIONAL = {
     "hold_up_per_cycle": (list,),
     "frames": (bool,),
     "lab_frame": (bool,),
+    "extended_cycles": (int,),
 }
 _FRAME_FILE = re.compile(r"[A-Za-z0-9_.-]+\.vtp")
 

@@ -229,14 +229,18 @@ def transient_end(samples: np.ndarray) -> int:
     return best_d
 
 
-def steady(samples: np.ndarray, min_samples: int = 6, tolerance: float = 0.0) -> bool:
+def steady(samples: np.ndarray, min_samples: int = 6, tolerance: float = 0.0,
+           trend_z: float | None = None) -> bool:  # fmt: skip
     """True when the transient of a growing series has ended: its MSER point lies inside.
 
-    With n >= ``min_samples`` samples, the series is steady when :func:`transient_end` is below
-    n/2 - 1: the kept part is not still drifting, and at least half of the series is past the
-    transient. A series without noise that converges geometrically (one grain settling onto
-    its periodic orbit) drifts forever by that rule; it is steady once the second half of the
-    series spans no more than ``tolerance``. Cost O(n^2) per call.
+    With n >= ``min_samples`` samples, the series is steady when :func:`transient_end` d* is
+    below n/2 - 1: the kept part is not still drifting, and at least half of the series is past
+    the transient; with ``trend_z``, the kept part x[d*:] must also show no :func:`trend`
+    beyond ``trend_z`` of its error (MSER alone stops on a bed still speeding up when the rise
+    is slow against the noise: validation/steadiness). A series without noise that converges
+    geometrically (one grain settling onto its periodic orbit) drifts forever by that rule; it
+    is steady once the second half of the series spans no more than ``tolerance``. Cost O(n^2)
+    per call.
     """
     u = np.asarray(samples, dtype=np.float64)
     n = u.size
@@ -245,7 +249,54 @@ def steady(samples: np.ndarray, min_samples: int = 6, tolerance: float = 0.0) ->
     tail = u[n // 2 :]
     if float(np.max(tail) - np.min(tail)) <= tolerance:
         return True
-    return transient_end(u) < n // 2 - 1
+    d = transient_end(u)
+    if d >= n // 2 - 1:
+        return False
+    return trend_z is None or abs(trend(u[d:]).z) <= trend_z
+
+
+class Trend(NamedTuple):
+    """A series' least-squares trend against its error (:func:`trend`).
+
+    Attributes:
+        slope: Fitted change per sample (units of the series per cycle).
+        change: slope (n - 1): the fitted change from the first sample to the last.
+        z: slope over its standard error, the residuals' autocorrelation accounted for.
+        samples: n.
+
+    """
+
+    slope: float
+    change: float
+    z: float
+    samples: int
+
+
+def trend(samples: np.ndarray) -> Trend:
+    """The least-squares slope of a series against its autocorrelated standard error.
+
+    slope = sum t (x_t - m) / sum t^2 (t centred); its error std(res, ddof=2)
+    sqrt(2 tau_int / sum t^2), with tau_int of the residuals
+    (:func:`integrated_autocorrelation_time`).
+    z = 0 for a series without spread (a single grain on its orbit) or of fewer than 4 samples.
+    On one short run the test is weak (validation/steadiness: at 20-30 cycles of lag-1 0.8 a
+    steady series gives |z| > 3 in 22-28 % of runs, a drift of 6 of the run's errors is seen in
+    62-91 %); on the longer series of a settle it is what tells a bed still speeding up.
+    """
+    u = np.asarray(samples, dtype=np.float64)
+    n = u.size
+    if n < 4:
+        return Trend(0.0, 0.0, 0.0, n)
+    t = np.arange(n) - (n - 1) / 2.0
+    tt = float(np.dot(t, t))
+    slope = float(np.dot(t, u - u.mean()) / tt)
+    res = u - u.mean() - slope * t
+    spread = float(np.std(res, ddof=2))
+    if spread <= 16.0 * np.finfo(float).eps * max(float(np.max(np.abs(u))), 1e-300):
+        return Trend(slope, slope * (n - 1), 0.0, n)
+    tau = integrated_autocorrelation_time(res)
+    se = spread * math.sqrt(2.0 * tau / tt)
+    return Trend(slope, slope * (n - 1), slope / se, n)
 
 
 def running_mean_and_stderr(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -46,7 +46,7 @@ from dem.run.checks import check_memory, compile_first, warn_plan
 from dem.run.interrupts import RunInterrupted, SignalFlag, StopNow, file_size_limit_as_error
 from dem.run.output import CHECKPOINT, RESULTS, locked, prepare_output
 from dem.run.record import Progress, close_cycle
-from dem.run.runner import fill_bar, finish, phase_bar, write_frame
+from dem.run.runner import fill_bar, finish, phase_bar, said_extended, write_frame
 from dem.run.summary import fingerprint
 from dem.run.writers import Checkpoints, HDF5Results, VTKFrames
 from dem.scene.resolved import resolve
@@ -211,9 +211,13 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
                 r.progress.chunk += 1
                 if r.progress.chunk == per_frame:
                     measuring = r.progress.measuring
+                    asked = r.progress.cycles
                     row = close_cycle(r.sim, r.scene.case, r.progress)
                     for writer in r.writers:
                         writer.cycle(row, r.progress)
+                    if r.progress.cycles != asked:
+                        said_extended(r.scene.case, r.progress, bar[0] if r.k == 0 else None,
+                                      bar[0] is not None)  # fmt: skip
                     if r.k == 0 and bar[0] is not None:
                         bar[0].update(1)
                         if r.progress.measuring != measuring:  # replica 0's settling has ended

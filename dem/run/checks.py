@@ -56,11 +56,12 @@ def read_checkpoint(
     loop.setdefault("cycles", loop["total_cycles"] - (settle or 0))  # older checkpoints
     loop.setdefault("settle_cycles", settle)
     _check_frames_setting(loop, path, frames=frames, lab_frame=lab_frame)
-    if loop["cycles"] != cycles:
+    asked = loop["cycles"] - loop.get("extended_cycles", 0)  # less what steadiness added
+    if asked != cycles:
         raise InputError(
             "--cycles",
             cycles,
-            f"the interrupted run has {loop['cycles']}: resume with the same",
+            f"the interrupted run has {asked}: resume with the same",
         )
     return state, Progress.from_checkpoint(loop)
 

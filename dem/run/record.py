@@ -22,7 +22,8 @@ from dem.physics import drive, measure
 
 #: Keys a checkpoint holds only once they have a value (older checkpoints lack some of them).
 _OPTIONAL = ("compile_wall_time_s", "fill_wall_time_s", "frames", "lab_frame", "settle_detected",
-             "discharge_per_cycle", "hold_up_per_cycle", "feeder", "max_overlap")  # fmt: skip
+             "discharge_per_cycle", "hold_up_per_cycle", "feeder", "max_overlap",
+             "extended_cycles")  # fmt: skip
 
 
 @dataclass
@@ -43,7 +44,7 @@ class Progress:
     chunk: int = 0
     total_cycles: int | None = None
     settle_cycles: int | None = None
-    #: Measured cycles.
+    #: Measured cycles (the run's, plus any the steadiness test added: ``extended_cycles``).
     cycles: int = 1
     #: Mean x-velocity of each "auto" settling cycle so far, m/s.
     settle_series: list = field(default_factory=list)
@@ -72,6 +73,8 @@ class Progress:
     feeder: dict | None = None
     #: The deepest overlap so far (:meth:`dem.engine.simulation.Simulation.overlap_summary`).
     max_overlap: dict | None = None
+    #: Measured cycles added because the measured series was not steady (:func:`close_cycle`).
+    extended_cycles: int | None = None
     #: Keys of a checkpoint that no field above names, written back unchanged.
     extra: dict = field(default_factory=dict)
 
@@ -150,12 +153,80 @@ def settle_floor(case) -> int:
     return max(config.DEM_AUTO_SETTLE_MIN_CYCLES, friction_floor(case))
 
 
+def drifts(case, t: measure.Trend) -> bool:
+    """Whether a measured series' trend ``t`` says the run is not steady.
+
+    Its z beyond ``DEM_STEADY_Z``, and a fitted change beyond the settle's tolerance
+    (``DEM_AUTO_SETTLE_TOLERANCE`` of A omega cos phi): a single grain on its periodic orbit
+    repeats its cycles to rounding, whose z says nothing.
+    """
+    small = abs(t.change) <= config.DEM_AUTO_SETTLE_TOLERANCE * case.drive.velocity_scale
+    return abs(t.z) > config.DEM_STEADY_Z and not small
+
+
+def steadiness(case, progress: Progress) -> dict:
+    """How steady the measured series was: summary.json's ``steadiness``.
+
+    The least-squares trend of the measured per-cycle velocities against its autocorrelated
+    error (:func:`dem.physics.measure.trend`): ``trend_z``, the fitted change over the measured
+    cycles in v / (A omega cos phi) (``change_norm``), ``steady`` (not :func:`drifts`), the
+    cycles added to reach it (``extended_cycles``) and what it means.
+    """
+    t = measure.trend(progress.per_cycle)
+    steady = not drifts(case, t)
+    extended = progress.extended_cycles or 0
+    if steady:
+        what = f"no trend beyond {config.DEM_STEADY_Z:g} standard errors over the measured cycles"
+        if extended:
+            what += f", after {extended} cycles more than run.cycles"
+    elif case.run.settle_cycles is None:
+        what = (f"still drifting after {extended} cycles more than run.cycles: the bed changes "
+                "over longer times than the run; measure more cycles (run.cycles) or pool "
+                "fills (run.replicas)")  # fmt: skip
+    else:
+        what = ("drifting: the measured cycles include the start-up; settle longer "
+                '(run.settle_cycles, or "auto", which waits for a steady series)')  # fmt: skip
+    scale = case.drive.velocity_scale
+    return {
+        "steady": steady,
+        "trend_z": t.z,
+        "change_norm": t.change / scale,
+        "threshold_z": config.DEM_STEADY_Z,
+        "extended_cycles": extended,
+        "what": what,
+    }
+
+
+def extend_if_unsteady(case, progress: Progress) -> int:
+    """At the last measured cycle: measure ``run.cycles`` more if the series is not steady.
+
+    Only with ``run.settle_cycles = "auto"`` (a fixed settle is the user's choice, and the
+    summary says when it was too short), at most ``DEM_STEADY_MAX_EXTENSIONS`` times. The longer
+    series dilutes what remains of a transient and gives the autocorrelation time more cycles
+    to be measured on. Returns the cycles added (0: none).
+    """
+    if case.run.settle_cycles is not None or case.feeder is not None:
+        return 0
+    extended = progress.extended_cycles or 0
+    base = progress.cycles - extended
+    if extended >= config.DEM_STEADY_MAX_EXTENSIONS * base:
+        return 0
+    if not drifts(case, measure.trend(progress.per_cycle)):
+        return 0
+    progress.cycles += base
+    progress.total_cycles += base
+    progress.extended_cycles = extended + base
+    return base
+
+
 def close_cycle(sim, case, progress: Progress) -> CycleRow:
     """Close a cycle: its mass-weighted mean x-velocity from the step loop's momentum sums.
 
     With ``run.settle_cycles = "auto"`` a settling cycle also tests the settling velocities so
-    far for the end of the transient (:func:`dem.physics.measure.steady`); the first cycle after
-    it is measured. At ``DEM_AUTO_SETTLE_MAX_CYCLES`` the run measures anyway and says so. Then
+    far for the end of the transient (:func:`dem.physics.measure.steady`, with the trend test);
+    the first cycle after it is measured. At ``DEM_AUTO_SETTLE_MAX_CYCLES`` the run measures
+    anyway and says so. The last measured cycle tests the measured series and may add cycles
+    (:func:`extend_if_unsteady`). Then
     the sums are zeroed and ``progress`` moves to the next cycle; the row returned is the closed
     cycle's.
     """
@@ -164,12 +235,19 @@ def close_cycle(sim, case, progress: Progress) -> CycleRow:
     measured = settle is not None and progress.cycle >= settle
     if measured:
         progress.per_cycle.append(velocity)
+        if progress.cycle + 1 == progress.total_cycles:
+            extend_if_unsteady(case, progress)
     elif settle is None:
         series = progress.settle_series
         series.append(velocity)
         scale = case.drive.velocity_scale
         done = (
-            measure.steady(series, settle_floor(case), config.DEM_AUTO_SETTLE_TOLERANCE * scale)
+            measure.steady(
+                series,
+                settle_floor(case),
+                config.DEM_AUTO_SETTLE_TOLERANCE * scale,
+                config.DEM_AUTO_SETTLE_TREND_Z,
+            )  # fmt: skip
             and len(series) >= case.drive.ramp_cycles
         )  # the start-up ramp is no steady state
         if done or len(series) >= config.DEM_AUTO_SETTLE_MAX_CYCLES:

@@ -306,10 +306,20 @@ def pool_summaries(
             "mean_velocity_norm": s["mean_velocity_norm"],
             "mass_flow_rate": s["mass_flow_rate"],
             "settle_cycles": s["settle_cycles"],
+            "cycles": s["cycles"],
+            "steadiness": s.get("steadiness"),
             "wall_time_s": s["wall_time_s"],
         }
         for s in summaries
     ]
+    unsteady = [s["seed"] for s in summaries if not (s.get("steadiness") or {}).get("steady", True)]
+    out["steadiness"] = {
+        "steady": not unsteady,
+        "unsteady_seeds": unsteady,
+        "what": "every fill's measured series without a trend beyond its error" if not unsteady
+        else f"fills with seeds {unsteady} still drifting (per_replica: their steadiness); the "
+        "pooled error bar includes their spread, not the drift common to all fills",
+    }  # fmt: skip
     out["per_cycle_velocity_replica"] = 0
     steps = sum(s["spheres"] * s["steps"] for s in summaries)
     loops = sum(s["wall_time_s"] for s in summaries)

@@ -47,6 +47,7 @@ from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
 from dem.io.hdf5 import check_resumable
 from dem.io.tables import write_cycles_csv
+from dem.physics import measure
 from dem.physics.drive import cycle_edge
 from dem.run import plan, stiffness
 from dem.run.checks import (
@@ -221,10 +222,12 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
                     write_frame(writers, sim, progress)
                 progress.chunk = k + 1
                 if progress.chunk == per_frame:
-                    measuring = progress.measuring
+                    measuring, asked = progress.measuring, progress.cycles
                     row = close_cycle(sim, case, progress)
                     for writer in writers:
                         writer.cycle(row, progress)
+                    if progress.cycles != asked:
+                        said_extended(case, progress, bar, show)
                     if bar is not None:
                         bar.update(1)
                         if progress.measuring != measuring:  # the settling phase has ended
@@ -251,6 +254,21 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         print(f"dem: {signal.Signals(late).name} arrived after the last cycle: the run finished "
               f"its summary first ({out_dir / SUMMARY})", file=sys.stderr)  # fmt: skip
     return summary
+
+
+def said_extended(case, progress: Progress, bar, show: bool) -> None:
+    """Say that the steadiness test added measured cycles, and give the bar its new total.
+
+    :func:`dem.run.record.extend_if_unsteady` added them; the line goes to stderr.
+    """
+    if bar is not None:
+        bar.total = progress.cycles
+        bar.refresh()
+    if show:
+        t = measure.trend(progress.per_cycle)
+        _note(f"{case.name}: the measured velocity still drifts ({t.z:+.1f} standard errors of "
+              f"trend over {len(progress.per_cycle)} cycles): measuring "
+              f"{progress.cycles - len(progress.per_cycle)} cycles more")  # fmt: skip
 
 
 def write_frame(writers: list[Writer], sim, progress: Progress) -> None:

@@ -103,10 +103,11 @@ def stiffness_for(scene, compliance: float) -> tuple[str, float]:
 
 
 #: A lone grain's error against its rigid reference, per unit compliance: |v_norm(DEM) -
-#: v_norm(rigid)| <= K c. validation/single-grain-stiffness measured 0.21-0.99 c over 7 sliding
-#: drives (level and uphill near the threshold) at E = 5e7-2e10 Pa: the contact's normal
-#: compliance, linear in c (a lone grain is one layer: omega_bed = omega_c).
-SINGLE_GRAIN_ERROR_PER_COMPLIANCE = 1.0
+#: v_norm(rigid)| <= K c. validation/single-grain-stiffness measured 0.01-0.49 c over 7 sliding
+#: drives (level and uphill near the threshold) at E = 5e7-2e10 Pa under the plastic contact of
+#: eps_n = 0 (growing as c^0.66-0.9; 0.21-0.99 c, linear, under the dashpot before it); K is
+#: the worst, rounded up (a lone grain is one layer: omega_bed = omega_c).
+SINGLE_GRAIN_ERROR_PER_COMPLIANCE = 0.5
 #: ... and what a lone grain's answer may be off by: 2 % of its reference v_norm, and 0.002 in
 #: v_norm below a reference of 0.1 (near a threshold a relative error means nothing).
 SINGLE_GRAIN_TOLERANCE = 0.02

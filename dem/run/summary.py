@@ -21,7 +21,7 @@ from dem.config import GRAVITY
 from dem.engine.simulation import Simulation
 from dem.physics import measure
 from dem.provenance import record
-from dem.run.record import Progress
+from dem.run.record import Progress, steadiness
 
 
 def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads: int) -> dict:
@@ -71,7 +71,8 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "settle_cycles": progress.settle_cycles,
         "settle_cycles_auto": case.run.settle_cycles is None,
         "settle_transient_ended": progress.settle_detected,
-        "cycles": cycles,
+        "cycles": len(per_cycle),
+        "steadiness": steadiness(case, progress),
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "settle_time_s": progress.settle_time_s,
         "settle_wall_time_s": progress.settle_wall_time_s,

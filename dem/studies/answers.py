@@ -36,6 +36,18 @@ def run_summary_lines(s: dict) -> list[str]:
     else:
         line("error bar", "this run only: it excludes the fill-to-fill spread (pool fills "
              "with --replicas N)")  # fmt: skip
+    steady = s.get("steadiness")
+    if steady and "trend_z" in steady:  # one run (a pooled summary says it per replica)
+        grew = f"{steady['change_norm']:+.2g} in v_norm over {s['cycles']} measured cycles"
+        if steady["steady"]:
+            line("steadiness", f"steady: trend {grew}, {steady['trend_z']:+.1f} standard errors"
+                 + (f"; {steady['extended_cycles']} cycles added to reach it"
+                    if steady["extended_cycles"] else ""))  # fmt: skip
+        else:
+            line("steadiness", f"NOT STEADY: trend {grew}, {steady['trend_z']:+.1f} standard "
+                 f"errors: {steady['what']}")  # fmt: skip
+    elif steady:
+        line("steadiness", steady["what"])
     paper, bounded = s.get("pointmass_velocity_norm"), s.get("pointmass_bounded_velocity_norm")
     if paper is not None:
         text = f"{paper:.3f} (paper's model)"

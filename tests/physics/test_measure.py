@@ -99,6 +99,41 @@ def test_a_noiseless_geometric_approach_is_steady_within_the_tolerance():
     assert measure.steady(x, tolerance=1e-4)  # second half spans < 1e-6
 
 
+def test_trend_recovers_a_known_slope_and_its_error():
+    """The slope of a line under AR(1) noise: the estimate, and z near N(0, 1) without a line."""
+    rng = np.random.default_rng(21)
+    n, rho = 200, 0.5
+    zs, slopes = [], []
+    for _ in range(300):
+        noise = _ar1(rng, rho, n, 1)[0]
+        zs.append(measure.trend(noise).z)
+        slopes.append(measure.trend(noise + 0.01 * np.arange(n)).slope)
+    # the slope's error: sqrt(var 2 tau / sum t^2) = sqrt(4 / 666650) = 0.0025 a series
+    assert np.mean(slopes) == pytest.approx(0.01, abs=3 * 0.0025 / math.sqrt(300))
+    zs = np.array(zs)
+    # the autocorrelated error makes z a unit normal: its spread within 20 % of 1, its mean near 0
+    assert abs(np.std(zs) - 1.0) < 0.2
+    assert abs(np.mean(zs)) < 0.2
+    line = measure.trend(2.0 + 0.5 * np.arange(10.0))
+    assert (line.slope, line.change, line.z) == (pytest.approx(0.5), pytest.approx(4.5), 0.0)
+    assert measure.trend([1.0, 2.0, 3.0]).z == 0.0  # too short to tell
+
+
+def test_steady_with_the_trend_test_waits_for_a_slow_rise():
+    """A rise slow against the noise: MSER alone stops inside it, the trend test does not."""
+    rng = np.random.default_rng(22)
+    n = 40
+    rise = 0.5 + 0.05 * (1.0 - np.exp(-np.arange(n) / 30.0))  # still rising at 40 cycles
+    x = rise + 0.004 * rng.normal(size=n)
+    ends_mser = [k for k in range(6, n + 1) if measure.steady(x[:k])]
+    ends_trend = [k for k in range(6, n + 1) if measure.steady(x[:k], trend_z=2.0)]
+    assert ends_mser and ends_mser[0] < 20  # MSER calls it steady early
+    assert len(ends_trend) < len(ends_mser)
+    assert not ends_trend or ends_trend[0] > ends_mser[0]
+    flat = 0.5 + 0.004 * rng.normal(size=n)
+    assert measure.steady(flat, trend_z=2.0)
+
+
 @pytest.mark.parametrize("replicas", [2, 3, 5, 10])
 @pytest.mark.parametrize("spread", [0.0, 1.0, 4.0])
 def test_pooled_interval_covers_the_true_mean_at_95_percent(replicas, spread):

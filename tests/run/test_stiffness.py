@@ -152,8 +152,10 @@ def test_the_lone_grain_rule_covers_every_measured_error():
 
 @pytest.mark.integration
 def test_a_soft_lone_grain_is_as_far_off_as_its_summary_says(tmp_path, capsys):
-    """5e7 Pa at the uphill drive: the run's error lies within K c, above what is allowed, and
-    the summary and terminal say TOO SOFT, naming the modulus."""
+    """5e7 Pa at the uphill drive: the summary and terminal say TOO SOFT, naming the modulus,
+    and the run's error lies within K c. (Under the plastic contact of eps_n = 0 this drive's
+    error, +0.0004, is also within the 0.0035 allowed: K is the worst drive's, Gamma 0.9 at
+    25 deg, whose +0.0017 at 5e7 Pa is not.)"""
     from dem.run.runner import run_case
     from dem.studies.answers import run_summary_lines
 
@@ -163,5 +165,6 @@ def test_a_soft_lone_grain_is_as_far_off_as_its_summary_says(tmp_path, capsys):
     assert stiff["single_grain"] and not stiff["converged"]
     assert stiff["key"] == "contact.youngs_modulus"
     error = abs(s["mean_velocity_norm"] - s["pointmass_bounded_velocity_norm"])
-    assert stiff["allowed_error"] < error <= stiff["expected_error"]
+    assert error <= stiff["expected_error"]
+    assert stiff["allowed_error"] < stiff["expected_error"]
     assert any("TOO SOFT for the rigid grain's answer" in line for line in run_summary_lines(s))
