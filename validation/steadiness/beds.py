@@ -1,4 +1,4 @@
-"""Long runs of the shipped beds at five drives: the series that settle rules and error bars are judged on.
+"""Long runs of the shipped beds at five drives: the series settle rules and error bars are judged on.
 
 Each run is ``dem run``'s path (:func:`dem.run.runner.run_case`) with ``run.settle_cycles = 0``:
 every driven cycle from the moment the drive starts is recorded, so any settle rule can be replayed
@@ -151,7 +151,7 @@ LATE_FRACTION = 0.5
 
 
 def settle_floors() -> dict:
-    """The automatic settle's least cycles for each bed and drive (``dem.run.record.settle_floor``)."""
+    """The automatic settle's least cycles per bed and drive (``dem.run.record.settle_floor``)."""
     from dem.run.record import settle_floor
     from dem.scene.case import load_case
 
