@@ -1,4 +1,4 @@
-"""Long runs of the shipped beds at five drives: the series settle rules and error bars are judged on.
+"""Long runs of the shipped beds at five drives: series to judge settle rules and error bars on.
 
 Each run is ``dem run``'s path (:func:`dem.run.runner.run_case`) with ``run.settle_cycles = 0``:
 every driven cycle from the moment the drive starts is recorded, so any settle rule can be replayed
@@ -181,7 +181,7 @@ def replay_settle(x, floor: int, rule: str, z_settle: float) -> int:
         if not measure.steady(head, floor, config.DEM_AUTO_SETTLE_TOLERANCE):
             continue
         if rule == "mser+trend":
-            kept = head[measure.transient_end(head):]
+            kept = head[measure.transient_end(head) :]
             if abs(measure.trend(kept).z) > z_settle:
                 continue
         return n
@@ -205,7 +205,7 @@ def analyse() -> None:
             continue
         floor, _ = floors[(bed, g, a)]
         n = min(len(v) for v in fills.values())
-        late = {s: float(np.mean(fills[s][int(LATE_FRACTION * n):n])) for s in seeds}
+        late = {s: float(np.mean(fills[s][int(LATE_FRACTION * n) : n])) for s in seeds}
         for rule in ("mser", "mser+trend", "fixed:20", "fixed:40"):
             for extend in (False, True):
                 runs = {}
@@ -213,12 +213,12 @@ def analyse() -> None:
                     x = fills[s][:n]
                     k = replay_settle(x, floor, rule, 2.0)
                     m = min(MEASURED, n - k)
-                    measured = x[k:k + m]
+                    measured = x[k : k + m]
                     extended = 0
                     while extend and extended < 2 and abs(measure.trend(measured).z) > 3.0:
                         if k + len(measured) + MEASURED > n:
                             break
-                        measured = x[k:k + len(measured) + MEASURED]
+                        measured = x[k : k + len(measured) + MEASURED]
                         extended += 1
                     se = measure.correlated_stderr(measured)[0]
                     runs[s] = (float(measured.mean()), se, k, len(measured))
