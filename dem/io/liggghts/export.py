@@ -21,6 +21,7 @@ from dem.io.files import refuse_links
 from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, write_deck
 from dem.io.liggghts.geometry import MESH_FILE
 from dem.io.paths import refuse_replacing
+from dem.physics import drive
 from dem.scene.case import Case
 from dem.scene.resolved import Scene, resolve
 
@@ -79,9 +80,12 @@ def plan_export(
             raise
         raise InputError("--timestep", timestep, exc.allowed) from None  # not the case's
     dt = scene.step.dt
-    steps = int(round(case.run.cycles / case.drive.frequency / dt))
     settle, settle_note = export_settle_cycles(case, settle_cycles, from_run)
-    settle_steps = round(settle / (case.drive.frequency * dt))
+    # dem's cycle edges (drive.cycle_edge), as the launchers cut the deck's output by them:
+    # rounding each stage on its own made 83,333 + 83,333 steps of 166,667 (issue 48, item 1)
+    period = 1.0 / case.drive.frequency
+    settle_steps = drive.cycle_edge(0, settle, period, dt)
+    steps = drive.cycle_edge(0, settle + case.run.cycles, period, dt) - settle_steps
     return ExportPlan(scene, dt, steps, settle, settle_steps, settle_note)
 
 
