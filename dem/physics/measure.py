@@ -340,6 +340,18 @@ def mass_weighted_mean(mass: np.ndarray, values: np.ndarray) -> float:
     return float(np.dot(mass, values) / np.sum(mass))
 
 
+def distinct(a: float, b: float, digits: int = 2) -> tuple[str, str]:
+    """Two numbers with the fewest significant digits that tell them apart.
+
+    At least ``digits``, at most 8: "0.008948 > 0.008937", never "0.0089 > 0.0089".
+    """
+    for n in range(digits, 9):
+        sa, sb = f"{a:.{n}g}", f"{b:.{n}g}"
+        if sa != sb or a == b:
+            return sa, sb
+    return sa, sb
+
+
 def with_error(value: float, error: float, unit: str = "") -> str:
     """``value +- error unit`` with the digits the error allows: 0.0457 +- 0.0008 m/s.
 

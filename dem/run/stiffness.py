@@ -34,6 +34,7 @@ from importlib import resources
 
 from dem.config import GRAVITY
 from dem.kernels import contact
+from dem.physics import measure
 from dem.physics.mass import sphere_volume
 
 #: Solid fraction of a resting bed assumed for its height.
@@ -179,12 +180,13 @@ def advice(scene):
     if mode.compliance <= limit:
         return None
     key, value = stiffness_for(scene, limit)
+    shown, bound = measure.distinct(mode.compliance, limit, 3)
     return Advice(
         "warn",
         key,
         f"the resting bed's lowest vertical mode ({mode.omega_bed / (2 * math.pi):.0f} Hz, "
         f"{mode.layers:.1f} layers) is close enough to the drive that the bed conveys unlike "
-        f"the rigid material: (omega / omega_bed)^2 = {mode.compliance:.3f} > {limit:.3f}, where "
+        f"the rigid material: (omega / omega_bed)^2 = {shown} > {bound}, where "
         f"validation/bulk-convergence measured more than 2 % from the rigid limit "
         f"({data['evidence']}); set {key} >= {round_up(value):.3g}",
         round_up(value),

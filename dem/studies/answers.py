@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from dem.physics.laws import TANGENTIAL_LAWS
-from dem.physics.measure import with_error
+from dem.physics.measure import distinct, with_error
 from dem.studies.report import feeder_lines
 
 if TYPE_CHECKING:
@@ -81,8 +81,8 @@ def run_summary_lines(s: dict) -> list[str]:
                  f"{stiff['value']:.3g}")  # fmt: skip
     elif stiff:
         sign = "<=" if stiff["converged"] else ">"
-        ratio = f"(omega / omega_bed)^2 = {stiff['compliance']:.2g} {sign} "
-        ratio += f"{stiff['compliance_limit']:.2g}"
+        shown, bound = distinct(stiff["compliance"], stiff["compliance_limit"])
+        ratio = f"(omega / omega_bed)^2 = {shown} {sign} {bound}"
         near = "; ".join(
             f"{m['bed']} at E = {m['youngs_modulus_pa']:.0e} Pa (c = {m['compliance']:.2g}): "
             f"{100 * m['error_vs_rigid']:+.1f} +- {100 * m['error_stderr']:.1f} %"

@@ -189,3 +189,10 @@ def test_student_t95_against_the_table_and_the_normal_limit():
 )
 def test_with_error_keeps_the_digits_the_error_allows(value, error, unit, text):
     assert measure.with_error(value, error, unit) == text
+
+
+def test_distinct_shows_the_digits_that_tell_a_value_from_its_bound():
+    """Issue 48, item 5: "TOO SOFT ... 0.0089 > 0.0089" for 0.008948 against 0.008937."""
+    assert measure.distinct(0.008948, 0.008937) == ("0.00895", "0.00894")
+    assert measure.distinct(0.0123, 0.0089) == ("0.012", "0.0089")
+    assert measure.distinct(0.5, 0.5) == ("0.5", "0.5")
