@@ -228,7 +228,7 @@ def cmd_dem_optimum(args) -> int:
     result = bulk_optimum(
         args.case_dir, args.over, args.hold, out, bounds=bounds, tolerance=args.tolerance,
         max_runs=args.max_runs, scheduler=args.scheduler, workers=args.workers,
-        cycles=args.cycles,
+        cycles=args.cycles, overrides=set_overrides(args.set),
     )  # fmt: skip
     if args.json:
         print_json(result)
@@ -262,7 +262,7 @@ def cmd_export_liggghts(args) -> int:
     from dem.io.liggghts.export import export_deck, plan_export
     from dem.scene.case import load_case
 
-    case = load_case(args.case_dir)
+    case = load_case(args.case_dir, set_overrides(args.set))
     plan = plan_export(case, timestep=args.timestep, settle_cycles=args.settle_cycles,
                        from_run=args.from_run)  # fmt: skip
     out = writable_path("OUT_DIR", args.out_dir, folder=True)

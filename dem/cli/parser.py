@@ -223,6 +223,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: local)")
     p.add_argument("--workers", type=WHOLE, help="local workers (default: one per core)")
     p.add_argument("--cycles", type=WHOLE, help="measured cycles per run (overrides run.cycles)")
+    p.add_argument(
+        "--set", action="append", metavar="TABLE.KEY=VALUE",
+        help="a case key set over case.toml at every run, e.g. material.friction=0.5 "
+        "(repeatable; not the --over key)",
+    )  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=c.cmd_dem_optimum)
 
@@ -259,6 +264,10 @@ def build_parser() -> argparse.ArgumentParser:
     e = es.add_parser("liggghts", help="write an equivalent LIGGGHTS-PUBLIC 3.8 deck")
     e.add_argument("case_dir")
     e.add_argument("out_dir")
+    e.add_argument(
+        "--set", action="append", metavar="TABLE.KEY=VALUE",
+        help="a case key set over case.toml, e.g. drive.angle=30 (repeatable)",
+    )  # fmt: skip
     _deck_options(e)
     e.add_argument(
         "--no-dump",

@@ -483,8 +483,21 @@ def _load_case(path: str | Path, overrides: Mapping[str, Any] | None) -> Case:
     return case
 
 
+#: Keys of which a case gives exactly one: an override of one replaces the file's other
+#: (``--set drive.amplitude=3e-4`` on a case that gives drive.throw_number).
+_EITHER = {"drive.amplitude": "drive.throw_number", "drive.throw_number": "drive.amplitude"}
+
+
 def _apply_overrides(data: dict, overrides: Mapping[str, Any], where: str) -> None:
-    """Set ``table.key`` values in the parsed file ``data`` (None removes the key)."""
+    """Set ``table.key`` values in the parsed file ``data`` (None removes the key).
+
+    An override of one of a pair the case gives exactly one of (:data:`_EITHER`) removes the
+    file's other, unless the overrides set it too (then both are given, and refused as such).
+    """
+    for dotted, other in _EITHER.items():
+        if overrides.get(dotted) is not None and other not in overrides:
+            name, _, key = other.partition(".")
+            data.get(name, {}).pop(key, None)
     for dotted, value in overrides.items():
         name, _, key = str(dotted).partition(".")
         if name not in _TABLES or not key or "." in key:

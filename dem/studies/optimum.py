@@ -205,8 +205,13 @@ def bulk_optimum(
     workers: int | None = None,
     cycles: int | None = None,
     progress: bool = True,
+    overrides: dict | None = None,
 ) -> dict:
-    """Search the bulk optimum of a case; writes optimum.json, optimum.csv and optimum.png."""
+    """Search the bulk optimum of a case; writes optimum.json, optimum.csv and optimum.png.
+
+    ``overrides``: case keys set over case.toml (``--set``), at every run of the search; the
+    searched key itself is refused there.
+    """
     from dem.pointmass.sweep import optimum as pointmass_optimum
     from dem.provenance import record
     from dem.scene.case import load_case
@@ -233,11 +238,15 @@ def bulk_optimum(
         raise InputError("--bounds", f"{lo:g}:{hi:g}", "LO:HI with the lower bound below the upper")
     tol = tolerance if tolerance is not None else (1.0 if over == "drive.angle" else 0.05)
     case_dir, out = Path(case_dir), Path(out)
-    case = load_case(case_dir)
-    held = _held(case, over, hold)
+    base = dict(overrides or {})
+    if over in base:
+        raise InputError("--set", over, f"a key other than the one searched (--over {over})")
+    origins = dict.fromkeys(base, "--set")
+    case = load_case(case_dir, base, origins)
+    held = base | _held(case, over, hold)
     for x in (lo, hi):  # the bounds themselves must make valid cases
         try:
-            load_case(case_dir, held | {over: x})
+            load_case(case_dir, held | {over: x}, origins)
         except InputError as err:
             raise InputError(
                 "--bounds", f"{lo:g}:{hi:g}", f"bounds at which the case holds: at {over} = "
@@ -286,7 +295,8 @@ def bulk_optimum(
             cluster.close()
     pm = _pointmass(case, over, hold, (lo, hi), pointmass_optimum)
     summary = {
-        "case": case.name, "case_dir": str(case_dir.resolve()), "over": over, "hold": hold,
+        "case": case.name, "case_dir": str(case_dir.resolve()), "overrides": base,
+        "over": over, "hold": hold,
         "objective": objective, "bounds": [lo, hi],
         "bulk": {k: v for k, v in asdict(result).items() if k != "samples"},
         "pointmass": {"value": pm.value, "plateau_90": list(pm.plateau),

@@ -92,3 +92,41 @@ def test_calibrate_plot_into_a_folder_writes_the_file_it_names(capsys, tmp_path)
     named = tmp_path / "cal.PNG"  # a .png name, any case, is taken as it is
     code, out, err = run(capsys, "calibrate", case, "--dry-run", "--plot", named)
     assert code == 0 and named.read_bytes()[:8] == PNG and f"wrote {named}\n" in out, out
+
+
+def test_set_reaches_an_exported_liggghts_deck(capsys, tmp_path):
+    """Issue 48, item 4: `dem export liggghts` took no --set."""
+    code, out, err = run(capsys, "export", "liggghts", "cases/sphere-bed", tmp_path / "deck",
+                         "--set", "drive.angle=30", "--settle-cycles", "2")  # fmt: skip
+    assert code == 0, err
+    assert "phi = 30.0 deg" in (tmp_path / "deck" / "in.dem").read_text()
+    code, _, err = run(capsys, "export", "liggghts", "cases/sphere-bed", tmp_path / "d2",
+                       "--set", "material.friction=-1")  # fmt: skip
+    assert code == 2 and "material.friction" in err and not (tmp_path / "d2").exists()
+
+
+def test_set_on_optimum_is_checked_and_never_the_searched_key(capsys, tmp_path):
+    """Issue 48, item 4: `dem optimum` took no --set; refused before any run starts."""
+    code, _, err = run(capsys, "optimum", "cases/sphere-bed", "--over", "drive.angle",
+                       "--set", "drive.angle=30", "--out", tmp_path / "o")  # fmt: skip
+    assert code == 2 and "--set" in err and "drive.angle" in err
+    code, _, err = run(capsys, "optimum", "cases/sphere-bed", "--over", "drive.angle",
+                       "--set", "material.friction=-1", "--out", tmp_path / "o")  # fmt: skip
+    assert code == 2 and "material.friction" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_set_switches_a_throw_number_case_to_an_amplitude_and_back(tmp_path):
+    """Issue 48, item 4: `--set drive.amplitude=...` on a throw-number case was refused as
+    'both are given'; an override of one replaces the file's other."""
+    from dem.scene.case import load_case
+
+    screws = load_case("cases/screw-trough", {"drive.amplitude": 3.0e-4})
+    assert screws.drive.amplitude == 3.0e-4 and screws.drive.given == "amplitude"
+    spheres = load_case("cases/sphere-bed", {"drive.throw_number": 2.0})
+    assert spheres.drive.throw_number == pytest.approx(2.0)
+    assert spheres.drive.given == "throw_number"
+    from dem.errors import InputError
+
+    with pytest.raises(InputError, match="exactly one of"):
+        load_case("cases/sphere-bed", {"drive.throw_number": 2.0, "drive.amplitude": 3e-4})
