@@ -264,11 +264,14 @@ def analyse() -> None:
 
 
 def main() -> None:
+    global SCRATCH
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("part", choices=("run", "collect", "analyse"))
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--fills", type=int, default=FILLS)
+    p.add_argument("--scratch", type=Path, default=SCRATCH, help="where the runs are")
     a = p.parse_args()
+    SCRATCH = a.scratch
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     if a.part == "run":
         run(a.workers, a.fills)
