@@ -286,8 +286,10 @@ def expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str]
         change("resolution", data["resolution"], per_grain, "particles.max_bumpiness")
     # One run's error: its own noise (falls as 1/sqrt(cycles)) and the fill-to-fill scatter
     # the study found beyond it (a fill's persistent structure: more cycles do not remove it).
-    within = data["base_stderr"] * math.sqrt(data["base_cycles"] / cycles)
-    between = math.sqrt(max(data["fill_spread"] ** 2 - data["base_stderr"] ** 2, 0.0))
+    # N replicas (run.replicas) pool N fills: both shrink as 1/sqrt(N).
+    replicas = max(1, int(getattr(case.run, "replicas", 1) or 1))
+    within = data["base_stderr"] * math.sqrt(data["base_cycles"] / cycles / replicas)
+    between = math.sqrt(max(data["fill_spread"] ** 2 - data["base_stderr"] ** 2, 0.0) / replicas)
     statistical = math.hypot(between, within)
     systematic = sum(parts.values())
     # The rigid limit's own uncertainty (validation/bulk-convergence's extrapolation).

@@ -60,6 +60,8 @@ class Plan:
     error_parts: dict[str, float]
     error_source: str
     advice: list[Advice] = field(default_factory=list)
+    #: Fills pooled (run.replicas): the wall time counts them all, the expected error their pool.
+    replicas: int = 1
 
     def as_dict(self) -> dict:
         """Plain data for JSON."""
@@ -85,6 +87,7 @@ class Plan:
             f"({self.memory_bytes / self.spheres:.0f} B per sphere)",
             f"  wall time         about {format_duration(self.wall_time_s)} "
             f"on {self.threads} thread(s)"
+            + (f" for {self.replicas} fills" if self.replicas > 1 else "")
             + (
                 f": compiling {format_duration(self.compile_s)} "
                 "(no numba cache yet, once per machine),"
@@ -192,6 +195,12 @@ def plan(
     calibrated = accuracy.calibration_advice(case)
     if calibrated is not None:
         advice.append(calibrated)
+    # replicas (dem.run.replicas): min(N, threads) processes at once, the threads shared among
+    # them (a process's rate taken as its share of the threads' rate), N of them in batches;
+    # frames are replica 0's
+    replicas = max(1, int(case.run.replicas))
+    workers = min(replicas, threads)
+    batches = math.ceil(replicas / workers)
     mem = cost.memory_bytes(scene, spheres, grains, threads)
     total = physical_memory()
     if total and mem > 0.5 * total:
@@ -203,8 +212,9 @@ def plan(
         steps_per_cycle=per_cycle, settle_cycles=settle, settle_cycles_auto=auto_settle,
         cycles=cycles, steps=steps, particle_steps=particle_steps, memory_bytes=mem,
         threads=threads, particle_steps_per_s=speed, rate_source=source,
-        wall_time_s=startup + compile_s + fill_s + particle_steps / speed
-        + steps * cost.STEP_OVERHEAD_S + frames_s,
+        wall_time_s=startup + compile_s + frames_s + batches * (
+            fill_s + workers * particle_steps / speed + steps * cost.STEP_OVERHEAD_S),
+        replicas=replicas,
         compile_s=compile_s, fill_s=fill_s, frames=n_frames, frames_s=frames_s,
         expected_error=expected, error_parts=parts,
         error_source=error_source, advice=advice,

@@ -362,3 +362,27 @@ def test_a_cuda_plan_says_its_times_are_the_cpu_engines(tmp_path):
     assert cuda.wall_time_s == cpu.wall_time_s
     assert "GPU is not estimated" in cuda.rate_source and "GPU" not in cpu.rate_source
     assert "GPU is not estimated" in cuda.text()
+
+
+def test_the_plan_counts_replicas_in_its_time_and_its_error():
+    """Issue 48, item 4: `dem plan` ignored run.replicas in its time and error."""
+    from dem.run.plan import plan as make_plan
+    from dem.scene.case import load_case
+
+    one = make_plan(load_case("cases/sphere-bed"), threads=2)
+    three = make_plan(load_case("cases/sphere-bed", {"run.replicas": 3}), threads=2)
+    assert three.replicas == 3 and "for 3 fills" in three.text()
+    # the statistical part of a pool of 3 fills is that of one over sqrt(3)
+    ratio = three.error_parts["statistical"] / one.error_parts["statistical"]
+    assert ratio == pytest.approx(3**-0.5, rel=1e-9)
+    # 2 processes at a time on 2 threads, each at half the rate: 2 batches of 2 runs' time
+    one_run = one.wall_time_s - one.compile_s - cost_startup() - one.frames_s
+    assert three.wall_time_s - three.compile_s - cost_startup() - three.frames_s == pytest.approx(
+        2 * (one_run + one.particle_steps / one.particle_steps_per_s), rel=1e-9
+    )
+
+
+def cost_startup():
+    from dem.run import cost
+
+    return cost.STARTUP_S
