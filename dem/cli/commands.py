@@ -302,7 +302,8 @@ def cmd_export_lammps(args) -> int:
         return 0
     print(f"dem: running LAMMPS on {args.ranks} rank(s) in {out}", file=sys.stderr)
     try:
-        log, wall = run_lammps(out, ranks=args.ranks)
+        log, wall = run_lammps(out, ranks=args.ranks, progress=True,
+                               total_steps=plan.settle_steps + plan.steps)  # fmt: skip
         s = summarize_run(plan, out, log, wall, args.ranks)  # a finished run's errors too
     except LammpsError as exc:
         print(f"dem: {exc}", file=sys.stderr)

@@ -279,6 +279,11 @@ def bulk_optimum(
             counter[0] += 1
             jobs.append(client.submit(run_point, str(case_dir), overrides, str(folder), cycles,
                                       1, False, pure=False))  # fmt: skip
+        if progress:  # before the runs: each lasts as long as a dem run of the case
+            where = ", ".join(f"{x:.4g}" + (f" (fill {rep})" if rep else "") for x, rep in batch)
+            print(f"dem optimum: running {len(batch)} run(s) at {over} = {where} "
+                  f"({counter[0]} of at most {max_runs} started)", file=sys.stderr,
+                  flush=True)  # fmt: skip
         results = client.gather(jobs)
         if progress:
             for (x, rep), r in zip(batch, results, strict=True):

@@ -261,7 +261,10 @@ def test_a_short_deck_runs_in_lammps_and_summarises_like_dem_run(tmp_path, capsy
     assert s["mean_velocity_norm"] == pytest.approx(s["mean_velocity"] / s["velocity_scale"])
     assert s["grains"] == 40 and s["spheres"] == 40
     assert s["particle_steps_per_s"] == pytest.approx(40 * s["steps"] / s["wall_time_s"], rel=1e-9)
-    assert "LAMMPS 22 Jul 2025" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "LAMMPS 22 Jul 2025" in printed.out
+    # issue 48, item 7: LAMMPS's steps as a bar, not silence (the deck's settle + measurement)
+    assert "LAMMPS:" in printed.err and f"{s['steps']}/{s['steps']}" in printed.err
 
 
 @pytest.mark.integration

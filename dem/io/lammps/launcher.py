@@ -69,9 +69,14 @@ def lammps_version(log: str) -> str | None:
 
 
 def run_lammps(
-    deck_dir: Path, *, ranks: int = 1, timeout: float | None = None
-) -> tuple[str, float]:
-    """Run the deck in ``deck_dir`` on ``ranks`` MPI ranks; returns (log text, wall time s)."""
+    deck_dir: Path, *, ranks: int = 1, timeout: float | None = None,
+    total_steps: int | None = None, progress: bool = False,
+) -> tuple[str, float]:  # fmt: skip
+    """Run the deck in ``deck_dir`` on ``ranks`` MPI ranks; returns (log text, wall time s).
+
+    ``progress``: a bar of LAMMPS's steps on stderr, moved by its thermo lines (one a drive
+    cycle), up to ``total_steps`` (the deck's settle and measurement) when given.
+    """
     refuse_links(deck_dir, (LOG_NAME, VX_FILE), "OUT_DIR")  # LAMMPS would write through them
     lmp, mpirun = find_lammps()
     command = [lmp, "-in", DECK_NAME, "-log", LOG_NAME]
@@ -82,15 +87,57 @@ def run_lammps(
         command = [mpirun, "-np", str(ranks), *command]
     env = dict(os.environ, OMP_NUM_THREADS="1")
     start = time.perf_counter()
-    proc = subprocess.run(command, cwd=deck_dir, capture_output=True, text=True, env=env,
-                          timeout=timeout, check=False)  # fmt: skip
+    if not progress:
+        proc = subprocess.run(command, cwd=deck_dir, capture_output=True, text=True, env=env,
+                              timeout=timeout, check=False)  # fmt: skip
+        out, err, code = proc.stdout, proc.stderr, proc.returncode
+    else:
+        out, err, code = _run_with_bar(command, deck_dir, env, timeout, total_steps)
     wall = time.perf_counter() - start
-    if proc.returncode != 0:
+    if code != 0:
         raise LammpsError(
-            f"LAMMPS failed (exit {proc.returncode}) in {deck_dir}: "
-            f"{(proc.stdout + proc.stderr)[-FAILURE_TAIL:]}"
+            f"LAMMPS failed (exit {code}) in {deck_dir}: {(out + err)[-FAILURE_TAIL:]}"
         )
-    return proc.stdout, wall
+    return out, wall
+
+
+_THERMO = re.compile(r"^\s*(\d+)\s+[-+0-9.eE]+\s")
+
+
+def _run_with_bar(command, deck_dir, env, timeout, total_steps) -> tuple[str, str, int]:
+    """LAMMPS with its stdout read line by line: a tqdm bar of the thermo lines' steps."""
+    import threading
+
+    from tqdm import tqdm
+
+    proc = subprocess.Popen(command, cwd=deck_dir, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+    err_lines: list[str] = []
+    reader = threading.Thread(target=lambda: err_lines.extend(proc.stderr), daemon=True)
+    reader.start()
+    timer = threading.Timer(timeout, proc.kill) if timeout else None
+    if timer is not None:
+        timer.start()
+    lines: list[str] = []
+    bar = tqdm(total=total_steps, unit="step", desc="LAMMPS", file=sys.stderr)
+    try:
+        for line in proc.stdout:
+            lines.append(line)
+            found = _THERMO.match(line)
+            if found:
+                step = int(found.group(1))
+                if total_steps:
+                    step = min(step, total_steps)
+                bar.update(max(0, step - bar.n))
+        code = proc.wait()
+    finally:
+        bar.close()
+        if timer is not None:
+            timer.cancel()
+        if proc.poll() is None:
+            proc.kill()
+    reader.join(timeout=5.0)
+    return "".join(lines), "".join(err_lines), code
 
 
 def per_cycle_velocities(vx: np.ndarray, period: float, dt: float, settle_cycles: int,
