@@ -142,9 +142,11 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         compile_first(case, show)
         compile_wall = time.perf_counter() - t0
         stop.phase = "filling"
-        if show:
-            print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
-                  flush=True)  # fmt: skip
+        if show:  # a resume builds the scene too, then takes the checkpoint's state
+            what = (f"building the scene to resume from {checkpoint.name} (cycle "
+                    f"{progress.cycle})" if resume
+                    else f"filling the trough with {case.particles.count} grains")  # fmt: skip
+            print(f"dem: {what}", file=sys.stderr, flush=True)
         t0 = time.perf_counter()
         sim = setup.from_case(scene)
         fill_wall = time.perf_counter() - t0

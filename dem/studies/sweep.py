@@ -423,7 +423,10 @@ def dask_client(scheduler: str | None, workers: int, command: str):
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - the message is the point
-        raise InputError(command, "dask", "the sweep extra: pip install 'dem[sweep]'") from None
+        raise InputError(
+            command, "dask", "the sweep extra, from the checkout: pip install -e '.[sweep]' "
+            "(a package named dem on the public index is another project)",
+        ) from None  # fmt: skip
     if scheduler:
         try:
             return Client(scheduler), None
