@@ -234,9 +234,16 @@ def cmd_dem_optimum(args) -> int:
         print_json(result)
     else:
         b, p = result["bulk"], result["pointmass"]
-        print(f"bulk optimum {args.over} = {b['x']:.4g} +- {b['uncertainty']:.2g} "
+        where = (f"{b['x']:.4g}, flat within the noise over {b['bracket'][0]:.4g}-"
+                 f"{b['bracket'][1]:.4g}" if b["flat"]
+                 else f"{b['x']:.4g} +- {b['uncertainty']:.2g}")  # fmt: skip
+        print(f"bulk optimum {args.over} = {where} "
               f"({result['objective']} {b['value']:.4g}; {b['reason']}; "
               f"{len(result['samples'])} runs)")  # fmt: skip
+        if b["at_bound"]:
+            print(f"dem: warning: the bulk optimum lies at the {b['at_bound']} bound of the "
+                  f"search ({result['bounds'][0]:g}:{result['bounds'][1]:g}): the best may lie "
+                  "beyond it; widen --bounds", file=sys.stderr)  # fmt: skip
         print(f"point-mass optimum {args.over} = {p['value']:.4g} "
               f"(90 % plateau {p['plateau_90'][0]:.3g}-{p['plateau_90'][1]:.3g})")  # fmt: skip
         print(f"wrote {out / 'optimum.json'}, optimum.csv and optimum.png")

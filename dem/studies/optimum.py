@@ -299,16 +299,19 @@ def bulk_optimum(
         if cluster is not None:
             cluster.close()
     pm = _pointmass(case, over, hold, (lo, hi), pointmass_optimum)
+    bulk = {k: v for k, v in asdict(result).items() if k != "samples"}
+    band = plateau(result)
+    bulk.update(_honest(result, band, lo, hi, tol))
     summary = {
         "case": case.name, "case_dir": str(case_dir.resolve()), "overrides": base,
         "over": over, "hold": hold,
         "objective": objective, "bounds": [lo, hi],
-        "bulk": {k: v for k, v in asdict(result).items() if k != "samples"},
+        "bulk": bulk,
         "pointmass": {"value": pm.value, "plateau_90": list(pm.plateau),
                       objective: getattr(pm, objective)},
         "samples": [dict(zip(("x", "fill", "value", "stderr"), s, strict=True))
                     for s in result.samples],
-        "plateau": plateau(result),
+        "plateau": band,
         "csv_columns": dict(zip(_csv_columns(over, objective), (
             f"the scanned {over}", "the fill (replicate: run.seed = the case's seed + fill)",
             f"the {objective} of the run", "its standard error"), strict=True)),
@@ -318,6 +321,27 @@ def bulk_optimum(
     _write_csv(out / "optimum.csv", result.samples, over, objective)
     _plot(out / "optimum.png", result, pm, over, objective, case.name)
     return summary
+
+
+def _honest(result: NoisyOptimum, band: dict, lo: float, hi: float, tol: float) -> dict:
+    """What the optimum's error bar and position can claim (issue 48, item 2).
+
+    ``flat``: no significant curvature, so no error bar, only the range level with the best.
+    ``uncertainty``: at least half the plateau (where the fitted top is within a run's error of
+    its maximum): the bootstrap of the vertex used each run's own error, which leaves out the
+    fill-to-fill scatter, and gave +-0.07 deg inside a plateau 2 deg wide.
+    ``at_bound``: the optimum within the tolerance of a search bound ("lower", "upper").
+    """
+    flat = "no significant curvature" in result.reason
+    half = 0.5 * (band["range"][1] - band["range"][0])
+    out = {"flat": flat, "uncertainty_bootstrap": result.uncertainty}
+    if flat:
+        out["uncertainty"] = None
+    else:
+        out["uncertainty"] = max(result.uncertainty, half)
+    out["at_bound"] = ("lower" if result.x - lo <= tol else "upper" if hi - result.x <= tol
+                       else None)  # fmt: skip
+    return out
 
 
 def _csv_columns(over: str, objective: str) -> list[str]:

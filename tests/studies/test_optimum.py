@@ -90,3 +90,32 @@ def test_dem_optimum_runs_a_case_and_writes_its_files(tmp_path, capsys):
     (out / "optimum.png").unlink()
     replot(out)  # the figure again, from optimum.json alone
     assert (out / "optimum.png").stat().st_size > 0
+
+
+def test_the_reported_error_bar_is_never_narrower_than_the_plateau_nor_given_when_flat():
+    """Issue 48, item 2: "20.0 +- 0.068 deg" inside a plateau 2 deg wide; an optimum at the
+    search bound without a word; an error bar beside "no significant curvature"."""
+    from dem.studies.optimum import _honest, plateau
+
+    # runs whose own errors are tiny (the fill-to-fill scatter left out), around a broad top
+    def broad(batch):
+        return [(1.0 - 0.0004 * (x - 19.0) ** 2, 0.002) for x, _ in batch]
+
+    r = maximize_noisy(broad, 10.0, 60.0, tolerance=1.0, max_evaluations=20, seed=1)
+    band = plateau(r)
+    h = _honest(r, band, 10.0, 60.0, 1.0)
+    half = 0.5 * (band["range"][1] - band["range"][0])
+    assert not h["flat"] and h["uncertainty"] >= half > r.uncertainty
+    assert h["at_bound"] is None
+
+    def falling(batch):  # best at the lower bound
+        return [(1.0 - 0.01 * x, 0.002) for x, _ in batch]
+
+    r = maximize_noisy(falling, 10.0, 60.0, tolerance=1.0, max_evaluations=20, seed=1)
+    assert _honest(r, plateau(r), 10.0, 60.0, 1.0)["at_bound"] == "lower"
+
+    rng = np.random.default_rng(3)
+    r = maximize_noisy(lambda b: [(0.5 + 0.01 * rng.standard_normal(), 0.01) for _ in b],
+                       10.0, 60.0, tolerance=1.0, max_evaluations=30)  # fmt: skip
+    h = _honest(r, plateau(r), 10.0, 60.0, 1.0)
+    assert h["flat"] and h["uncertainty"] is None
