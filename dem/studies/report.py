@@ -432,7 +432,7 @@ def _run_text(label, d, s, dem_err, ratio, notes) -> str:
         f"cycles          {_fmt(g('settle_cycles'))} settling + {_fmt(g('cycles'))} measured",
         "",
         f"v               {_fmt(g('mean_velocity'))} +- {_fmt(g('mean_velocity_stderr'))} m/s"
-        " (+-1 standard error of the per-cycle means)",
+        + _error_label(s),
         f"v/(A w cos phi) {_fmt(g('mean_velocity_norm'))} +- {_fmt(dem_err)}",
         f"point mass      {_fmt(g('pointmass_velocity_norm'))}  (DEM / point mass = "
         f"{_fmt(ratio, '.3f')})",
@@ -522,6 +522,16 @@ _DRIVE_KEYS = ("angle", "throw_number", "frequency", "friction", "inclination")
 def _drive_values(summary: dict) -> dict:
     """The drive and material of a run by key, where summary.json gives them as numbers."""
     return {k: summary[k] for k in _DRIVE_KEYS if _is_number(summary.get(k))}
+
+
+def _error_label(s: dict) -> str:
+    """What a run's +- is: one run's per-cycle error, or a pool of fills (issue 48, item 6)."""
+    fills = s.get("replicas", 1)
+    if isinstance(fills, int) and fills > 1:
+        return (f" (+-1 standard error of {fills} fills pooled, the fill-to-fill spread "
+                "included; the per-cycle figure is fill 0's)")  # fmt: skip
+    return (" (+-1 standard error of this run's per-cycle means: it leaves out the "
+            "fill-to-fill spread)")  # fmt: skip
 
 
 def _bounded_lines(paper, bounded) -> list[str]:

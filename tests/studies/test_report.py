@@ -152,3 +152,12 @@ def test_report_shows_the_bounded_point_mass_where_it_differs(tmp_path):
     (out / "summary.json").write_text(json.dumps({**s, "pointmass_bounded_velocity_norm": 0.42}))
     make_report([out])
     assert "bounded p. mass" not in (out / "report" / "report.txt").read_text()
+
+
+def test_report_text_names_which_error_bar_it_shows():
+    """Issue 48, item 6: a 3-fill pool was labelled "+-1 standard error of the per-cycle means"."""
+    from dem.studies.report import _error_label
+
+    assert "3 fills pooled" in _error_label({"replicas": 3})
+    one = _error_label({"replicas": 1})
+    assert "this run's per-cycle means" in one and "leaves out the fill-to-fill" in one
