@@ -278,6 +278,10 @@ def cmd_export_liggghts(args) -> int:
           f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
     if plan.settle_note:
         print(f"settle: {plan.settle_note}")
+    if case.run.replicas > 1:  # a deck is one fill
+        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); run.replicas = "
+              f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
+              "and pool them")  # fmt: skip
     return 0
 
 
@@ -305,6 +309,10 @@ def cmd_export_lammps(args) -> int:
           f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
     if plan.settle_note:
         print(f"settle: {plan.settle_note}")
+    if case.run.replicas > 1:  # a deck is one fill
+        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); run.replicas = "
+              f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
+              "and pool them")  # fmt: skip
     if not args.run:
         return 0
     print(f"dem: running LAMMPS on {args.ranks} rank(s) in {out}", file=sys.stderr)

@@ -252,6 +252,10 @@ def bulk_optimum(
                 "--bounds", f"{lo:g}:{hi:g}", f"bounds at which the case holds: at {over} = "
                 f"{x:g} (holding {hold}) {err.key} = {err.value!r}: {err.allowed}",
             ) from None  # fmt: skip
+    if progress and case.run.replicas > 1:
+        print(f"dem optimum: run.replicas = {case.run.replicas} is not applied: the search "
+              "runs one fill a point and adds fills where the noise needs them",
+              file=sys.stderr)  # fmt: skip
     objective = "velocity_norm" if (over, hold) == ("drive.angle", "throw_number") else "velocity"
     key = "mean_velocity_norm" if objective == "velocity_norm" else "mean_velocity"
     counter = [0]

@@ -266,6 +266,25 @@ def status(point: SweepPoint) -> str:
     return "new"
 
 
+def one_fill_note(command: str, case_dir: Path, sets, progress: bool) -> None:
+    """Say that a sweep's point is one fill whatever run.replicas says.
+
+    A point's error bar is then one run's, which leaves out the fill-to-fill spread.
+    """
+    import sys
+
+    from dem.scene.case import load_case
+
+    if not progress or any(key == "run.seed" for key, _ in sets):
+        return
+    replicas = load_case(case_dir).run.replicas
+    if replicas > 1:
+        print(f"{command}: run.replicas = {replicas} is not applied: each point is one fill "
+              "(its error bar leaves out the fill-to-fill spread); sweep run.seed too "
+              "(--set run.seed=1,2,3) and pool the fills of a point", file=sys.stderr,
+              flush=True)  # fmt: skip
+
+
 def run_point(case_dir: str, overrides: dict, folder: str, cycles, threads: int,
               frames: bool, device: str | None = None) -> dict:  # fmt: skip
     """Run one point (a Dask task; also callable directly); returns its summary.
@@ -312,6 +331,7 @@ def run_sweep(
     """
     case_dir, out = Path(case_dir), Path(out)
     points = plan_points(case_dir, sets, out, cycles=cycles, frames=frames, device=device)
+    one_fill_note("dem sweep", case_dir, sets, progress)
     refuse_links(out, written_names(points))
     check_finished(points, out)
     todo = [p for p in points if status(p) != "done"]

@@ -37,7 +37,6 @@ the trough with the point mass's own orbit (a Moreau-Jean twin of the bounded po
 
 import argparse
 import contextlib
-import csv
 import dataclasses
 import json
 import math
@@ -62,6 +61,7 @@ from dem.kernels.contact import params as kparams  # noqa: E402
 from dem.physics.measure import conveying_velocity  # noqa: E402
 from dem.scene.case import load_case  # noqa: E402
 from validation._lib.header import results_header  # noqa: E402
+from validation._lib.tables import read_rows, write_rows  # noqa: E402
 
 SCRIPT = "validation/hopping-bias/run.py"
 SETTLE, CYCLES = 30, 20
@@ -206,24 +206,11 @@ def grain_row(law, gamma, angle=25.0, friction=0.35, eps_t=0.8, youngs=YOUNGS, d
 
 
 def write_csv(rows, name):
-    path = HERE / name
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {path}", flush=True)
+    print(f"wrote {write_rows(HERE / name, rows)}", flush=True)
 
 
 def read_csv(name):
-    with open(HERE / name) as fh:
-        rows = list(csv.DictReader(fh))
-    for r in rows:
-        for k, v in r.items():
-            try:
-                r[k] = float(v)
-            except ValueError:
-                r[k] = {"True": True, "False": False}.get(v, v)
-    return rows
+    return read_rows(HERE / name)
 
 
 def _worst(rows):
