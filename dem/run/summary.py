@@ -48,8 +48,8 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "replicas": 1,
         "error_bar": "within this run (autocorrelated per-cycle means): it excludes the "
         "fill-to-fill spread, and on the shipped beds at five drives held the long-run mean in "
-        "about 40 % of runs, three pooled fills in about 90 % (validation/steadiness); pool "
-        "fills with run.replicas",
+        "23-53 % of runs, three pooled fills in 92-96 % (validation/steadiness); pool fills "
+        "with run.replicas",
         "mass_flow_rate": flow,
         "mass_flow_rate_per_width": flow / case.trough.width,
         "amplitude": case.drive.amplitude,

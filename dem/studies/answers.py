@@ -34,9 +34,9 @@ def run_summary_lines(s: dict) -> list[str]:
              f"+- {s['mean_velocity_ci95']:.2g} m/s; spread between fills "
              f"{s['replica_spread']:.2g} m/s)")  # fmt: skip
     else:
-        line("error bar", "this run only: it excludes the fill-to-fill spread and covers a "
-             "bed's long-run mean in about 40 % of runs (pool fills with --replicas 3: about "
-             "90 %)")  # fmt: skip
+        line("error bar", "this run only: it excludes the fill-to-fill spread and covered a "
+             "bed's long-run mean in 23-53 % of runs (pool fills with --replicas 3: "
+             "92-96 %)")  # fmt: skip
     steady = s.get("steadiness")
     if steady and "trend_z" in steady:  # one run (a pooled summary says it per replica)
         grew = f"{steady['change_norm']:+.2g} in v_norm over {s['cycles']} measured cycles"

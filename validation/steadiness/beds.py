@@ -9,7 +9,7 @@ shipped ones, ``FILLS`` fills each (seeds 1..FILLS), ``CYCLES`` cycles a run.
 
     .venv/bin/python validation/steadiness/beds.py run [--workers 2] [--fills 6]
     .venv/bin/python validation/steadiness/beds.py collect     # scratch/ -> series.csv
-    .venv/bin/python validation/steadiness/beds.py analyse     # series.csv -> rules.csv, coverage
+    .venv/bin/python validation/steadiness/beds.py analyse     # series.csv -> rules.csv, series.png
 
 Resumable: a run whose cycles.csv is in ``scratch/`` is not run again; runs go seed by seed over
 every drive, so a study stopped early has the same number of fills at each drive. ``series.csv``
@@ -206,6 +206,9 @@ def analyse() -> None:
         floor, _ = floors[(bed, g, a)]
         n = min(len(v) for v in fills.values())
         late = {s: float(np.mean(fills[s][int(LATE_FRACTION * n) : n])) for s in seeds}
+        # is the long run itself still moving? the fills' mean series over the late half
+        mean_late = np.mean([fills[s][int(LATE_FRACTION * n) : n] for s in seeds], axis=0)
+        late_trend = measure.trend(mean_late)
         for rule in ("mser", "mser+trend", "fixed:20", "fixed:40"):
             for extend in (False, True):
                 runs = {}
@@ -242,6 +245,8 @@ def analyse() -> None:
                     "bias_rms": float(np.sqrt(np.mean([r[1] ** 2 for r in single]))),
                     "stderr_median": float(np.median([runs[s][1] for s in seeds])),
                     "fill_spread": float(np.std(list(late.values()), ddof=1)),
+                    "long_run_mean": float(np.mean(list(late.values()))),
+                    "late_trend_z": late_trend.z, "late_change": late_trend.change,
                     "covered_single": sum(r[0] for r in single),
                     "covered_triples": sum(triples), "triples": len(triples),
                 })  # fmt: skip
@@ -249,6 +254,7 @@ def analyse() -> None:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
+    _tables(rows)
     for rule in ("mser", "mser+trend", "fixed:20", "fixed:40"):
         for extend in (False, True):
             for bed in BEDS:
@@ -263,10 +269,95 @@ def analyse() -> None:
                       f"bias {[round(r['bias_mean'], 4) for r in sel]}")  # fmt: skip
 
 
+def _tables(rows: list[dict]) -> None:
+    """coverage.md: the coverage table (bed x rule) and the per-drive table of the README."""
+    names = {
+        ("mser", False): "MSER (before)",
+        ("mser+trend", False): "MSER and trend",
+        ("mser+trend", True): "MSER and trend, extended (now)",
+        ("fixed:20", True): "20 cycles, extended",
+        ("fixed:40", True): "40 cycles, extended",
+    }
+    out = ["| settle | bed | settling cycles (median per drive) | one run covers "
+           "| 3 fills pooled cover |", "| --- | --- | --- | --- | --- |"]  # fmt: skip
+    for (rule, extend), label in names.items():
+        for bed in BEDS:
+            sel = [r for r in rows if r["rule"] == rule and r["extend"] == extend
+                   and r["bed"] == bed]  # fmt: skip
+            if not sel:
+                continue
+            fills = sum(r["fills"] for r in sel)
+            c1 = sum(r["covered_single"] for r in sel)
+            n3 = sum(r["triples"] for r in sel)
+            c3 = sum(r["covered_triples"] for r in sel)
+            settle = ", ".join(f"{r['settle_cycles_median']:g}" for r in sel)
+            out.append(f"| {label} | {bed} | {settle} | {c1}/{fills} ({100 * c1 / fills:.0f} %) | "
+                       f"{c3}/{n3} ({100 * c3 / n3:.0f} %) |")  # fmt: skip
+    out += ["", "| bed | Gamma | phi (deg) | fills | long-run mean | fill spread (sd) | one run's "
+            "error (median) | its bias (mean) | late-half change (z) |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]  # fmt: skip
+    for r in rows:
+        if (r["rule"], r["extend"]) != ("mser+trend", True):
+            continue
+        out.append(f"| {r['bed']} | {r['throw_number']:g} | {r['angle_deg']:g} | {r['fills']} | "
+                   f"{r['long_run_mean']:.4f} | {r['fill_spread']:.4f} | "
+                   f"{r['stderr_median']:.4f} | {r['bias_mean']:+.4f} | "
+                   f"{r['late_change']:+.4f} ({r['late_trend_z']:+.1f}) |")  # fmt: skip
+    (HERE / "coverage.md").write_text("\n".join(out) + "\n")
+    print("\n".join(out))
+
+
+def figure() -> None:
+    """series.png: every fill's per-cycle v_norm at each drive, where the settle rules end, and
+    the long-run mean (the fills' late halves)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    data = load_series()
+    floors = settle_floors()
+    fig, axes = plt.subplots(len(BEDS), len(DRIVES), figsize=(17, 6.5), sharex="row")
+    for i, bed in enumerate(BEDS):
+        for j, (g, a) in enumerate(DRIVES):
+            ax = axes[i, j]
+            fills = data.get((bed, g, a), {})
+            if not fills:
+                continue
+            n = min(len(v) for v in fills.values())
+            floor, _ = floors[(bed, g, a)]
+            for k, (_seed, x) in enumerate(sorted(fills.items())):
+                color = f"C{k}"
+                ax.plot(np.arange(n), x[:n], color=color, lw=0.8)
+                old = replay_settle(x[:n], floor, "mser", 2.0)
+                new = replay_settle(x[:n], floor, "mser+trend", 2.0)
+                ax.plot(old, x[old], "v", color=color, ms=5)
+                ax.plot(new, x[new], "o", color=color, ms=5, mfc="none")
+            late = np.mean([np.mean(x[int(LATE_FRACTION * n) : n]) for x in fills.values()])
+            ax.axhline(late, color="k", lw=1.2, ls="--")
+            lo = min(float(np.min(x[5:n])) for x in fills.values())
+            hi = max(float(np.max(x[5:n])) for x in fills.values())
+            ax.set_ylim(lo - 0.01, hi + 0.01)
+            ax.set_title(f"{bed}: Gamma {g:g}, phi {a:g} deg", fontsize=9)
+            if j == 0:
+                ax.set_ylabel("v / (A omega cos phi), per cycle")
+            if i == len(BEDS) - 1:
+                ax.set_xlabel("drive cycle")
+    fig.suptitle(
+        "Each fill's per-cycle velocity; settle ends: MSER (triangles), MSER and trend "
+        "(circles); dashed: the long-run mean (the fills' late halves)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(HERE / "series.png", dpi=110)
+    print(f"wrote {HERE / 'series.png'}")
+
+
 def main() -> None:
     global SCRATCH
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("part", choices=("run", "collect", "analyse"))
+    p.add_argument("part", choices=("run", "collect", "analyse", "figure"))
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--fills", type=int, default=FILLS)
     p.add_argument("--scratch", type=Path, default=SCRATCH, help="where the runs are")
@@ -277,8 +368,11 @@ def main() -> None:
         run(a.workers, a.fills)
     elif a.part == "collect":
         collect()
-    else:
+    elif a.part == "analyse":
         analyse()
+        figure()
+    else:
+        figure()
 
 
 if __name__ == "__main__":
