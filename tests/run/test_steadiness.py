@@ -85,3 +85,31 @@ def test_an_unsteady_run_measures_more_says_so_and_resumes_bit_for_bit(tmp_path,
     resumed = run_case(case, tmp_path / "cut", progress=False, threads=1, resume=True)
     assert resumed["per_cycle_velocity"] == ref["per_cycle_velocity"]
     assert resumed["steadiness"] == ref["steadiness"]
+
+
+@pytest.mark.integration
+def test_the_steadiness_study_replays_the_settle_dem_run_takes(tmp_path):
+    """validation/steadiness/beds.py judges settle rules on series recorded from cycle 0; its
+    replay of the default rule must end the settle where `dem run` does, and what follows must
+    be the very cycles `dem run` measured."""
+    import importlib.util
+    from pathlib import Path
+
+    from dem.run.record import settle_floor
+
+    path = Path(__file__).resolve().parents[2] / "validation" / "steadiness" / "beds.py"
+    spec = importlib.util.spec_from_file_location("beds", path)
+    beds = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(beds)
+
+    text = SMALL_CASE.replace("settle_cycles = 2", 'settle_cycles = "auto"')
+    case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
+    auto = run_case(case, tmp_path / "auto", progress=False, threads=1, frames=False)
+    settle = auto["settle_cycles"]
+    beds.MEASURED = 3
+    recorded = load_case(tmp_path / "case", {"run.settle_cycles": 0, "run.cycles": settle + 3})
+    with pytest.warns(UserWarning):  # an explicit settle below the friction floor: warned
+        every = run_case(recorded, tmp_path / "all", progress=False, threads=1, frames=False)
+    series = np.array(every["per_cycle_velocity"]) / case.drive.velocity_scale
+    assert beds.replay_settle(series, settle_floor(case), "mser+trend", 2.0) == settle
+    assert every["per_cycle_velocity"][settle : settle + 3] == auto["per_cycle_velocity"][:3]
