@@ -23,3 +23,8 @@ class InputError(ValueError):
 
 class SimulationError(RuntimeError):
     """A run went unstable or cannot continue; the message says why and what to change."""
+
+
+def one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning as the command line prints it, ``dem: warning: ...`` (no file, no line)."""
+    return f"dem: warning: {message}\n"

@@ -9,7 +9,7 @@ import warnings
 
 from dem.cli.options import EXIT_USAGE, option_name
 from dem.cli.parser import build_parser
-from dem.errors import InputError, SimulationError
+from dem.errors import InputError, SimulationError, one_line_warning
 
 #: What an interrupted write leaves behind, by command (the files are replaced whole or not).
 KEPT = {
@@ -20,16 +20,11 @@ KEPT = {
 }
 
 
-def _format_warning(message, category, filename, lineno, line=None) -> str:
-    """One line per warning, as the command line's errors are: ``dem: warning: ...``."""
-    return f"dem: warning: {message}\n"
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``dem`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    warnings.formatwarning = _format_warning
+    warnings.formatwarning = one_line_warning
     try:
         return args.func(args)
     except InputError as err:

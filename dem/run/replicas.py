@@ -66,10 +66,21 @@ def _cores(threads: int | None) -> int:
     return max(1, config.default_threads())
 
 
-def _run_one(case, k: int, out_dir: str, kwargs: dict) -> dict:
-    """Run replica ``k`` in a worker process; its summary, or how it was interrupted."""
+def _run_one(case, k: int, out_dir: str, kwargs: dict, one_line: bool = False) -> dict:
+    """Run replica ``k`` in a worker process; its summary, or how it was interrupted.
+
+    ``one_line``: print warnings as the command line does (a spawned worker starts with
+    Python's format, file and line included).
+    """
     from dem.run.interrupts import RunInterrupted
     from dem.run.runner import run_case
+
+    if one_line:
+        import warnings
+
+        from dem.errors import one_line_warning
+
+        warnings.formatwarning = one_line_warning
 
     try:
         return {"k": k, "summary": run_case(case, Path(out_dir), **kwargs)}
@@ -132,7 +143,7 @@ def run_replicas(
             "cycles": cycles, "threads": per_worker, "progress": progress and k == 0,
             "overwrite": overwrite or (resume and not pending_resume),
             "resume": pending_resume, "frames": frames and (k == 0 or all_replicas),
-            "lab_frame": lab_frame,
+            "lab_frame": lab_frame, "warn": k == 0,
         }  # fmt: skip
         jobs.append((replica_case(case, k), k, str(run_dir), kwargs))
     if progress and not (jobs and not resume and batchable(case) is None):
@@ -162,7 +173,12 @@ def run_replicas(
         try:
             with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
                                      mp_context=context) as pool:  # fmt: skip
-                futures = [pool.submit(_run_one, *job) for job in jobs]
+                import warnings
+
+                from dem.errors import one_line_warning
+
+                one_line = warnings.formatwarning is one_line_warning
+                futures = [pool.submit(_run_one, *job, one_line) for job in jobs]
                 for future in as_completed(futures):
                     try:
                         result = future.result()

@@ -76,6 +76,7 @@ def run_case(
     resume: bool = False,
     frames: bool = True,
     lab_frame: bool = False,
+    warn: bool = True,
 ) -> dict:
     """Run ``case`` into ``out_dir``; returns the summary (also written to summary.json).
 
@@ -94,6 +95,8 @@ def run_case(
         lab_frame: Write the VTK frames in the lab frame: grains and trough displaced by the
             drive s(t) and velocities plus ds/dt, so ParaView shows the trough shaking.
             Otherwise (default) in the trough frame. results.h5 is always in the trough frame.
+        warn: Warn about the plan's advice before the fill (replicas after the first do not:
+            the advice is the same for every fill).
 
     Raises:
         RunInterrupted: SIGINT or SIGTERM arrived before the last cycle ended; a checkpoint was
@@ -117,15 +120,16 @@ def run_case(
     with locked(out_dir), file_size_limit_as_error():
         return _run(scene, out_dir, estimate, n_threads, cycles=cycles, show=progress,
                     overwrite=overwrite, resume=resume, frames=frames,
-                    lab_frame=lab_frame)  # fmt: skip
+                    lab_frame=lab_frame, warn=warn)  # fmt: skip
 
 
 def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: bool,
-         overwrite: bool, resume: bool, frames: bool, lab_frame: bool) -> dict:  # fmt: skip
+         overwrite: bool, resume: bool, frames: bool, lab_frame: bool,
+         warn: bool = True) -> dict:  # fmt: skip
     """The run itself, in the locked folder (:func:`run_case` has checked its arguments)."""
     case = scene.case
     prepare_output(out_dir, overwrite=overwrite, resume=resume)
-    if not resume:
+    if not resume and warn:
         warn_plan(estimate)
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1

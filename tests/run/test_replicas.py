@@ -111,3 +111,21 @@ def test_replicas_key_and_option_are_checked_at_the_door(tiny, capsys):
     with pytest.raises(InputError, match="seed"):
         load_case(tiny, {"run.seed": 2**63 - 2, "run.replicas": 3})
     np.testing.assert_equal(load_case(tiny, {"run.replicas": 2}).run.replicas, 2)
+
+
+@pytest.mark.integration
+def test_the_plan_warning_is_one_line_once_not_once_a_replica(tiny, tmp_path, capfd):
+    """Issue 48, item 5: the stiffness warning came as a Python warning with a file path, once
+    per replica (the replicas' processes warned each, in Python's format)."""
+    from dem.cli import main
+
+    code = main(["run", str(tiny), "--out", str(tmp_path / "out"), "--replicas", "2",
+                 "--threads", "2", "--no-frames"])  # fmt: skip
+    err = capfd.readouterr().err
+    assert code == 0, err
+    warned = [line for line in err.splitlines() if "warning" in line.lower()]
+    assert warned, err  # this soft small bed is warned about
+    assert all(line.startswith("dem: warning: ") for line in warned), warned
+    assert ".py:" not in err
+    plan_lines = [line for line in warned if "dem plan" in line]
+    assert len(plan_lines) == 1, plan_lines
