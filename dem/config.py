@@ -14,7 +14,7 @@ NUMBA_OPTIONS = {"cache": True, "fastmath": False, "nogil": True}
 #: Options for kernels that run a ``prange`` loop.
 NUMBA_PARALLEL_OPTIONS = {**NUMBA_OPTIONS, "parallel": True}
 
-#: Standard gravity, m/s^2 (DESIGN.md section 2).
+#: Standard gravity, m/s^2 (README, Symbols).
 GRAVITY = 9.81
 
 # --- point-mass model -------------------------------------------------------------------------

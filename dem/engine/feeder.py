@@ -2,7 +2,7 @@
 
 A linear feeder is a trough of length L with a back wall at x = 0 and an open end at x = L
 where the product falls into a hopper. ``[feeder]`` in a case turns the periodic section into
-one (DESIGN.md section 6):
+one (README, A DEM run):
 
 - **Back wall**: the plane x = 0 (inward normal +x), a fourth flat wall of the kernel with the
   same contact law as the floor (:func:`dem.kernels.forces.wall_forces`); with a trough mesh it

@@ -558,7 +558,7 @@ def measure_cycles(sim: Simulation, cycles: int, *, settle_cycles: int = 0) -> n
 
     Switches the drive on (phase 0) if it is off, runs ``settle_cycles`` unmeasured cycles,
     then ``cycles`` measured ones, each ending on a whole number of drive periods since the
-    drive started (as ``dem run`` does, without writers). DESIGN.md section 3 defines the
+    drive started (as ``dem run`` does, without writers). README, A DEM run defines the
     velocity: :meth:`Simulation.cycle_velocity` of each cycle.
     """
     if not sim.drive_on:

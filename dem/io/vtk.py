@@ -23,7 +23,7 @@ Frames (coordinates in m):
 
 - Trough frame (default, ``lab_frame=False``): x along the trough (conveying direction), y across,
   z normal to the floor; the floor is z = 0 for 0 <= x <= length, the side walls are
-  y = -width/2 and y = +width/2 (DESIGN.md section 2). The trough is fixed in this frame, the axes
+  y = -width/2 and y = +width/2 (README, Symbols). The trough is fixed in this frame, the axes
   are tilted by the inclination alpha against the horizontal (gravity is
   g (-sin alpha, 0, -cos alpha)); the inclination is stored as field data ``inclination_deg``.
 - Lab frame (``lab_frame=True``): the same axes, but spheres AND trough are shifted by the drive

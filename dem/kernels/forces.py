@@ -16,7 +16,7 @@ directly (no per-pair rows, no gather: the rows' memory is never touched) and th
 adds only the walls (:func:`wall_forces`). Every sphere's sum has the same terms in the same
 order both ways, so one thread and several give the same bits (tested).
 
-Walls (trough frame, DESIGN.md section 2): w = 0 the floor z = 0 with normal +z, w = 1 the side
+Walls (trough frame, README, Symbols): w = 0 the floor z = 0 with normal +z, w = 1 the side
 wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
 infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_w delta
 (``[contact] wall_lever_arm``: f_w = 1, 1/2 or 0, :data:`dem.kernels.contact.WALL_LEVER_ARMS`;

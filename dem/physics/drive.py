@@ -6,8 +6,8 @@ normal part of the peak trough acceleration over the normal part of gravity,
 
     Gamma = A omega^2 sin(phi) / (g cos(alpha)),
 
-and conveying velocities are reported over the drive velocity A omega cos(phi) (DESIGN.md,
-section 3). The inverse forms (the frequency at which a held amplitude or a held peak speed
+and conveying velocities are reported over the drive velocity A omega cos(phi) (README,
+A DEM run). The inverse forms (the frequency at which a held amplitude or a held peak speed
 A omega gives Gamma) live here too. Every function takes angles in degrees and broadcasts over
 numpy arrays; with scalars it returns a float. :func:`dem.scene.spec.resolve_drive`,
 :class:`dem.scene.trough.Trough`, :mod:`dem.physics.measure`, the point-mass model and its sweeps,
@@ -171,7 +171,7 @@ class Motion:
 
     One component is the paper's straight-line drive; two with different phases trace an ellipse
     (a circle for equal amplitudes at right angles a quarter period apart). r(t) is the start-up
-    ramp (:func:`ramp`). In the trough's frame every grain feels -s''(t) (DESIGN.md section 2):
+    ramp (:func:`ramp`). In the trough's frame every grain feels -s''(t) (README, Symbols):
 
         -s'' = sum_k A_k e_k [(omega^2 r - r'') sin(theta_k) - 2 r' omega cos(theta_k)]
 

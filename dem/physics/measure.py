@@ -1,4 +1,4 @@
-"""Measurements of a driven run (DESIGN.md section 3): conveying velocity and mass flow.
+"""Measurements of a driven run (README, A DEM run): conveying velocity and mass flow.
 
 - Mean conveying velocity v: the mass-weighted mean x-velocity of all grains in the trough frame,
   sum_i m_i v_x,i / sum_i m_i, averaged over each whole drive cycle; v is the mean of the

@@ -1,6 +1,6 @@
 """Event-driven integration of the point-mass model (numba kernels; arrays and scalars only).
 
-Dimensionless variables (Sec. 2.2 of the paper, DESIGN.md section 4). The drive phase is
+Dimensionless variables (Sec. 2.2 of the paper, README, The point-mass model). The drive phase is
 ``theta = omega t``, kept in [0, 2 pi) within a cycle. Relative to the trough:
 
 - ``u``: tangential velocity in units of ``A omega cos(phi)``; ``x`` its integral (units

@@ -1,7 +1,7 @@
 """Parameter sweeps of the point-mass model and the optimum vibration angle or throw number.
 
 An optimum only means something with a statement of what is held fixed while the angle or
-the throw number changes (DESIGN.md section 4). The conveying velocity in m/s is
+the throw number changes (README, The point-mass model). The conveying velocity in m/s is
 
     v = v_norm(Gamma, phi) * A omega cos(phi),   Gamma = A omega^2 sin(phi) / (g cos(alpha)),
 

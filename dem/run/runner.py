@@ -17,7 +17,7 @@ What one run does, in order:
    record with the writers' positions);
 4. when SIGINT or SIGTERM arrives (checked between chunks, :mod:`dem.run.interrupts`), write
    the checkpoint and end the run with :class:`RunInterrupted`;
-5. write ``summary.json`` (DESIGN.md section 6, :mod:`dem.run.summary`; strict JSON, written
+5. write ``summary.json`` (README, A DEM run, :mod:`dem.run.summary`; strict JSON, written
    whole by a rename) and close the writers (results.h5 marked complete, the checkpoint
    removed). A signal after the last cycle is recorded until then: the run finishes its
    summary and says so.

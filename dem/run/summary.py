@@ -1,4 +1,4 @@
-"""The summary of a run (summary.json, DESIGN.md section 6), and the case's fingerprint.
+"""The summary of a run (summary.json, README, A DEM run), and the case's fingerprint.
 
 :func:`summarize` gathers what a finished run reports: the conveying velocity over the measured
 cycles with its error bar (:func:`dem.physics.measure.conveying_velocity`), the mass flow, a

@@ -1,6 +1,6 @@
 """Case files: ``cases/NAME/case.toml`` -> one validated, frozen :class:`Case`.
 
-Everything a run needs is checked here, once, before anything runs (DESIGN.md section 6): every
+Everything a run needs is checked here, once, before anything runs (README, A DEM run): every
 key is known, has the right type and lies in its allowed range (each read through its row of the
 schema, :mod:`dem.scene.schema`), keys of a shape or law not chosen are refused, and the drive is
 resolved so that both the amplitude A and the throw number Gamma are available,

@@ -24,7 +24,7 @@ from dem.scene.schema import DEFAULT_TANGENTIAL_STIFFNESS_RATIO, TANGENTIAL_CONV
 
 @dataclass(frozen=True)
 class TroughSpec:
-    """Periodic section of the trough (DESIGN.md section 2).
+    """Periodic section of the trough (README, Symbols).
 
     Attributes:
         length: Length of the periodic section along x, m.

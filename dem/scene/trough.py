@@ -1,6 +1,6 @@
 """Trough geometry and drive, in the trough's own (accelerating) frame.
 
-Frame (DESIGN.md section 2): x along the trough, y across, z normal to the floor. The floor is
+Frame (README, Symbols): x along the trough, y across, z normal to the floor. The floor is
 z = 0, the side walls are y = -width/2 and y = +width/2, and the section is periodic in x with
 period ``length``. Inclination alpha > 0 means the trough rises in +x, so gravity in this frame is
 
@@ -20,7 +20,7 @@ and s''(t) = -A omega^2 sin(omega t) e. The frame force is therefore
 the extra acceleration every grain gets while the walls stay still. Contact forces depend on
 relative positions and velocities only, which are the same in both frames, so nothing is lost.
 Velocities in this frame are the velocities relative to the trough, the ones the conveying
-velocity is measured in (DESIGN.md section 3).
+velocity is measured in (README, A DEM run).
 
 Walls. This module is the Python description of the walls the kernel
 (:mod:`dem.kernels.forces`) computes contacts with, in the kernel's order w = 0, 1, 2

@@ -1,6 +1,6 @@
 """Reports of finished (or killed) runs: figures, a text summary, and a comparison across runs.
 
-``make_report([OUT])`` reads ``OUT/summary.json`` (DESIGN.md section 6) and, when present,
+``make_report([OUT])`` reads ``OUT/summary.json`` (README, A DEM run) and, when present,
 ``OUT/results.h5`` (:mod:`dem.io.hdf5`), and writes into the report folder:
 
 - ``velocity_per_cycle.png``: the mass-weighted mean x-velocity of every cycle (settling cycles

@@ -1,7 +1,7 @@
 """1 and 2 numba threads step a bed bit for bit: plain spheres, and screws (clumps).
 
-The parallel loops are race-free by construction (each sphere sums its own contacts, STYLE.md
-item 4), so the thread count must not change a single bit of the state. A case's seeded fill is
+The parallel loops are race-free by construction (each sphere sums its own
+contacts), so the thread count must not change a single bit of the state. A case's seeded fill is
 given random velocities, so that grains meet in the air and on the floor within a few hundred
 steps; after a common start, copies of that bed are driven on 1 and on 2 threads and compared
 with ``np.array_equal``: positions, velocities, the angular state and the contact history (pair

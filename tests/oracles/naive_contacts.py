@@ -1,6 +1,6 @@
 """Brute-force NumPy count of each sphere's contacts: every pair (no pair list), every wall.
 
-Written from the geometry (DESIGN.md section 2: the floor z = 0, the side walls y = -+width/2,
+Written from the geometry (README, Symbols: the floor z = 0, the side walls y = -+width/2,
 the back wall x = 0 of a finite feeder, the periodic section along x), not from the kernels, so
 that :func:`dem.kernels.forces.contact_counts` is checked against an independent count.
 """

@@ -51,7 +51,7 @@ def test_regimes_switch_at_the_thresholds(angle, friction, inclination):
 
 
 def gamma_of_flight(n):
-    """Throw number whose flight (eps_n = 0) lasts n cycles (DESIGN.md section 4)."""
+    """Throw number whose flight (eps_n = 0) lasts n cycles (README, The point-mass model)."""
     a = 2 * math.pi * n
     return math.sqrt(1 + ((2 * math.pi**2 * n**2 + math.cos(a) - 1) / (a - math.sin(a))) ** 2)
 
@@ -102,7 +102,7 @@ def test_one_period_flight_on_incline(alpha, eps_t):
     # With alpha != 0 gravity along the floor is balanced by the landing impulses alone:
     # u0 = -2 pi c eps_t / (1 - eps_t) with c = tan a tan phi / Gamma, so
     # v = pi (1 - tan a tan phi) / Gamma - 2 pi c eps_t / (1 - eps_t).
-    # (DESIGN.md states the eps_t-free form, which holds for alpha = 0 or eps_t = 0 only.)
+    # (The form without the eps_t term holds for alpha = 0 or eps_t = 0 only.)
     gamma, phi = 3.5, 25.0
     c = math.tan(math.radians(alpha)) * math.tan(math.radians(phi)) / gamma
     expected = math.pi / gamma - math.pi * c - 2 * math.pi * c * eps_t / (1 - eps_t)

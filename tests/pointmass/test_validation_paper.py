@@ -59,7 +59,7 @@ def test_landing_phase_oracles():
     for gamma in (3.4, 3.6):
         landings = mf.normal_landings(gamma)
         assert np.allclose(landings, math.degrees(math.acos(math.pi / gamma)), atol=1e-6)
-    # half-cycle flight at Gamma(0.5) = 1.36846 (DESIGN.md section 4)
+    # half-cycle flight at Gamma(0.5) = 1.36846 (README, The point-mass model)
     gamma = 1.368457
     landings = mf.normal_landings(gamma)
     assert np.allclose(landings, math.degrees(math.asin(1 / gamma)) + 180.0, atol=1e-2)

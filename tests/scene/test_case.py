@@ -120,7 +120,7 @@ def test_single_sphere_slides_without_flight():
     contact_frequency = math.sqrt(case.contact.stiffness / mass) / (2 * math.pi)
     assert contact_frequency > 20 * case.drive.frequency
     mu, phi = case.material.friction, math.radians(case.drive.angle)
-    forward = mu / (1 / math.tan(phi) + mu)  # DESIGN.md Eq. 1 at alpha = 0
+    forward = mu / (1 / math.tan(phi) + mu)  # the paper's Eq. 1 at alpha = 0
     assert forward < case.drive.throw_number < 1.0
 
 

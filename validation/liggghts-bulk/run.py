@@ -15,7 +15,7 @@ Regenerates results.json, results.csv, velocity.png and decks/phi_XX/in.dem in t
 Base case: sphere-bed-5e7 here, the LIGGGHTS-parity bed (cases/sphere-bed as shipped until
 2026-11-26: 1500 Hertz spheres r = 2 mm, E = 5e7 Pa, nu = 0.3, mu = 0.35,
 0.10 m x 0.04 m periodic section, 60 Hz, A = 0.5 mm), with restitution_normal = 0.06 in BOTH
-codes (LIGGGHTS refuses e <= 0.05; DESIGN.md section 8), the same explicit time step and the
+codes (LIGGGHTS refuses e <= 0.05; README, A short tour), the same explicit time step and the
 same number of settle and measured drive cycles. The vibration angle phi is swept at fixed
 amplitude, so Gamma = A omega^2 sin(phi) / g changes with phi.
 

@@ -15,11 +15,11 @@ line.startswith("#")), delimiter=",", names=True, dtype=None, encoding=None)``.
 
 Velocities are normalised by the drive velocity ``A omega cos(phi)``; the m/s panels use the
 paper's 60 Hz. What is held fixed while the angle changes decides where the optimum lies
-(DESIGN.md section 4): the throw number Gamma (the paper's Figs. 7-8), the amplitude A, or the
-peak trough acceleration A omega^2 = K g. At a fixed frequency the last two are the same hold
-(A = K g / omega^2); both are computed and reported, which checks that identity. A fourth
-reading holds Gamma but measures the velocity in units of the drive velocity amplitude,
-v / (A omega) = v_norm cos(phi) (``v_over_A_omega``; no frequency enters).
+(README, The point-mass model): the throw number Gamma (the paper's Figs. 7-8), the
+amplitude A, or the peak trough acceleration A omega^2 = K g. At a fixed frequency the last
+two are the same hold (A = K g / omega^2); both are computed and reported, which checks that
+identity. A fourth reading holds Gamma but measures the velocity in units of the drive
+velocity amplitude, v / (A omega) = v_norm cos(phi) (``v_over_A_omega``; no frequency enters).
 
 This file is the entry point; the work is in the modules beside it: fig2_regimes.py,
 fig6_throw_number.py (claims a and b), optima.py and angle_figures.py (Figs. 7 and 8, claims c

@@ -1,9 +1,9 @@
 """The optimum vibration angle of the point mass under each hold, and the drive along a hold.
 
-What is held fixed while the angle changes decides where the optimum lies (DESIGN.md section 4):
-the throw number Gamma, the amplitude A, or the peak trough acceleration A omega^2 = K g; a
-fourth reading holds Gamma and measures v / (A omega) = v_norm cos(phi). The drive at the
-paper's 60 Hz comes from :mod:`dem.physics.drive`.
+What is held fixed while the angle changes decides where the optimum lies (README, The
+point-mass model): the throw number Gamma, the amplitude A, or the peak trough acceleration
+A omega^2 = K g; a fourth reading holds Gamma and measures v / (A omega) = v_norm cos(phi).
+The drive at the paper's 60 Hz comes from :mod:`dem.physics.drive`.
 """
 
 import math

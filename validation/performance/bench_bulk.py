@@ -1,6 +1,6 @@
 """Speed bar: particle-steps per second of LIGGGHTS and of dem on the same case.
 
-particle-steps/s = spheres * time steps / wall time of the step loop (DESIGN.md section 3); for
+particle-steps/s = spheres * time steps / wall time of the step loop (README, A DEM run); for
 screws and clumps the spheres are the clump members (LIGGGHTS's atoms under fix multisphere).
 
 LIGGGHTS half: the case is exported with dem.io.liggghts.write_deck (fill, settle, then the

@@ -1,4 +1,4 @@
-"""Export a case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (DESIGN.md section 8).
+"""Export a case as an equivalent LIGGGHTS-PUBLIC 3.8 input deck (README, A short tour).
 
 The deck simulates the same trough section in the trough's accelerating frame: the walls stay
 still and every grain feels the effective gravity (:mod:`dem.io.liggghts.drive`). It is written

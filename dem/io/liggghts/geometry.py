@@ -10,7 +10,7 @@ and become one granular wall, ``fix trough all mesh/surface file trough.stl type
 primitive walls (``curvature_tolerant yes`` is added only if a triangle has a corner angle below
 LIGGGHTS's default curvature, 0.256 deg, which it would otherwise refuse). The mesh is not
 moved: the drive is a translation, so in the trough's frame the walls stand still and the same
-effective gravity is exact (DESIGN.md section 2); no ``fix move/mesh`` is needed. The box is
+effective gravity is exact (README, Symbols); no ``fix move/mesh`` is needed. The box is
 periodic over x in [0, length], which the mesh spans, and reaches
 :data:`MESH_BOX_MARGIN` grain reaches beyond the mesh across y and below it. LIGGGHTS copies
 the triangles across the periodic boundary itself (ghost elements); a sphere rolling across
@@ -260,7 +260,7 @@ def layout(case: Case, out: Path, *, r_min: float, r_max: float, grain_volume: f
         wall_note = [
             f"# walls: {MESH_FILE}, the {len(tri)} triangles of {t.mesh.name} (m, trough frame),",
             "#   standing still: the drive translates the trough, so in its frame the walls do",
-            "#   not move (no move/mesh; DESIGN.md section 2). The insertion block lies inside the",
+            "#   not move (no move/mesh; README, Symbols). The insertion block lies inside the",
             "#   pan, clear of the mesh: insert/pack does not check grains against a mesh",
         ]
     feeder = case.feeder
