@@ -146,11 +146,9 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         compile_first(case, show)
         compile_wall = time.perf_counter() - t0
         stop.phase = "filling"
-        if show:  # a resume builds the scene too, then takes the checkpoint's state
-            what = (f"building the scene to resume from {checkpoint.name} (cycle "
-                    f"{progress.cycle})" if resume
-                    else f"filling the trough with {case.particles.count} grains")  # fmt: skip
-            print(f"dem: {what}", file=sys.stderr, flush=True)
+        if show and not resume:  # a resume says so once the checkpoint's state is in
+            print(f"dem: filling the trough with {case.particles.count} grains", file=sys.stderr,
+                  flush=True)  # fmt: skip
         t0 = time.perf_counter()
         sim = setup.from_case(scene)
         fill_wall = time.perf_counter() - t0
@@ -167,6 +165,9 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
             ) from None
         if sim.feeder is not None:
             sim.feeder.restore(progress.feeder)
+        if show:
+            print(f"dem: resumed from {checkpoint.name} at cycle {progress.cycle}",
+                  file=sys.stderr, flush=True)  # fmt: skip
     else:
         t0 = time.perf_counter()
         with StopNow() as stop:

@@ -248,7 +248,10 @@ def test_summary_holds_the_overlap_record_and_the_warning(tmp_path, monkeypatch)
     assert len(on_disk["warnings"]) == 1 and "contact.stiffness" in on_disk["warnings"][0]
     monkeypatch.undo()
     summary = run_case(case, tmp_path / "again", progress=False, frames=False)
-    assert summary["warnings"] == [] and summary["max_overlap_fraction"] < 1e-6
+    # the deepest overlap is the dent of the fill's landing, which a perfectly plastic contact
+    # (eps_n = 0) keeps: 3.0e-5 of the radius, the same from the fill's rest to 60 cycles on
+    # (the elastic resting overlap under the weight would be 1.3e-7)
+    assert summary["warnings"] == [] and summary["max_overlap_fraction"] < 1e-4
 
 
 @pytest.mark.validation

@@ -167,7 +167,7 @@ def test_the_resume_hint_repeats_every_option_the_resume_needs(tmp_path, monkeyp
     assert main(argv[1:]) == 0
     err = capsys.readouterr().err
     # issue 48, item 8: a resume said "filling the trough"
-    assert "filling the trough" not in err and "to resume from checkpoint.npz" in err
+    assert "filling the trough" not in err and "resumed from checkpoint.npz at cycle" in err
     summary = _strict((out / "summary.json").read_text())
     assert summary["cycles"] == (4 if "--cycles" in options else 6)
 

@@ -369,7 +369,7 @@ def test_the_plan_counts_replicas_in_its_time_and_its_error():
     from dem.run.plan import plan as make_plan
     from dem.scene.case import load_case
 
-    one = make_plan(load_case("cases/sphere-bed"), threads=2)
+    one = make_plan(load_case("cases/sphere-bed", {"run.replicas": 1}), threads=2)
     three = make_plan(load_case("cases/sphere-bed", {"run.replicas": 3}), threads=2)
     assert three.replicas == 3 and "for 3 fills" in three.text()
     # the statistical part of a pool of 3 fills is that of one over sqrt(3)
