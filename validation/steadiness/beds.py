@@ -125,6 +125,8 @@ def collect() -> None:
                 rows.append({"bed": bed, "throw_number": gamma, "angle_deg": angle, "seed": seed,
                              "cycle": int(r["cycle"]),
                              "velocity_norm": float(r["velocity_norm"])})  # fmt: skip
+    if not rows:  # never overwrite the recorded series with nothing
+        raise SystemExit(f"no finished runs in {SCRATCH}: series.csv left as it is")
     with open(HERE / "series.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
