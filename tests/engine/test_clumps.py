@@ -321,8 +321,8 @@ def test_body_force_acts_at_the_centre_of_mass():
     "found 2026-11-28, open: 20 small screws thrown with random velocities (0.3 m/s) and spins "
     "(100 x their moments) into a driven periodic section (50 Hz, 2 mm, 30 deg; the GPU tests' "
     "scene) under the impact law's plastic contact of eps_n = 0: screw 12 crosses the side wall "
-    "y = -width/2 at t = 1.2 ms (1.86 radii at dt 2e-5 s, 1.48 at 5e-6: not the step) and the "
-    "overlap guard stops the run; the dashpot law before it holds the same scene at 0.075 "
+    "y = -width/2 within 0.5 ms (the guard reports 1.86 radii at dt 2e-5 s, 1.48 at 5e-6: "
+    "not the step) and stops the run; the dashpot law before it holds the same scene at 0.075 "
     "radii. The shipped screw beds never met it (30 long runs, validation/steadiness)"
 ))  # fmt: skip
 def test_spinning_screws_at_a_side_wall_stay_in_the_trough_under_the_plastic_contact():
