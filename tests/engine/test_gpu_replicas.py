@@ -184,10 +184,11 @@ def test_settle_rests_every_replica_and_starts_the_drive_together():
 def test_clump_replicas_are_the_single_run_to_the_bit():
     """Two copies of 20 driven screws stepped together and scattered: each replica's bodies,
     members, pairs and momentum sums are the scene stepped alone on the GPU."""
-    # eps_n = 0.3: under the plastic contact of eps_n = 0 one screw of this scene crosses the
-    # side wall within 25 steps and the replicas' overlap check stops the batch (open; the
-    # strict xfail in tests/engine/test_clumps.py); the other clump tests compare the plastic
-    # contact's bits by raw steps, which do not check
+    # eps_n = 0.3: the scene's random placement starts screw 12 1.95 radii into the side wall;
+    # the plastic contact of eps_n = 0 keeps such an overlap as a dent (it pushes only against
+    # an approach), so its centre stays past the wall and the replicas' overlap check stops
+    # the batch; the dashpot of eps_n = 0.3 pushes it out. The other clump tests compare the
+    # plastic contact's bits by raw steps, which do not check
     law = ("hertz_mindlin", 0.3, 0.5, "impact", True)
     alone = _clump_pair(*law)[1]
     copies = [_clump_pair(*law)[1] for _ in range(2)]
