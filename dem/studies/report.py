@@ -51,6 +51,7 @@ COMPARISON_COLUMNS = (
     "grains",
     "spheres",
     "cycles",
+    "replicas",
     "mean_velocity",
     "mean_velocity_stderr",
     "mean_velocity_norm",
@@ -382,6 +383,7 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
         mean_velocity_norm_stderr=dem_err,
         dem_over_pointmass=ratio,
         cycles=summary.get("cycles"),
+        replicas=summary.get("replicas", 1),
     )
     text = _run_text(label, d, summary, dem_err, ratio, notes)
     replace_text(dest / "report.txt", shown_text(text), encoding="ascii", errors="replace")
@@ -457,7 +459,9 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
 
     names = [summary_column(k) for k in COMPARISON_COLUMNS]
     meaning = {"run": "the run's output folder (its report sub-folder)",
-               "dem_over_pointmass": "mean_velocity_norm over pointmass_velocity_norm"}  # fmt: skip
+               "dem_over_pointmass": "mean_velocity_norm over pointmass_velocity_norm",
+               "replicas": "fills pooled in the run's error (1: its own per-cycle error, which "
+                           "leaves the fill-to-fill spread out)"}  # fmt: skip
     columns = {
         n: {"unit": SUMMARY_UNITS.get(k, ""), "meaning": meaning.get(k, f"summary.json {k}")}
         for n, k in zip(names, COMPARISON_COLUMNS, strict=True)
@@ -471,7 +475,10 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
         ("angle", "phi", ".4g"),
         ("throw_number", "Gamma", ".4g"),
         ("frequency", "f", ".4g"),
+        ("friction", "mu", ".4g"),
+        ("inclination", "alpha", ".4g"),
         ("grains", "grains", "d"),
+        ("replicas", "fills", "d"),
         ("mean_velocity", "v m/s", ".4g"),
         ("mean_velocity_stderr", "se m/s", ".2g"),
         ("mean_velocity_norm", "v_norm", ".4g"),

@@ -132,6 +132,9 @@ def test_comparison_across_runs(tmp_path):
     assert side["columns"]["mean_velocity_m_s"]["unit"] == "m/s" and side["provenance"]
     table = (tmp_path / "cmp" / "comparison.txt").read_text().splitlines()
     assert len(table) == 4 and "dem/pm" in table[0]
+    # issue 48, item 6: the material and incline, and how many fills each error pools
+    assert all(word in table[0].split() for word in ("mu", "alpha", "fills"))
+    assert [int(r["replicas"]) for r in rows] == [1, 1, 1]
     assert _is_png(tmp_path / "cmp" / "comparison.png")
 
 
