@@ -24,6 +24,7 @@ from dem.pointmass.validate import (
     check_throw_number,
     check_transport_friction,
     checked_arrays,
+    drive_inputs,
 )
 
 #: Regime labels, indexed by the integer codes returned by :func:`velocities`.
@@ -164,14 +165,9 @@ def velocities(
     The points run in parallel (numba prange); non-periodic points are rerun from
     ``PM_SPREAD_STARTS`` starting phases to give their mean and spread.
     """
-    g, phi, mu, alpha, et, en = checked_arrays({
-        "throw_number": (throw_number, check_throw_number),
-        "angle": (angle, check_angle),
-        "friction": (friction, check_transport_friction),
-        "inclination": (inclination, check_inclination),
-        "eps_t": (eps_t, check_restitution),
-        "eps_n": (eps_n, check_restitution),
-    })  # fmt: skip
+    g, phi, mu, alpha, et, en = checked_arrays(
+        drive_inputs(throw_number, angle, friction, inclination, eps_t, eps_n)
+    )
     bounded = np.full(g.shape, IMPACT_LAWS[check_impact(impact)])
     params = np.column_stack(
         [g, np.tan(np.radians(phi)), np.tan(np.radians(alpha)), mu, et, en, bounded]

@@ -95,6 +95,7 @@ from dem.pointmass.validate import (
     check_throw_number,
     check_transport_friction,
     checked_arrays,
+    drive_inputs,
 )
 from dem.quantities import QUANTITIES
 
@@ -266,12 +267,7 @@ def velocities(
     check_landing(landing)
     model.check_impact(impact)
     g, phi, mu, alpha, et, en, k, p = checked_arrays({
-        "throw_number": (throw_number, check_throw_number),
-        "angle": (angle, check_angle),
-        "friction": (friction, check_transport_friction),
-        "inclination": (inclination, check_inclination),
-        "eps_t": (eps_t, check_restitution),
-        "eps_n": (eps_n, check_restitution),
+        **drive_inputs(throw_number, angle, friction, inclination, eps_t, eps_n),
         "inertia_factor": (inertia_factor, check_inertia_factor),
         "momentum": (momentum, check_momentum),
     })  # fmt: skip

@@ -62,3 +62,18 @@ def checked_arrays(inputs: dict[str, tuple[object, Callable[[float, str], float]
         for value in np.unique(values):
             check(float(value), key)
     return flat
+
+
+def drive_inputs(throw_number, angle, friction, inclination, eps_t, eps_n) -> dict:
+    """The six inputs of a point-mass drive with their checks, for :func:`checked_arrays`.
+
+    The order is the one the point masses unpack: Gamma, phi, mu, alpha, eps_t, eps_n.
+    """
+    return {
+        "throw_number": (throw_number, check_throw_number),
+        "angle": (angle, check_angle),
+        "friction": (friction, check_transport_friction),
+        "inclination": (inclination, check_inclination),
+        "eps_t": (eps_t, check_restitution),
+        "eps_n": (eps_n, check_restitution),
+    }
