@@ -20,7 +20,6 @@ landings where Eq. 12 asks for more tangential impulse than friction gives.
 """
 
 import argparse
-import csv
 import dataclasses
 import importlib.util
 import json
@@ -43,6 +42,7 @@ from dem.studies import calibrate
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
+sys.path.insert(0, str(ROOT))  # validation._lib
 SETTLE, CYCLES = 30, 20
 #: (model, stiffness) of the sliding map: Hertz from the bed's 5e7 Pa up 100x; linear from the
 #: single sphere's shipped 1.6e7 N/m down 100x (above it the step gets too short to sweep)
@@ -164,24 +164,15 @@ def impact_row(job):
 
 
 def write_csv(rows, name):
-    path = HERE / name
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {path}")
+    from validation._lib.tables import write_rows
+
+    print(f"wrote {write_rows(HERE / name, rows)}")
 
 
 def read_csv(name):
-    with open(HERE / name) as fh:
-        rows = list(csv.DictReader(fh))
-    for r in rows:
-        for k, v in r.items():
-            try:
-                r[k] = float(v)
-            except ValueError:
-                r[k] = {"True": True, "False": False}.get(v, v)
-    return rows
+    from validation._lib.tables import read_rows
+
+    return read_rows(HERE / name)
 
 
 def pool_map(func, jobs, processes=2):
