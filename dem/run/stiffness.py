@@ -113,6 +113,14 @@ SINGLE_GRAIN_ERROR_PER_COMPLIANCE = 0.5
 #: v_norm below a reference of 0.1 (near a threshold a relative error means nothing).
 SINGLE_GRAIN_TOLERANCE = 0.02
 SINGLE_GRAIN_FLOOR = 0.1
+#: Where the grain flies, its error also follows the reference's sensitivity to the contact:
+#: |v_norm(DEM) - v_norm(rigid)| <= K_h |v(Gamma (1 + c)) - v(Gamma (1 - c))| / 2, the bounded
+#: point mass at a throw number moved by the compliance c either way. validation/hopping-bias
+#: (part ``rule``, rule.csv) measured the ratio on Figs. 6 and 7's 64 drives at 2e9 Pa and the
+#: misses at 2e10 and 2e11 Pa: 0.51-7.8 where the error exceeds the sliding rule by more than a
+#: run resolves (0.001), the largest at Gamma 3.8 and 4.4, beside the paper's fall (+0.7 % and
+#: +7.7 % at 2e9 Pa, converging with E); K_h is the worst, rounded up, and covers all 74 rows.
+HOPPING_ERROR_PER_SENSITIVITY = 8.0
 
 
 def single_grain(scene) -> dict | None:
@@ -132,15 +140,22 @@ def single_grain(scene) -> dict | None:
     if reference is None:
         return None
     mode = bed_mode(scene)
+    c = mode.compliance
     allowed = SINGLE_GRAIN_TOLERANCE * max(abs(reference), SINGLE_GRAIN_FLOOR)
-    limit = allowed / SINGLE_GRAIN_ERROR_PER_COMPLIANCE
+    sliding = SINGLE_GRAIN_ERROR_PER_COMPLIANCE * c
+    hopping = None if grains_roll(case) else hopping_error(case, c)
+    expected = max(sliding, hopping or 0.0)
+    # both terms grow about linearly in c: the compliance at which the larger meets the bound
+    limit = c * allowed / expected if expected > 0.0 else math.inf
     out = {
         "single_grain": True,
-        "converged": mode.compliance <= limit,
-        "compliance": mode.compliance,
+        "converged": expected <= allowed,
+        "compliance": c,
         "compliance_limit": limit,
         "grain_mode_hz": mode.omega_bed / (2 * math.pi),
-        "expected_error": SINGLE_GRAIN_ERROR_PER_COMPLIANCE * mode.compliance,
+        "expected_error": expected,
+        "expected_error_sliding": sliding,
+        "expected_error_hopping": hopping,
         "allowed_error": allowed,
         "reference_velocity_norm": reference,
     }
@@ -148,6 +163,40 @@ def single_grain(scene) -> dict | None:
         key, value = stiffness_for(scene, limit)
         out |= {"key": key, "value": round_up(value)}
     return out
+
+
+def hopping_error(case, compliance: float) -> float | None:
+    """A flying lone grain's expected error from the rigid point mass's sensitivity, v_norm.
+
+    :data:`HOPPING_ERROR_PER_SENSITIVITY` times half the change of the Coulomb-bounded point
+    mass when the throw number moves by the compliance c either way: large next to a
+    bifurcation (the paper's fall at Gamma 4.5), where the finite contact's landing phase
+    matters. None where the grain does not fly (Gamma <= 1: the sliding rule alone) or on a
+    two-component drive.
+    """
+    from dem import pointmass
+
+    d, m = case.drive, case.wall_material
+    if not d.is_single or d.throw_number <= 1.0:
+        return None
+
+    def v(gamma):
+        return pointmass.velocity(
+            gamma, d.angle, m.friction, case.trough.inclination, m.restitution_tangential,
+            m.restitution_normal, impact="coulomb",
+        ).velocity_norm  # fmt: skip
+
+    lo, hi = v(d.throw_number * (1.0 - compliance)), v(d.throw_number * (1.0 + compliance))
+    return HOPPING_ERROR_PER_SENSITIVITY * abs(hi - lo) / 2.0
+
+
+def why_expected(one: dict) -> str:
+    """Which rule set a lone grain's expected error, in words with its evidence."""
+    if (one.get("expected_error_hopping") or 0.0) > one.get("expected_error_sliding", 0.0):
+        return (f"{HOPPING_ERROR_PER_SENSITIVITY:g} times the bounded point mass's change when "
+                f"Gamma moves by c either way: a flying grain's landing phase, large beside a "
+                f"bifurcation; validation/hopping-bias")  # fmt: skip
+    return f"{SINGLE_GRAIN_ERROR_PER_COMPLIANCE:g} c, validation/single-grain-stiffness"
 
 
 def advice(scene):
@@ -166,8 +215,7 @@ def advice(scene):
             f"one grain's contact is soft against the drive: (omega / omega_c)^2 = "
             f"{one['compliance']:.3g} (the grain bounces at {one['grain_mode_hz']:.0f} Hz on "
             f"the floor), where a lone grain departs from its rigid reference by up to "
-            f"{SINGLE_GRAIN_ERROR_PER_COMPLIANCE:g} c = {one['expected_error']:.2g} in v_norm "
-            f"(validation/single-grain-stiffness), more than the "
+            f"{one['expected_error']:.2g} in v_norm ({why_expected(one)}), more than the "
             f"{one['allowed_error']:.2g} allowed (2 % of the reference "
             f"{one['reference_velocity_norm']:.3g}); set {one['key']} >= {one['value']:.3g}",
             one["value"],

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from dem.physics.laws import TANGENTIAL_LAWS
 from dem.physics.measure import distinct, with_error
+from dem.run.stiffness import why_expected
 from dem.studies.report import feeder_lines
 
 if TYPE_CHECKING:
@@ -73,7 +74,7 @@ def run_summary_lines(s: dict) -> list[str]:
     if stiff and stiff.get("single_grain"):
         ratio = f"(omega / omega_c)^2 = {stiff['compliance']:.2g}"
         within = (f"expected within {stiff['expected_error']:.2g} in v_norm of the rigid "
-                  f"reference {stiff['reference_velocity_norm']:.3g}")  # fmt: skip
+                  f"reference {stiff['reference_velocity_norm']:.3g} ({why_expected(stiff)})")  # fmt: skip
         if stiff["converged"]:
             line("stiffness", f"stiff enough for the rigid grain's answer, {ratio}: {within}")
         else:
