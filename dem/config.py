@@ -187,3 +187,9 @@ DEM_THREAD_GUARD_TRY_STEPS = 100
 DEM_THREAD_GUARD_TRY_COST = 0.02
 #: ... and at most this many chunks (so that a machine that frees up is noticed).
 DEM_THREAD_GUARD_MAX_WAIT = 400
+
+#: Solid fraction assumed for a resting bed where depth and grain count are converted
+#: (``particles.layers``, ``bed_height``, ``mass_per_area``: :mod:`dem.scene.depth`) and for the
+#: stiffness rule's bed height (:mod:`dem.run.stiffness`); random packings of spheres lie at
+#: 0.55-0.64, of elongated grains lower.
+BED_PACKING = 0.6

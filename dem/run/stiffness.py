@@ -32,13 +32,13 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 
-from dem.config import GRAVITY
+from dem.config import BED_PACKING, GRAVITY
 from dem.kernels import contact
 from dem.physics import measure
 from dem.physics.mass import sphere_volume
 
-#: Solid fraction of a resting bed assumed for its height.
-PACKING = 0.6
+#: Solid fraction of a resting bed assumed for its height (the one of the depth keys).
+PACKING = BED_PACKING
 
 
 @dataclass(frozen=True)

@@ -65,6 +65,7 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "contact_model": case.contact.model,
         **sim.law.tangential_coefficients(),
         "grains": sim.n_grains,
+        "bed": bed_summary(case),
         "spheres": sim.spheres.n,
         "total_mass": total_mass,
         "timestep": sim.dt,
@@ -97,6 +98,19 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "git_commit": provenance["git_commit"],
         "provenance": provenance,
     }
+
+
+def bed_summary(case) -> dict | None:
+    """The bed's depth as layers, height and mass per area, and which one the case gave.
+
+    :func:`dem.scene.depth.bed`; None for a mesh trough or a feeder (no flat section).
+    """
+    from dem.scene import depth
+
+    if case.trough.mesh is not None or case.feeder is not None:
+        return None
+    return depth.bed(case.particles, case.material.density, case.trough.length,
+                     case.trough.width)  # fmt: skip
 
 
 def feeder_summary(case, sim: Simulation, progress: Progress) -> dict | None:
@@ -300,7 +314,14 @@ def wall_summary(case) -> dict:
 RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
 #: Case keys added after checkpoints (and sweep records) were first written, with the value
 #: every older record ran with: an older record without the key is taken to hold that value.
-ADDED_KEYS = {"run.device": "cpu"}
+ADDED_KEYS = {
+    "run.device": "cpu",
+    "particles.layers": None,
+    "particles.bed_height": None,
+    "particles.mass_per_area": None,
+    "run.target_error": None,
+    "run.max_replicas": 12,
+}
 
 
 def fingerprint(case) -> dict:

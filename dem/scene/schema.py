@@ -16,6 +16,8 @@ from __future__ import annotations
 from dem.physics import laws
 from dem.scene.tomltable import REQUIRED, Derived, Key
 
+#: How much grain a case puts in the section: exactly one of these ``[particles]`` keys.
+DEPTH_KEYS = ("count", "layers", "bed_height", "mass_per_area")
 #: Grain shapes (``particles.shape``).
 SHAPES = ("sphere", "screw", "clump")
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
@@ -110,7 +112,10 @@ CONTACT = (
 )
 PARTICLES = (
     Key("shape", "choice", default="sphere", choices=SHAPES),
-    _whole("count"),
+    _whole("count", None),  # exactly one of count and the depths (DEPTH_KEYS)
+    _number("layers", None),
+    _number("bed_height", None),
+    _number("mass_per_area", None),
     _number("radius", owners=("sphere",)),
     Key("rotation", "boolean", default=True),
     _number("length", owners=("screw",)),
@@ -126,6 +131,8 @@ RUN = (
     _number("timestep", None, auto=True),  # None: from the stiffest contact
     _whole("seed", 1),
     _whole("replicas", 1),
+    _number("target_error", None),  # None: run.replicas fills, whatever their error
+    _whole("max_replicas", 12),
     Key("device", "choice", default="cpu", choices=DEVICES),
 )
 OUTPUT = (_whole("frames_per_cycle", 4),)

@@ -246,6 +246,8 @@ class ParticlesSpec:
             spheres as a fraction of the shank radius, 0 < b <= 1; a smaller b takes more
             spheres per screw (:func:`dem.scene.shapes.screw`). Default 0.25: 8 spheres for the
             shipped screw.
+        layers, bed_height, mass_per_area: The depth the case gave instead of ``count`` (grain
+            layers, m, kg/m^2; :mod:`dem.scene.depth`), else None; ``count`` is derived from it.
         grain: The :class:`dem.scene.shapes.Template` built at load (screw, clump), else None; not
             part of :meth:`Case.as_dict`.
 
@@ -261,6 +263,9 @@ class ParticlesSpec:
     mass: float | None = None
     template: Path | None = None
     max_bumpiness: float | None = None
+    layers: float | None = None
+    bed_height: float | None = None
+    mass_per_area: float | None = None
     grain: Any = field(default=None, repr=False, compare=False)
 
     @property
@@ -297,7 +302,11 @@ class RunSpec:
         seed: Seed of the random generator (insertion positions).
         replicas: Independent fills run and pooled (seeds ``seed``, ``seed + 1``, ...;
             :func:`dem.physics.measure.pooled`); 1: one run, whose error bar excludes the
-            fill-to-fill spread.
+            fill-to-fill spread. With ``target_error`` the first batch of fills.
+        target_error: Standard error, as a fraction of |v| (of 0.1 A omega cos phi at least),
+            that the run reaches by pooling more fills, up to ``max_replicas``
+            (:mod:`dem.run.replicas`); None: ``replicas`` fills, whatever their error.
+        max_replicas: Most fills pooled while reaching ``target_error``.
         device: The engine that steps the grains: ``"cpu"`` (numba, the default) or ``"cuda"``
             (numba.cuda on a GPU; :func:`dem.engine.device.check_device` refuses what it cannot
             run yet).
@@ -310,6 +319,8 @@ class RunSpec:
     seed: int = 1
     replicas: int = 1
     device: str = "cpu"
+    target_error: float | None = None
+    max_replicas: int = 12
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,17 @@ def run_summary_lines(s: dict) -> list[str]:
         line("error bar", "this run only: it excludes the fill-to-fill spread and covered a "
              "bed's long-run mean in 23-53 % of runs (pool fills with --replicas 3: "
              "92-96 %)")  # fmt: skip
+    target = s.get("target")
+    if target:
+        line("target error", target["what"])
+    bed = s.get("bed")
+    if bed:
+        given = {"count": "", "layers": " (given as layers)", "bed_height": " (given as height)",
+                 "mass_per_area": " (given as mass per area)"}[bed["given"]]  # fmt: skip
+        line("bed", f"{bed['count']} grains{given}: {bed['layers']:.2g} layers of "
+             f"{1e3 * bed['layer_thickness_m']:.3g} mm, {1e3 * bed['bed_height_m']:.3g} mm deep "
+             f"at solid fraction {bed['packing_assumed']:g}, {bed['mass_per_area_kg_m2']:.3g} "
+             "kg/m^2")  # fmt: skip
     steady = s.get("steadiness")
     if steady and "trend_z" in steady:  # one run (a pooled summary says it per replica)
         grew = f"{steady['change_norm']:+.2g} in v_norm over {s['cycles']} measured cycles"
@@ -74,7 +85,8 @@ def run_summary_lines(s: dict) -> list[str]:
     if stiff and stiff.get("single_grain"):
         ratio = f"(omega / omega_c)^2 = {stiff['compliance']:.2g}"
         within = (f"expected within {stiff['expected_error']:.2g} in v_norm of the rigid "
-                  f"reference {stiff['reference_velocity_norm']:.3g} ({why_expected(stiff)})")  # fmt: skip
+                  f"reference {stiff['reference_velocity_norm']:.3g} "
+                  f"({why_expected(stiff)})")  # fmt: skip
         if stiff["converged"]:
             line("stiffness", f"stiff enough for the rigid grain's answer, {ratio}: {within}")
         else:

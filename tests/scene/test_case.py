@@ -345,7 +345,13 @@ BAD = [
     ("missing-angle", {"drive.angle": None}, "drive.angle", "required"),
     ("missing-density", {"material.density": None}, "material.density", "required"),
     ("missing-friction", {"material.friction": None}, "material.friction", "required"),
-    ("missing-count", {"particles.count": None}, "particles.count", "required"),
+    (
+        "missing-count",
+        {"particles.count": None},
+        "particles.count",
+        "exactly one of particles.count, layers",
+    ),
+    ("count-and-layers", {"particles.layers": 2.0}, "particles.count", "(given: count, layers)"),
     ("missing-radius", {"particles.radius": None}, "particles.radius", "required"),
     ("missing-E", {"contact.youngs_modulus": None}, "contact.youngs_modulus", "required"),
     (
