@@ -17,6 +17,7 @@ KEPT = {
     "--resume continues from the last checkpoint)",
     "sweep": "every finished point's folder stays as it is, and a rerun skips them",
     "optimum": "every finished run's folder stays as it is",
+    "atlas": "every finished point's folder stays as it is, and a rerun skips them",
 }
 
 

@@ -218,6 +218,28 @@ def cmd_dem_sweep(args) -> int:
     return 1 if result["failed"] else 0
 
 
+def cmd_dem_atlas(args) -> int:
+    """``dem atlas``: bulk runs over a grid file, each to a target error, into one table."""
+    from dem.studies.atlas import run_atlas
+
+    check_numbers(args)
+    grid = Path(args.grid)
+    out = output_folder("--out", args.out, grid.with_suffix(""))
+    result = run_atlas(grid, out, workers=args.workers, scheduler=args.scheduler,
+                       threads=args.threads, device=args.device, rerun_stale=args.rerun_stale,
+                       dry_run=args.dry_run)  # fmt: skip
+    if args.json:
+        print_json(result)
+    elif not args.dry_run:
+        print(f"{result['points']} points: {result['done']} finished, {len(result['failed'])} "
+              f"failed; wrote {result['csv']}, atlas.h5 and atlas.png")  # fmt: skip
+    for name, error in result.get("failed", {}).items():
+        print(f"dem: atlas point {name} failed: {error}", file=sys.stderr)
+    if result.get("stopped"):
+        return 128 + int(result["stopped"])
+    return 1 if result.get("failed") else 0
+
+
 def cmd_dem_optimum(args) -> int:
     """``dem optimum``: the DEM's best angle or throw number around the point mass's."""
     from dem.studies.optimum import bulk_optimum

@@ -209,6 +209,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=c.cmd_dem_sweep)
 
+    p = sub.add_parser(
+        "atlas", help="the bulk against the point mass over a grid file, resumable, each point "
+        "to a target error",
+    )  # fmt: skip
+    p.add_argument("grid", metavar="GRID", help="grid file (TOML): [atlas] and [[grid]] blocks")
+    p.add_argument("--out", help="atlas folder (default: beside GRID, named after it)")
+    p.add_argument("--workers", type=WHOLE, help="points at once on a local Dask cluster "
+                   "(default 1: one point at a time, its fills on the cores)")  # fmt: skip
+    p.add_argument("--scheduler", help="address of a running dask scheduler")
+    p.add_argument("--threads", type=WHOLE, help="cores one point's fills share (default: all)")
+    add_device(p)
+    p.add_argument("--rerun-stale", action="store_true", help="move points run with another "
+                   "case or settings to OUT/stale/ and run them again")  # fmt: skip
+    p.add_argument("--dry-run", action="store_true", help="count the points and stop")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=c.cmd_dem_atlas)
+
     p = sub.add_parser("optimum", help="the bulk optimum angle (or throw number) of a case")
     p.add_argument("case_dir", help="directory holding case.toml")
     p.add_argument("--over", required=True, choices=("drive.angle", "drive.throw_number"))

@@ -101,12 +101,14 @@ def run_replicas(
     frames: bool = True,
     lab_frame: bool = False,
     all_replicas: bool = False,
+    warn: bool = True,
 ) -> dict:
     """Run ``case.run.replicas`` fills of ``case`` into ``out_dir`` and pool them.
 
     Arguments as :func:`dem.run.runner.run_case`; ``threads`` is the number of cores shared among
     the replicas (default: the default thread count); ``all_replicas`` keeps every replica's
-    frames and results.h5 (default: replica 0's only). Returns the pooled summary, also
+    frames and results.h5 (default: replica 0's only); ``warn``: replica 0 gives the plan's
+    warnings (a study that gave them already passes False). Returns the pooled summary, also
     written to ``out_dir/summary.json``. With one replica this is :func:`dem.run.runner.run_case`.
 
     Raises:
@@ -114,7 +116,6 @@ def run_replicas(
             kept and the interrupted ones left a checkpoint (``resume`` continues them).
 
     """
-    from dem.run.interrupts import RunInterrupted
     from dem.run.runner import run_case
 
     n = case.run.replicas
@@ -127,12 +128,99 @@ def run_replicas(
     if not resume:
         _check_outputs(out_dir, n, overwrite)
     cores = _cores(threads)
-    workers = min(n, cores)
-    per_worker = max(1, cores // workers)
     started = time.perf_counter()
+    options = {"cycles": cycles, "progress": progress, "overwrite": overwrite, "resume": resume,
+               "frames": frames, "lab_frame": lab_frame, "all_replicas": all_replicas,
+               "warn": warn}  # fmt: skip
     summaries: dict[int, dict] = {}
+    processes = _run_fills(case, out_dir, range(n), summaries, cores, started, options)
+    target = case.run.target_error
+    history = []
+    while target is not None:
+        pooled = pool_summaries([summaries[k] for k in range(n)])
+        error, goal = target_gap(pooled, target)
+        history.append({"fills": n, "error_norm": error, "mean_velocity_norm":
+                        pooled["mean_velocity_norm"]})  # fmt: skip
+        if error <= goal or n >= case.run.max_replicas:
+            break
+        more = fills_for(n, error, goal, case.run.max_replicas)
+        if progress:
+            print(f"dem: {n} fills give +- {error:.2g} in v_norm, the target is {goal:.2g}: "
+                  f"{more - n} fills more", file=sys.stderr, flush=True)  # fmt: skip
+        processes = _run_fills(case, out_dir, range(n, more), summaries, cores, started, options)
+        n = more
+    summary = pool_summaries([summaries[k] for k in range(n)], time.perf_counter() - started,
+                             processes=processes)  # fmt: skip
+    if target is not None:
+        summary["target"] = target_record(summary, target, history, case.run.max_replicas)
+        summary["replicas_requested"] = case.run.replicas
+    summary["replica_outputs"] = "all" if all_replicas else "replica 0 (frames, results.h5)"
+    if not all_replicas:
+        for k in range(1, n):
+            _drop_run_files(replica_dir(out_dir, k))
+    replace_text(out_dir / SUMMARY, json_text(summary))
+    return summary
+
+
+def target_gap(pooled: dict, target: float) -> tuple[float, float]:
+    """The pooled error in v_norm and the goal it must reach: ``target`` max(|v_norm|, 0.1).
+
+    Near a regime's threshold, where v -> 0, a relative error means nothing: the goal is then
+    ``target`` of 0.1 A omega cos phi (as the lone grain's tolerance, :mod:`dem.run.stiffness`).
+    """
+    error = float(pooled["mean_velocity_norm_stderr"])
+    return error, target * max(abs(float(pooled["mean_velocity_norm"])), TARGET_FLOOR)
+
+
+#: The v_norm below which ``run.target_error`` is a fraction of this instead of |v_norm|.
+TARGET_FLOOR = 0.1
+
+
+def fills_for(n: int, error: float, goal: float, most: int) -> int:
+    """How many fills to pool next: the error falls as 1 / sqrt(fills), one more at least."""
+    if not math.isfinite(error) or goal <= 0.0:
+        return min(most, n + 1)
+    return max(n + 1, min(most, math.ceil(n * (error / goal) ** 2)))
+
+
+def target_record(summary: dict, target: float, history: list[dict], most: int) -> dict:
+    """What a run with ``run.target_error`` reached, in summary.json's ``target``."""
+    error, goal = target_gap(summary, target)
+    reached = error <= goal
+    n = summary["replicas"]
+    cost = summary.get("elapsed_s")
+    what = (
+        f"{'reached' if reached else 'NOT REACHED'}: +- {error:.2g} in v_norm with {n} fills "
+        f"pooled (target {target:g} of max(|v_norm|, {TARGET_FLOOR:g}) = {goal:.2g})"
+    )
+    if not reached:
+        what += f"; run.max_replicas = {most} fills reached: raise it, or run.cycles"
+    if cost is not None:
+        what += f", {cost:.0f} s"
+    return {"target_error": target, "reached": reached, "error_norm": error, "goal_norm": goal,
+            "fills": n, "max_replicas": most, "steps": history, "what": what}  # fmt: skip
+
+
+def _run_fills(case, out_dir: Path, ks, summaries: dict[int, dict], cores: int, started: float,
+               options: dict) -> int:  # fmt: skip
+    """Run replicas ``ks`` of ``case`` (those not already in ``summaries``) into ``out_dir``.
+
+    Each finished replica's summary goes into ``summaries`` and ``replicas/k/``. Returns the
+    processes that ran at once (1 on a GPU batch).
+
+    Raises:
+        dem.run.interrupts.RunInterrupted: a signal stopped a replica.
+
+    """
+    from dem.run.interrupts import RunInterrupted
+
+    ks = list(ks)
+    resume, overwrite = options["resume"], options["overwrite"]
+    progress, frames = options["progress"], options["frames"]
+    workers = min(len(ks), cores)
+    per_worker = max(1, cores // workers)
     jobs = []
-    for k in range(n):
+    for k in ks:
         own = replica_dir(out_dir, k) / SUMMARY
         if resume and own.is_file() and not _has_checkpoint(out_dir if k == 0 else own.parent):
             summaries[k] = json.loads(own.read_text(encoding="utf-8"))
@@ -140,34 +228,58 @@ def run_replicas(
         run_dir = out_dir if k == 0 else replica_dir(out_dir, k)
         pending_resume = resume and _has_checkpoint(run_dir)
         kwargs = {
-            "cycles": cycles, "threads": per_worker, "progress": progress and k == 0,
+            "cycles": options["cycles"], "threads": per_worker, "progress": progress and k == 0,
             "overwrite": overwrite or (resume and not pending_resume),
-            "resume": pending_resume, "frames": frames and (k == 0 or all_replicas),
-            "lab_frame": lab_frame, "warn": k == 0,
+            "resume": pending_resume, "frames": frames and (k == 0 or options["all_replicas"]),
+            "lab_frame": options["lab_frame"], "warn": options["warn"] and k == 0,
         }  # fmt: skip
         jobs.append((replica_case(case, k), k, str(run_dir), kwargs))
-    if progress and not (jobs and not resume and batchable(case) is None):
+    first = ks[0] if ks else 0
+    batched = bool(jobs) and not resume and batchable(case) is None
+    if progress and jobs and not batched:
         print(
-            f"dem: {n} replicas (seeds {case.run.seed}..{case.run.seed + n - 1}), "
+            f"dem: {len(ks)} replicas (seeds {case.run.seed + first}..{case.run.seed + ks[-1]}), "
             f"{len(jobs)} to run on {workers} process(es) x {per_worker} thread(s)",
             file=sys.stderr, flush=True,
         )  # fmt: skip
-    interrupted = []
-    batched = jobs and not resume and batchable(case) is None
     if batched:
         if progress:
-            print(f"dem: the {n} replicas run as one GPU batch (dem.run.batch)", file=sys.stderr,
-                  flush=True)  # fmt: skip
-        run_dirs = [out_dir if k == 0 else replica_dir(out_dir, k) for k in range(n)]
-        done = run_batch([replica_case(case, k) for k in range(n)], run_dirs, cycles=cycles,
-                         progress=progress, overwrite=overwrite, frames=frames,
-                         lab_frame=lab_frame,
-                         keep_frames=[k == 0 or all_replicas for k in range(n)])  # fmt: skip
-        for k, summary in done.items():
+            print(f"dem: the {len(jobs)} replicas run as one GPU batch (dem.run.batch)",
+                  file=sys.stderr, flush=True)  # fmt: skip
+        run_dirs = [out_dir if k == 0 else replica_dir(out_dir, k) for k in ks]
+        done = run_batch([replica_case(case, k) for k in ks], run_dirs, cycles=options["cycles"],
+                         progress=progress, overwrite=True, frames=frames,
+                         lab_frame=options["lab_frame"],
+                         keep_frames=[k == 0 or options["all_replicas"] for k in ks])  # fmt: skip
+        for i, summary in done.items():
+            k = ks[i]
             summaries[k] = summary
             _keep_own_summary(out_dir, k, summary)
-        jobs = []
-    if jobs:
+        return 1
+    interrupted = []
+
+    def finished(result: dict) -> None:
+        k = result["k"]
+        if "interrupted" in result:
+            interrupted.append(result)
+            return
+        summaries[k] = result["summary"]
+        _keep_own_summary(out_dir, k, result["summary"])
+        if progress:
+            s = result["summary"]
+            print(
+                f"dem: replica {k} (seed {s['seed']}) done: v = "
+                f"{s['mean_velocity']:.4g} +- {s['mean_velocity_stderr']:.2g} m/s "
+                f"({len(summaries)} done, {time.perf_counter() - started:.0f} s)",
+                file=sys.stderr, flush=True,
+            )  # fmt: skip
+
+    if jobs and workers == 1:  # one core: in this process, one after the other (no children,
+        for job in jobs:  # so a daemonic Dask worker can run it too)
+            finished(_run_one(*job))
+            if interrupted:
+                break
+    elif jobs:
         context = multiprocessing.get_context("spawn")  # fork after numba's threads is unsafe
         previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # the workers checkpoint
         try:
@@ -179,26 +291,12 @@ def run_replicas(
 
                 one_line = warnings.formatwarning is one_line_warning
                 futures = [pool.submit(_run_one, *job, one_line) for job in jobs]
-                for future in as_completed(futures):
-                    try:
-                        result = future.result()
-                    except BaseException:
-                        _stop_workers(pool)
-                        raise
-                    k = result["k"]
-                    if "interrupted" in result:
-                        interrupted.append(result)
-                        continue
-                    summaries[k] = result["summary"]
-                    _keep_own_summary(out_dir, k, result["summary"])
-                    if progress:
-                        s = result["summary"]
-                        print(
-                            f"dem: replica {k} (seed {s['seed']}) done: v = "
-                            f"{s['mean_velocity']:.4g} +- {s['mean_velocity_stderr']:.2g} m/s "
-                            f"({len(summaries)}/{n}, {time.perf_counter() - started:.0f} s)",
-                            file=sys.stderr, flush=True,
-                        )  # fmt: skip
+                try:
+                    for future in as_completed(futures):
+                        finished(future.result())
+                except BaseException:  # a replica failed, or the caller's signal handler raised
+                    _stop_workers(pool)
+                    raise
         finally:
             signal.signal(signal.SIGINT, previous)
     if interrupted:
@@ -206,14 +304,7 @@ def run_replicas(
         checkpoint = first["checkpoint"]
         raise RunInterrupted(first["interrupted"], None if checkpoint is None else
                              Path(checkpoint), -1, f"replica {first['k']}")  # fmt: skip
-    summary = pool_summaries([summaries[k] for k in range(n)], time.perf_counter() - started,
-                             processes=1 if batched else workers)  # fmt: skip
-    summary["replica_outputs"] = "all" if all_replicas else "replica 0 (frames, results.h5)"
-    if not all_replicas:
-        for k in range(1, n):
-            _drop_run_files(replica_dir(out_dir, k))
-    replace_text(out_dir / SUMMARY, json_text(summary))
-    return summary
+    return workers
 
 
 def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:

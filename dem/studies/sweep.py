@@ -492,8 +492,11 @@ def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     return rows
 
 
-def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Path:
+def write_table(rows: list[dict], out: Path, context: dict | None = None, *, table: str = TABLE,
+                command: str = "dem sweep") -> Path:  # fmt: skip
     """``sweep.csv``, its sidecar ``sweep.json`` and ``sweep.h5`` (one dataset per column).
+
+    ``table`` and ``command`` name the files and the command that wrote them (``dem atlas``).
 
     Column names carry their units (:func:`dem.io.tables.summary_column`: ``drive.angle_deg``,
     ``mean_velocity_m_s``); the CSV has one header line and numbers to 6 significant digits
@@ -522,12 +525,12 @@ def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Pat
     meaning |= {names[c]: f"summary.json {c}" for c in COLUMNS if c in names}
     meta = dict(context or {})
     meta["columns"] = {c: {"unit": units[c], "meaning": meaning.get(c, "")} for c in columns}
-    path = write_csv(out / f"{TABLE}.csv", columns, ([r[f] for f in fields] for r in rows),
-                     meta=meta, command="dem sweep")  # fmt: skip
+    path = write_csv(out / f"{table}.csv", columns, ([r[f] for f in fields] for r in rows),
+                     meta=meta, command=command)  # fmt: skip
 
     def write_h5(tmp: Path) -> None:
         with h5py.File(tmp, "w") as h5:
-            g = h5.create_group(TABLE)
+            g = h5.create_group(table)
             for f in fields:
                 values = [r[f] for r in rows]
                 name = names[f]
@@ -540,7 +543,7 @@ def write_table(rows: list[dict], out: Path, context: dict | None = None) -> Pat
                 g[name].attrs["unit"] = units[name]
             g.attrs["columns"] = json.dumps(columns)
 
-    replace_file(out / f"{TABLE}.h5", write_h5)
+    replace_file(out / f"{table}.h5", write_h5)
     return path
 
 

@@ -129,3 +129,52 @@ def test_the_plan_warning_is_one_line_once_not_once_a_replica(tiny, tmp_path, ca
     assert ".py:" not in err
     plan_lines = [line for line in warned if "dem plan" in line]
     assert len(plan_lines) == 1, plan_lines
+
+
+# --- a target error instead of a fill count (the atlas issue, item 2) --------------------------
+
+
+def test_fills_for_follows_one_over_sqrt_fills():
+    assert replicas.fills_for(3, 0.02, 0.01, 12) == 12  # 3 (2)^2
+    assert replicas.fills_for(3, 0.011, 0.01, 12) == 4  # at least one more
+    assert replicas.fills_for(3, 0.02, 0.01, 8) == 8  # never past max_replicas
+    assert replicas.fills_for(3, math.nan, 0.01, 8) == 4
+
+
+def test_the_goal_is_relative_with_a_floor_near_a_threshold():
+    assert replicas.target_gap({"mean_velocity_norm_stderr": 0.01,
+                                "mean_velocity_norm": 0.5}, 0.02) == (0.01, 0.01)  # fmt: skip
+    error, goal = replicas.target_gap({"mean_velocity_norm_stderr": 0.001,
+                                       "mean_velocity_norm": -0.01}, 0.02)  # fmt: skip
+    assert goal == pytest.approx(0.002)  # 2 % of 0.1, not of 0.01
+
+
+def test_a_target_error_starts_with_three_fills_and_is_checked_at_the_door(tiny):
+    case = load_case(tiny, {"run.target_error": 0.05})
+    assert case.run.replicas == 3 and case.run.max_replicas == 12
+    with pytest.raises(InputError, match=r"run\.replicas.*>= 3 with run\.target_error"):
+        load_case(tiny, {"run.target_error": 0.05, "run.replicas": 2})
+    with pytest.raises(InputError, match=r"run\.max_replicas.*>= run\.replicas \(4\)"):
+        load_case(tiny, {"run.target_error": 0.05, "run.replicas": 4, "run.max_replicas": 3})
+    with pytest.raises(InputError, match=r"run\.target_error.*\[1e-4, 0\.5\]"):
+        load_case(tiny, {"run.target_error": 2.0})
+
+
+@pytest.mark.integration
+def test_a_run_with_a_target_error_pools_fills_until_it_reaches_it(tiny, tmp_path):
+    """A loose target stops at the first three fills; a tight one adds fills up to the cap and
+    says it was not reached; both pool exactly the fills they name."""
+    loose = load_case(tiny, {"run.target_error": 0.5})
+    s = replicas.run_replicas(loose, tmp_path / "loose", threads=2, progress=False, frames=False)
+    assert s["replicas"] == 3 and s["target"]["reached"]
+    assert s["mean_velocity_norm_stderr"] <= 0.5 * max(abs(s["mean_velocity_norm"]), 0.1)
+    tight = load_case(tiny, {"run.target_error": 1e-4, "run.max_replicas": 5})
+    s = replicas.run_replicas(tight, tmp_path / "tight", threads=2, progress=False, frames=False)
+    assert s["replicas"] == 5 and not s["target"]["reached"]
+    assert "NOT REACHED" in s["target"]["what"] and "run.max_replicas = 5" in s["target"]["what"]
+    assert [r["seed"] for r in s["per_replica"]] == [3, 4, 5, 6, 7]
+    assert [step["fills"] for step in s["target"]["steps"]] == [3, 5]
+    own = [json.loads((tmp_path / "tight" / "replicas" / str(k) / "summary.json").read_text())
+           for k in range(5)]  # fmt: skip
+    p = measure.pooled([o["mean_velocity"] for o in own], [o["mean_velocity_stderr"] for o in own])
+    assert s["mean_velocity"] == p.mean
