@@ -193,3 +193,8 @@ DEM_THREAD_GUARD_MAX_WAIT = 400
 #: stiffness rule's bed height (:mod:`dem.run.stiffness`); random packings of spheres lie at
 #: 0.55-0.64, of elongated grains lower.
 BED_PACKING = 0.6
+
+#: Drive cycles run after the measured ones to sample the grains in flight by phase
+#: (``output.flight_phases``, :mod:`dem.run.flight`): the bed's state, not its transport, so
+#: it is not part of the measured velocity.
+DEM_FLIGHT_CYCLES = 2

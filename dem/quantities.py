@@ -202,6 +202,8 @@ QUANTITIES: dict[str, Quantity] = dict(
            "random seed of the fill"),
         _q("replicas", "", lambda n: 1 <= n <= 1000, "a whole number of fills in [1, 1000]",
            "independent fills pooled (seeds seed, seed + 1, ...)"),
+        _q("flight_phases", "", lambda n: 0 <= n <= 360, "a whole number in [0, 360]",
+           "phase bins per cycle at which the grains in flight are counted (0: none)"),
         _q("frames_per_cycle", "", lambda n: 1 <= n <= 10**6, "a whole number in [1, 1e6]",
            "VTK frames per drive cycle"),
         _q("threads", "", lambda n: 1 <= n <= 4096, "a whole number of threads in [1, 4096]",

@@ -332,9 +332,13 @@ def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:
 
 
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
-    """One replica failed: the others' results would not be pooled, so stop them now."""
+    """One replica failed (or a signal stopped the caller): stop the others now.
+
+    The worker processes are taken before the shutdown, which forgets them.
+    """
+    processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in list(getattr(pool, "_processes", {}).values()):
+    for process in processes:
         process.terminate()
 
 
@@ -427,6 +431,12 @@ def pool_summaries(
         else f"fills with seeds {unsteady} still drifting (per_replica: their steadiness); the "
         "pooled error bar includes their spread, not the drift common to all fills",
     }  # fmt: skip
+    flights = [s.get("flight") for s in summaries]
+    if flights[0] and all(f and f.get("fraction") for f in flights):
+        columns = zip(*(f["fraction"] for f in flights), strict=True)
+        what = flights[0]["what"] + f", and over {len(flights)} fills"
+        out["flight"] = dict(flights[0], fraction=[sum(x) / len(flights) for x in columns],
+                             what=what)  # fmt: skip
     out["per_cycle_velocity_replica"] = 0
     steps = sum(s["spheres"] * s["steps"] for s in summaries)
     loops = sum(s["wall_time_s"] for s in summaries)

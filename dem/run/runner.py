@@ -49,7 +49,7 @@ from dem.io.hdf5 import check_resumable
 from dem.io.tables import write_cycles_csv
 from dem.physics import measure
 from dem.physics.drive import cycle_edge
-from dem.run import plan, stiffness
+from dem.run import flight, plan, stiffness
 from dem.run.checks import (
     check_duration,
     check_memory,
@@ -297,6 +297,12 @@ def finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers,
     case = scene.case
     summary = summarize(case, sim, progress, cycles, n_threads)
     summary.update(extra or {})
+    # the grains in flight by phase, on cycles run after the measured ones and summarised (a
+    # GPU batch's runs share one state: they are not stepped one by one)
+    if "gpu_batch" in summary:
+        summary["flight"] = flight.not_sampled(case, "a run of a GPU batch")
+    else:
+        summary["flight"] = flight.by_phase(sim, case)
     summary["plan"] = estimate.as_dict()
     # the bed's stiffness against the bulk study's rule: how far this answer may be from the
     # rigid material's (validation/bulk-convergence)

@@ -321,6 +321,7 @@ ADDED_KEYS = {
     "particles.mass_per_area": None,
     "run.target_error": None,
     "run.max_replicas": 12,
+    "output.flight_phases": 0,
 }
 
 

@@ -327,7 +327,8 @@ def _read_feeder(t: Table, length: float) -> FeederSpec:
 
 def _read_output(t: Table) -> OutputSpec:
     t.check_known()
-    return OutputSpec(frames_per_cycle=t.read("frames_per_cycle"))
+    return OutputSpec(frames_per_cycle=t.read("frames_per_cycle"),
+                      flight_phases=t.read("flight_phases"))  # fmt: skip
 
 
 # --- checks across tables ------------------------------------------------------------------------

@@ -329,10 +329,14 @@ class OutputSpec:
 
     Attributes:
         frames_per_cycle: Particle frames written per measured drive cycle.
+        flight_phases: Phase bins of one drive cycle at which the fraction of grains in
+            flight (touching nothing) is sampled over :data:`dem.config.DEM_FLIGHT_CYCLES`
+            cycles after the measured ones (:mod:`dem.run.flight`); 0: not sampled.
 
     """
 
     frames_per_cycle: int = 4
+    flight_phases: int = 0
 
 
 @dataclass(frozen=True)

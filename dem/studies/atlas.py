@@ -6,6 +6,7 @@ A grid file (TOML) names base cases by grain shape and the axes over which their
     target_error = 0.03        # each point pools fills until its standard error is 3 % of |v|
     max_replicas = 9           # ... or this many fills
     cycles = 20                # measured cycles of each fill (default: the base case's)
+    flight_phases = 12         # phase bins at which the grains in flight are counted
 
     [atlas.cases]              # one base case per shape, relative to this file
     sphere = "../../cases/sphere-bed"
@@ -25,8 +26,9 @@ fills until its error bar, which covers a refill, reaches the target
 ``OUT/points/<shape>/<keys>`` and the table ``OUT/atlas.csv`` (with ``atlas.json``, its
 provenance and the grid, and ``atlas.h5``) gathers, per point: the bulk's v and v_norm with
 their pooled error, the fills, the paper's and the Coulomb-bounded point mass, the ratio of the
-bulk to each with its error, the point mass's regime and period, the bed (grains, layers, mass
-per area) and the cost.
+bulk to each with its error, the point mass's regime and period, what the bed does (the
+fraction of its grains in flight by phase of the drive, :mod:`dem.run.flight`), the bed
+(grains, layers, mass per area) and the cost.
 
 Resuming: every point folder holds ``atlas_point.json``, the resolved case it runs (the
 checkpoint's fingerprint) with the target, cycles and fill cap. A rerun of the same command skips
@@ -71,7 +73,7 @@ TABLE = "atlas"
 #: Most points one atlas runs (each is several whole bulk runs).
 MAX_POINTS = 5000
 #: Keys of ``[atlas]``.
-ATLAS_KEYS = ("target_error", "max_replicas", "cycles", "stiffness", "cases")
+ATLAS_KEYS = ("target_error", "max_replicas", "cycles", "stiffness", "flight_phases", "cases")
 #: ``[atlas] stiffness``: "converged" raises a point's Young's modulus (or linear stiffness) to
 #: what the stiffness rule asks for its bed (:mod:`dem.run.stiffness`), its time step kept at
 #: the same fraction of the stability limit; "as given" runs the base case's.
@@ -103,6 +105,7 @@ class Grid:
     max_replicas: int
     cycles: int | None
     stiffness: str
+    flight_phases: int
     cases: dict  # shape -> case folder
     points: list  # (shape, overrides)
 
@@ -139,6 +142,10 @@ def read_grid(path: str | Path) -> Grid:
     if cycles is not None and (not isinstance(cycles, int) or isinstance(cycles, bool)
                                or not 1 <= cycles <= 10**7):  # fmt: skip
         raise InputError("atlas.cycles", cycles, "a whole number of cycles in [1, 1e7]", where)
+    phases = atlas.get("flight_phases", 12)
+    if not isinstance(phases, int) or isinstance(phases, bool) or not 0 <= phases <= 360:
+        raise InputError("atlas.flight_phases", phases, "a whole number of phase bins in "
+                         "[0, 360] (0: the grains in flight are not counted)", where)  # fmt: skip
     stiffness = atlas.get("stiffness", "converged")
     if stiffness not in STIFFNESS:
         raise InputError("atlas.stiffness", stiffness, f"one of {', '.join(STIFFNESS)}", where)
@@ -164,7 +171,7 @@ def read_grid(path: str | Path) -> Grid:
     if len(unique) > MAX_POINTS:
         raise InputError("grid", len(unique), f"at most {MAX_POINTS} points (each is several "
                          "bulk runs): fewer values, or several atlases", where)  # fmt: skip
-    return Grid(path.resolve(), float(target), most, cycles, stiffness, folders, unique)
+    return Grid(path.resolve(), float(target), most, cycles, stiffness, phases, folders, unique)
 
 
 def _number(value, key: str, where: str) -> float:
@@ -216,7 +223,8 @@ def point_case(grid: Grid, shape: str, overrides: dict, device: str | None = Non
     from dem.scene.case import load_case
 
     keys = dict(overrides) | {"run.target_error": grid.target_error,
-                              "run.max_replicas": grid.max_replicas}  # fmt: skip
+                              "run.max_replicas": grid.max_replicas,
+                              "output.flight_phases": grid.flight_phases}  # fmt: skip
     if device is not None:
         keys["run.device"] = device
     case = load_case(grid.cases[shape], keys)
@@ -511,7 +519,8 @@ COLUMNS = (
     "fills", "target_reached", "pointmass_velocity_norm", "pointmass_bounded_velocity_norm",
     "ratio_bounded", "ratio_bounded_stderr", "ratio_paper", "ratio_paper_stderr",
     "pointmass_regime", "pointmass_period", "throw_number", "angle", "friction",
-    "youngs_modulus", "timestep", "grains",
+    "youngs_modulus", "timestep", "in_flight_mean", "in_flight_max", "in_flight_max_phase",
+    "in_flight_by_phase", "grains",
     "spheres", "layers", "mass_per_area", "velocity_scale", "elapsed_s", "cpu_s",
     "particle_steps",
 )  # fmt: skip
@@ -551,6 +560,8 @@ def gather(
                                    w.restitution_normal)  # fmt: skip
             regime, period = r.regime, r.period
         bed = s.get("bed") or {}
+        fraction = (s.get("flight") or {}).get("fraction") or []
+        top = max(range(len(fraction)), key=fraction.__getitem__) if fraction else None
         rate, loops = s.get("particle_steps_per_s"), s.get("wall_time_s")
         steps = rate * loops / s.get("processes", 1) if rate and loops else None
         rows.append(row | {
@@ -566,6 +577,10 @@ def gather(
             "friction": (s.get("wall") or {}).get("friction", s["friction"]),
             "youngs_modulus": case.contact.youngs_modulus if case is not None else None,
             "timestep": s["timestep"],
+            "in_flight_mean": sum(fraction) / len(fraction) if fraction else None,
+            "in_flight_max": fraction[top] if fraction else None,
+            "in_flight_max_phase": s["flight"]["phase_deg"][top] if fraction else None,
+            "in_flight_by_phase": ";".join(f"{x:.4g}" for x in fraction) or None,
             "grains": s["grains"], "spheres": s["spheres"], "layers": bed.get("layers"),
             "mass_per_area": bed.get("mass_per_area_kg_m2"),
             "velocity_scale": s["velocity_scale"], "elapsed_s": s.get("elapsed_s"),
@@ -594,6 +609,9 @@ def write_table(rows: list[dict], out: Path, grid: Grid) -> Path:
                    "ratio_paper": "bulk v_norm over the paper's point mass's (its Eq. 12)",
                    "fills": "fills pooled (run.target_error reached, or run.max_replicas)",
                    "pointmass_regime": "the paper's point mass's regime on the point's drive",
+                   "in_flight_by_phase": "fraction of grains touching nothing at the end of "
+                   "each phase bin (flight_phases per cycle, from phase 0), ';'-separated",
+                   "in_flight_max_phase": "the phase bin's end, deg, where most grains fly",
                    "cpu_s": "the fills' step loops, summed (compile and fill excluded)",
                    "elapsed_s": "the point's wall time, as waited",
                }}  # fmt: skip

@@ -127,13 +127,15 @@ def test_a_rerun_runs_no_finished_point_and_a_changed_case_is_refused(built, tmp
 
 
 @pytest.mark.integration
-def test_sigterm_stops_the_atlas_and_the_same_command_finishes_it(tmp_path):
+@pytest.mark.parametrize("threads", ["1", "2"])  # fills in process, and in a process pool
+def test_sigterm_stops_the_atlas_and_the_same_command_finishes_it(tmp_path, threads):
     """The command is stopped by SIGTERM once its first point has finished; it exits 143 with
     the table of that point; run again it runs the second point only."""
     path = write_grid(tmp_path)
     out = tmp_path / "out"
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "support"))
-    cmd = [sys.executable, "-m", "dem.cli", "atlas", str(path), "--out", str(out), "--threads", "1"]
+    cmd = [sys.executable, "-m", "dem.cli", "atlas", str(path), "--out", str(out), "--threads",
+           threads]  # fmt: skip
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     folder = out / "points" / "sphere" / "drive.angle=20_particles.layers=0.5"
     first, record = folder / "summary.json", folder / atlas.RECORD
@@ -148,13 +150,14 @@ def test_sigterm_stops_the_atlas_and_the_same_command_finishes_it(tmp_path):
     while not finished() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.1)
     assert finished(), proc.communicate()[1][-2000:]
+    time.sleep(1.0)  # into the second point's fills
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 128 + signal.SIGTERM, err[-2000:]
-    assert "SIGTERM" in err and "the same command continues" in err
+    assert "SIGTERM" in err and "the same command continues" in err and "failed" not in err
     rows = read_csv(out / "atlas.csv")
     assert rows[0]["status"] == "done" and rows[1]["status"] in ("not run", "interrupted")
     stamp = first.stat().st_mtime_ns
-    assert main(["atlas", str(path), "--out", str(out), "--threads", "1"]) == 0
+    assert main(["atlas", str(path), "--out", str(out), "--threads", threads]) == 0
     assert first.stat().st_mtime_ns == stamp
     assert [r["status"] for r in read_csv(out / "atlas.csv")] == ["done", "done"]
