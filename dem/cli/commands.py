@@ -9,7 +9,11 @@ from dem.io.files import own_folder, refuse_links, replace_text
 from dem.io.paths import output_folder, plot_path, writable_path
 
 #: The options that set a case key (errors in their values name the option, not ``--set``).
-ORIGINS = {"run.replicas": "--replicas", "run.device": "--device"}
+ORIGINS = {
+    "run.replicas": "--replicas",
+    "run.device": "--device",
+    "run.target_error": "--target-error",
+}
 
 
 def cmd_thresholds(args) -> int:
@@ -118,6 +122,8 @@ def cmd_run(args) -> int:
         overrides["run.replicas"] = args.replicas
     if args.device is not None:
         overrides["run.device"] = args.device
+    if args.target_error is not None:
+        overrides["run.target_error"] = args.target_error
     case = load_case(args.case_dir, overrides, ORIGINS)
     out = output_folder("--out", args.out, case.directory / "output")
     try:
@@ -131,6 +137,10 @@ def cmd_run(args) -> int:
         if stop.checkpoint is not None:
             print(f"dem: continue with: {resume_command(args, case, out)}", file=sys.stderr)
         return 128 + stop.signum
+    if args.json:
+        print_json(summary)
+        print(f"wrote {out / 'summary.json'}", file=sys.stderr)
+        return 0
     print("\n".join(run_summary_lines(summary)))
     print(f"wrote {out / 'summary.json'}")
     return 0
@@ -159,6 +169,8 @@ def resume_command(args, case, out: Path) -> str:
         parts += ["--device", args.device]
     if args.replicas is not None:
         parts += ["--replicas", str(args.replicas)]
+    if args.target_error is not None:
+        parts += ["--target-error", repr(args.target_error)]
     if args.all_replicas:
         parts.append("--all-replicas")
     return shlex.join(parts)
@@ -173,6 +185,8 @@ def cmd_plan(args) -> int:
     overrides = set_overrides(args.set)
     if args.device is not None:
         overrides["run.device"] = args.device
+    if args.target_error is not None:
+        overrides["run.target_error"] = args.target_error
     case = load_case(args.case_dir, overrides, ORIGINS)
     check_device(case.run.device, case)
     if args.suggest:
@@ -281,6 +295,9 @@ def cmd_report(args) -> int:
             raise InputError("OUT", out, "a run output folder holding summary.json")
     dest = writable_path("--out", args.dest, folder=True) if args.dest else None
     paths = make_report([Path(p) for p in args.out_dirs], dest)
+    if args.json:
+        print_json({"written": [str(p) for p in paths]})
+        return 0
     for path in paths:
         print(f"wrote {path}")
     return 0
@@ -327,8 +344,11 @@ def cmd_export_lammps(args) -> int:
             print(f"dem: {exc}", file=sys.stderr)
             return 2
     path = export_lammps(plan, out, overwrite=args.overwrite, fill=args.fill)
+    deck = {"deck": str(path), "timestep": plan.timestep, "settle_cycles": plan.settle_cycles,
+            "cycles": case.run.cycles, "steps": plan.steps}  # fmt: skip
     print(f"wrote {path} (dt = {plan.timestep:.4g} s, {plan.settle_cycles} settling and "
-          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
+          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)",
+          file=sys.stderr if args.json else sys.stdout)  # fmt: skip
     if plan.settle_note:
         print(f"settle: {plan.settle_note}")
     if case.run.replicas > 1:  # a deck is one fill
@@ -336,6 +356,8 @@ def cmd_export_lammps(args) -> int:
               f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
               "and pool them")  # fmt: skip
     if not args.run:
+        if args.json:
+            print_json(deck)
         return 0
     print(f"dem: running LAMMPS on {args.ranks} rank(s) in {out}", file=sys.stderr)
     try:
@@ -345,6 +367,9 @@ def cmd_export_lammps(args) -> int:
     except LammpsError as exc:
         print(f"dem: {exc}", file=sys.stderr)
         return 1
+    if args.json:
+        print_json(deck | {"summary": s})
+        return 0
     err = s["mean_velocity_stderr"]
     err_text = "" if err is None else f" +- {err:.3g}"
     rate = s["particle_steps_per_s"]
@@ -403,7 +428,8 @@ def cmd_calibrate(args) -> int:
         print(f"dem calibrate: stopped after {len(trail.tried)} evaluations, case.toml unchanged; "
               f"every evaluation is in {trail.path}{text}", file=sys.stderr)  # fmt: skip
         return 130
-    print("\n".join(calibration_lines(case, cal)))
+    out = sys.stderr if args.json else sys.stdout  # with --json stdout holds the object alone
+    print("\n".join(calibration_lines(case, cal)), file=out)
     strict_fail = args.strict and not cal.reachable
     if not cal.reachable:
         print(
@@ -416,13 +442,20 @@ def cmd_calibrate(args) -> int:
     if plot is None:
         plot = own_folder(case.directory / "output", "CASE_DIR") / "calibration.png"
     calibration_figure(cal, case.wall_material.friction, plot)
-    print(f"wrote {plot}")
+    print(f"wrote {plot}", file=out)
+    source = None
     if not cal.fitted:
-        print("case.toml unchanged: nothing to calibrate")
-        return 1 if strict_fail else 0
-    if args.dry_run:
-        print("dry run: case.toml unchanged")
-        return 1 if strict_fail else 0
-    source = write_calibration(case, cal, lambda kept: print(f"kept the previous file as {kept}"))
-    print(f"wrote {source} ([contact] tangential_stiffness_ratio, tangential_damping_ratio)")
+        print("case.toml unchanged: nothing to calibrate", file=out)
+    elif args.dry_run:
+        print("dry run: case.toml unchanged", file=out)
+    else:
+        source = write_calibration(case, cal, lambda kept: print(f"kept the previous file as "
+                                                                  f"{kept}", file=out))  # fmt: skip
+        print(f"wrote {source} ([contact] tangential_stiffness_ratio, tangential_damping_ratio)",
+              file=out)  # fmt: skip
+    if args.json:
+        import dataclasses
+
+        print_json({"calibration": dataclasses.asdict(cal), "plot": str(plot),
+                    "case_written": None if source is None else str(source)})  # fmt: skip
     return 1 if strict_fail else 0

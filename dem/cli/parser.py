@@ -171,6 +171,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--all-replicas", action="store_true",
         help="keep every replica's frames and results.h5 (default: replica 0's only)",
     )  # fmt: skip
+    p.add_argument(
+        "--target-error", type=number, metavar="FRACTION",
+        help="pool fills until the standard error is this fraction of |v_norm| (overrides "
+        "run.target_error), e.g. 0.02",
+    )  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print summary.json's object")
     p.set_defaults(func=c.cmd_run)
 
     p = sub.add_parser(
@@ -264,6 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="exit 1 when an impact stays more than 0.02 from its reachable target "
         "(default: write the closest fit and exit 0)",
     )
+    p.add_argument("--json", action="store_true", help="print the fit as one JSON object")
     p.set_defaults(func=c.cmd_calibrate)
 
     p = sub.add_parser("report", help="figures and a summary of one or more finished runs")
@@ -274,6 +281,7 @@ def build_parser() -> argparse.ArgumentParser:
         dest="dest",
         help="where to write the report (default OUT/report); --dest is an alias",
     )
+    p.add_argument("--json", action="store_true", help="print the files written as JSON")
     p.set_defaults(func=c.cmd_report)
 
     p = sub.add_parser("export", help="export a case to another code")
@@ -310,6 +318,8 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--run", action="store_true",
                    help="run the deck in LAMMPS and write OUT_DIR/summary.json")  # fmt: skip
     e.add_argument("--ranks", type=WHOLE, default=1, help="MPI ranks for --run (default 1)")
+    e.add_argument("--json", action="store_true", help="print the deck (and with --run the "
+                   "run's summary) as one JSON object")  # fmt: skip
     e.add_argument(
         "--fill", choices=("dem", "lammps"), default="dem",
         help="who fills the trough: dem (settled here, data.fill; default) or lammps (the deck "

@@ -12,6 +12,8 @@ Every frame is one ``<DataSet timestep="t" part="0" name="spheres" .../>``, one 
 ``part="1" name="trough"`` and, for clumps, one with ``part="2" name="grains"`` in the
 collection, t in seconds of simulated time; ParaView shows the three as named blocks
 (``/Root/spheres``, ``/Root/trough``, ``/Root/grains``: Extract Block selects them by name).
+pyvista's own PVD reader drops the names (``Block-00``, ``-01``, ``-02``, in that order);
+:func:`read_frame` reads one frame with them.
 The trough's geometry is that of :class:`dem.scene.trough.Trough`
 (:meth:`~dem.scene.trough.Trough.wall_corners`, the kernel's walls), or the triangles of a mesh
 trough (``trough.mesh``), built once per writer: in the trough frame it is written once and every
@@ -430,6 +432,29 @@ class VTKSeriesWriter:
         replace_text(self.pvd_path, "\n".join(lines), encoding="ascii")
         self._pvd_written_at = _clock()
         self._pvd_cost = self._pvd_written_at - start
+
+
+def read_frame(out_dir: str | Path, index: int = -1) -> tuple[float, pv.MultiBlock]:
+    """Frame ``index`` (negative from the end) of a run's series: its time, s, and its blocks.
+
+    The blocks are named as in ParaView (``spheres``, ``trough``, ``grains`` for clumps), from
+    the ``name`` of each ``<DataSet>`` of ``particles.pvd``, which pyvista's own PVD reader
+    drops.
+    """
+    from xml.etree import ElementTree
+
+    out_dir = Path(out_dir)
+    root = ElementTree.parse(out_dir / PVD_NAME).getroot()
+    frames: dict[float, list] = {}
+    for element in root.iter("DataSet"):
+        a = element.attrib
+        frames.setdefault(float(a["timestep"]), []).append((int(a.get("part", 0)), a))
+    times = sorted(frames)
+    t = times[index]
+    blocks = pv.MultiBlock()
+    for part, a in sorted(frames[t], key=lambda item: item[0]):
+        blocks[a.get("name") or BLOCK_NAMES[part]] = pv.read(out_dir / a["file"])
+    return t, blocks
 
 
 def _clock() -> float:

@@ -3,9 +3,10 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
-from small_case import SMALL_CASE
+from small_case import SMALL_CASE, run_cli, write_case
 
 from dem.cli import main
 
@@ -256,14 +257,17 @@ def _single_sphere_copy(tmp_path, throw_number=None, tangential=None):
 
 
 @pytest.mark.integration
-def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path):
+def test_calibrate_writes_the_contact_and_keeps_the_original(tmp_path, capsys):
     from dem.scene.case import load_case
 
     case_dir, toml = _single_sphere_copy(tmp_path, 1.8, "coulomb")
     before = toml.read_text()
     plot = tmp_path / "cal.png"
-    assert main(["calibrate", str(case_dir), "--dry-run", "--plot", str(plot)]) == 0
-    assert toml.read_text() == before and plot.stat().st_size > 0
+    code, out, _ = run_cli(capsys, "calibrate", case_dir, "--dry-run", "--plot", plot, "--json")
+    assert code == 0 and toml.read_text() == before and plot.stat().st_size > 0
+    fit = json.loads(out)  # stdout holds the object alone
+    assert fit["case_written"] is None and fit["plot"] == str(plot)
+    assert 0.015 < fit["calibration"]["kappa"] < 0.025 and fit["calibration"]["fitted"]
     assert not (case_dir / "case.toml.orig").exists()
     assert main(["calibrate", str(case_dir), "--plot", str(plot)]) == 0
     assert (case_dir / "case.toml.orig").read_text() == before
@@ -427,3 +431,19 @@ def test_a_sweep_too_large_for_memory_is_refused_before_computing(capsys, tmp_pa
     code, _, err = run(capsys, "pointmass", "sweep", "--throw-number", "0.5:3:1e-9",
                        "--angle", "20", "--friction", "0.3")  # fmt: skip
     assert code == 2 and "--throw-number" in err and "at most 1000000 values" in err, err
+
+
+@pytest.mark.integration
+def test_run_and_report_print_json_when_asked(tmp_path, capsys):
+    """dem run --json prints summary.json's object on stdout (the rest on stderr); dem report
+    --json the files it wrote; --target-error sets run.target_error and is named in errors."""
+    case_dir = write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", "cycles = 2"))
+    out = tmp_path / "out"
+    code, stdout, _ = run_cli(capsys, "run", case_dir, "--out", out, "--no-frames", "--json")
+    summary = json.loads(stdout)
+    assert code == 0 and summary == json.loads((out / "summary.json").read_text())
+    code, stdout, _ = run_cli(capsys, "report", out, "--json")
+    written = json.loads(stdout)["written"]
+    assert code == 0 and written and all(Path(p).is_file() for p in written)
+    code, _, err = run_cli(capsys, "run", case_dir, "--out", tmp_path / "t", "--target-error", "2")
+    assert code == 2 and "--target-error" in err and "run.target_error" in err

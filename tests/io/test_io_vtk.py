@@ -12,6 +12,7 @@ from dem.io.vtk import (
     VELOCITY_ARRAYS,
     VTKSeriesWriter,
     long_axis,
+    read_frame,
     rotate,
 )
 
@@ -274,6 +275,12 @@ def test_grains_dataset_of_clumps(tmp_path):
     assert np.allclose(grains["speed_lab"], np.linalg.norm(bodies.v + drive_v, axis=1))
     assert np.allclose(grains["angular_velocity"], bodies.omega)
     assert np.allclose(grains["mass"], 2.5e-3)
+    # pyvista's own reader names them Block-00..02; read_frame by the collection's names
+    assert blocks.keys() == ["Block-00", "Block-01", "Block-02"]
+    t, named = read_frame(tmp_path)
+    assert t == 0.0 and named.keys() == ["spheres", "trough", "grains"]
+    assert np.array_equal(named["grains"]["grain_id"], grains["grain_id"])
+    assert named["spheres"].n_points == 4
 
 
 def test_long_axis_points_to_the_farthest_member():
