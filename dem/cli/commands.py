@@ -185,8 +185,6 @@ def cmd_plan(args) -> int:
     overrides = set_overrides(args.set)
     if args.device is not None:
         overrides["run.device"] = args.device
-    if args.target_error is not None:
-        overrides["run.target_error"] = args.target_error
     case = load_case(args.case_dir, overrides, ORIGINS)
     check_device(case.run.device, case)
     if args.suggest:

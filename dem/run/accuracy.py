@@ -210,6 +210,38 @@ SAME_CONDITIONS = {"throw_number": 0.05, "angle": 1.0, "friction": 0.01, "inclin
                    "restitution_tangential": 0.01, "restitution_normal": 0.01}  # fmt: skip
 
 
+#: The depth of the study's beds, in layers (:mod:`dem.scene.depth`): 1500 spheres of 2 mm in
+#: 0.10 x 0.04 m, 200 screws of 2.5 g in 0.12 x 0.06 m (the shipped cases).
+STUDY_LAYERS = {"sphere-bed": 5.2, "screw-trough": 1.75}
+#: How far (a factor either way) a bed's depth may be from the study's and share its figures.
+SAME_DEPTH = 2.0
+
+
+def bed_and_contact_away(scene, data: dict, kind: str) -> list[str]:
+    """Where a bed leaves the study's by its depth or a contact too soft for the rigid answer.
+
+    A bed of a tenth of a layer (grains alone on the floor) or one whose contact the stiffness
+    rule finds too soft is not one the study's error figures describe, whatever its drive. The
+    study's depth: its ``conditions["layers"]`` (None: not checked), else :data:`STUDY_LAYERS`.
+    """
+    from dem.run import stiffness
+    from dem.run.summary import bed_summary
+
+    case, out = scene.case, []
+    bed = bed_summary(case)
+    study = (data.get("conditions") or {}).get("layers", STUDY_LAYERS.get(kind))
+    if bed is not None and study is not None:
+        if not study / SAME_DEPTH <= bed["layers"] <= study * SAME_DEPTH:
+            out.append(f"particles.layers = {bed['layers']:.3g} ({bed['count']} grains; study: "
+                       f"{study:g} layers)")  # fmt: skip
+    soft = stiffness.assessment(scene)
+    if soft is not None and not soft.get("converged", True):
+        out.append(f"{soft['key']} = {getattr(case.contact, soft['key'].split('.')[1]):.3g} "
+                   f"(the bed's (omega / omega_bed)^2 = {soft['compliance']:.3g} > "
+                   f"{soft['compliance_limit']:.3g}: too soft for the rigid material's answer)")
+    return out
+
+
 def unmeasured(case, data: dict, kind: str) -> list[str]:
     """Where the case leaves the conditions the study measured: "key = value (study: value)".
 

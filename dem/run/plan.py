@@ -156,6 +156,8 @@ def plan(
     startup = cost.STARTUP_S
     advice: list[Advice] = []
     away = accuracy.unmeasured(case, data, kind) if data else []
+    if data and grains > 1:
+        away += accuracy.bed_and_contact_away(scene, data, kind)
     if data and away:
         expected, parts = math.nan, {}
         measure = (

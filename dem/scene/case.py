@@ -489,7 +489,14 @@ def _load_case(path: str | Path, overrides: Mapping[str, Any] | None) -> Case:
     material = _material_density(material, particles, table("material"))
     particles = _build_grain(particles, material.density, table("particles"))
     if material.density is None:  # the grain's mass set it
-        material = replace(material, density=particles.grain.density)
+        rho = particles.grain.density
+        if not QUANTITIES["density"].accepts(rho):
+            raise table("particles").error(
+                "mass", particles.mass, f"a grain of plausible density: {particles.mass:g} kg in "
+                f"the grain's {particles.grain.volume:.3g} m^3 is {rho:.3g} kg/m^3, outside what "
+                f"material.density takes: {QUANTITIES['density'].allowed} (a mass in g for kg?)",
+            )  # fmt: skip
+        material = replace(material, density=rho)
     particles = _count_from_depth(particles, material.density, trough, "feeder" in data,
                                   table("particles"))  # fmt: skip
     if contact.tangential == "coulomb":

@@ -123,6 +123,24 @@ def impact_speed_for(case, height: float | None = None, fastest: float = 0.0) ->
     return peak + fastest + math.sqrt(2.0 * config.GRAVITY * max(height, 0.0))
 
 
+def _hardest_impact_text(case, speed: float) -> str:
+    """What sets the hardest impact, for a step refused against its limit: the keys to check.
+
+    A unit mistake elsewhere (an angle in radians, a throw number of 50, 20000 grains) shows
+    here first, as an impact harder than the shipped cases' few tenths of a m/s.
+    """
+    d = case.drive
+    fall = max(speed - d.peak_speed, 0.0)
+    height = fill.box_height(case)
+    return (
+        f"; at this case's hardest impact, {speed:.3g} m/s: the trough's peak speed A omega = "
+        f"{d.peak_speed:.3g} m/s (drive.amplitude {d.amplitude:.3g} m, Gamma "
+        f"{d.throw_number:.3g}, drive.angle {d.angle:g} deg, frequency {d.frequency:g} Hz) and a "
+        f"fall of {fall:.3g} m/s from the top of the fill, {height:.3g} m up "
+        f"(particles.count {case.particles.count}): check those keys if the speed looks wrong"
+    )
+
+
 def timestep_for(
     case,
     *,
@@ -155,8 +173,10 @@ def timestep_for(
     pt, mat = case.particles, case.material
     if law is None:
         law = ContactLaw.from_case(case)
+    hardest = ""
     if impact_speed is None:
         impact_speed = impact_speed_for(case)
+        hardest = _hardest_impact_text(case, impact_speed)
     if grains is None:
         grains = pt.count
     if not pt.clumps:
@@ -187,7 +207,7 @@ def timestep_for(
                 user,
                 f"<= {limit:.4g} s, the stability limit of this contact "
                 f"({config.DEM_DT_STABILITY_FRACTION} of the critical step; 'auto' gives "
-                f"{auto:.4g} s)",
+                f"{auto:.4g} s){hardest}",
                 source=str(case.source),
             )
         return Timestep(float(user), auto, limit, impact_speed)

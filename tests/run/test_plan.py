@@ -42,7 +42,7 @@ def synthetic_study(base_error=0.01, stderr=0.005) -> dict:
         "cheapest": {"youngs_modulus": 3e7, "timestep_fraction": 0.6,
                      "section_length_grains": 12.0, "section_width_grains": 5.0},
         # measured under the default law (only the keys given are compared)
-        "conditions": {"tangential": "impact"},
+        "conditions": {"tangential": "impact", "layers": None},  # depth: not this study's test
     }  # fmt: skip
     return {"cases": {"sphere-bed": kind, "screw-trough": kind}}
 
@@ -234,7 +234,7 @@ def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
     assert main(["plan", str(PARITY), "--suggest", str(out)]) == 0
     printed = capsys.readouterr().out
     before = plan.plan(load_case(PARITY))
-    warned = [a for a in before.advice if a.key == "contact.youngs_modulus"]
+    warned = [a for a in before.warnings() if a.key == "contact.youngs_modulus"]
     assert warned and warned[0].value is not None and "contact.youngs_modulus" in printed
     case = load_case(out)  # it loads
     assert case.contact.youngs_modulus == warned[0].value
@@ -386,3 +386,40 @@ def cost_startup():
     from dem.run import cost
 
     return cost.STARTUP_S
+
+
+# --- plausibility at the door (issue 48, item 3) ---------------------------------------------
+
+
+def test_a_grain_of_implausible_mass_is_refused_naming_the_mass_and_its_density():
+    from dem.errors import InputError
+
+    with pytest.raises(InputError, match=r"particles\.mass.*7\.77e\+06 kg/m\^3.*a mass in g"):
+        load_case(CASES_DIR / "screw-trough", {"particles.mass": 2.5})
+
+
+@pytest.mark.parametrize("key, value, named", [
+    ("drive.angle", 0.35, "drive.angle 0.35 deg"),  # radians for degrees
+    ("drive.throw_number", 50, "Gamma 50"),
+    ("particles.count", 20000, "particles.count 20000"),
+])  # fmt: skip
+def test_a_unit_mistake_is_named_where_the_step_refuses_it(key, value, named):
+    """The step is what such a mistake breaks first; its error names what set the impact."""
+    from dem.errors import InputError
+
+    with pytest.raises(InputError, match="run.timestep") as info:
+        load_case(CASES_DIR / "screw-trough", {key: value})
+    assert "hardest impact" in str(info.value) and named in str(info.value)
+
+
+def test_no_error_figure_is_claimed_for_a_bed_unlike_the_studys():
+    """A 120 m section (0.002 layers) and a contact the stiffness rule finds too soft leave
+    the study's beds: no expected error, and a note naming the key."""
+    for key, value, note in (
+        ("trough.length", 120.0, "particles.layers"),
+        ("contact.youngs_modulus", 5e7, "contact.youngs_modulus"),
+    ):
+        p = plan.plan(load_case(CASES_DIR / "screw-trough", {key: value}))
+        assert math.isnan(p.expected_error), key
+        assert note in p.error_source and any(a.key == note for a in p.advice)
+    assert math.isfinite(plan.plan(load_case(CASES_DIR / "screw-trough")).expected_error)
