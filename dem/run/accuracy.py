@@ -236,9 +236,11 @@ def bed_and_contact_away(scene, data: dict, kind: str) -> list[str]:
                        f"{study:g} layers)")  # fmt: skip
     soft = stiffness.assessment(scene)
     if soft is not None and not soft.get("converged", True):
-        out.append(f"{soft['key']} = {getattr(case.contact, soft['key'].split('.')[1]):.3g} "
-                   f"(the bed's (omega / omega_bed)^2 = {soft['compliance']:.3g} > "
-                   f"{soft['compliance_limit']:.3g}: too soft for the rigid material's answer)")
+        out.append(
+            f"{soft['key']} = {getattr(case.contact, soft['key'].split('.')[1]):.3g} "
+            f"(the bed's (omega / omega_bed)^2 = {soft['compliance']:.3g} > "
+            f"{soft['compliance_limit']:.3g}: too soft for the rigid material's answer)"
+        )
     return out
 
 

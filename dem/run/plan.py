@@ -392,6 +392,14 @@ def suggest(
             name = key.rpartition(".")[2]
             if line.startswith(f"{name} = ") and line.endswith(f"# dem plan --suggest {stamp}"):
                 text_lines[i] = f"{line}, was {old}"
+    # the file's own header and comments describe the case it came from: say so above them
+    changed = ", ".join(sorted(changes))
+    text_lines = [
+        f"# dem plan --suggest {stamp}: the case {source.parent.name} with its advice applied,",
+        f"# {changed}. The comments below are that case's (each changed key keeps its old line",
+        "# as '# was: ...'): where they describe the old values, the values are the new ones.",
+        *text_lines,
+    ]
     replace_text(out / CASE_FILE, "\n".join(text_lines) + "\n", key="--suggest")
     after = plan(load_case(out), threads=threads, cycles=cycles)
     return Suggestion(out / CASE_FILE, {k: v for k, v in changes.items()}, before, after)

@@ -24,9 +24,11 @@ def set_contact_keys(path: Path, values: dict[str, float], comment: str) -> str:
 def set_case_keys(path: Path, values: dict[str, object], comment: str) -> str:
     """Return the text of the case file ``path`` with ``values`` ({"table.key": value}) set.
 
-    Existing lines of those keys in their table are replaced; the new lines follow the table's
-    header with ``comment``; the rest of the file (comments, order) is kept. A missing table is
-    appended. Values are written as TOML: numbers, strings and booleans.
+    A key already in its table is set where it stands, with ``comment``, and its old line
+    follows as a comment (``# was: key = old  # its comment``), so that its unit and the
+    comment lines that continue it stay in place; a new key follows the table's header. The
+    rest of the file (comments, order) is kept. A missing table is appended. Values are written
+    as TOML: numbers, strings and booleans.
     """
     lines = Path(path).read_text(encoding="utf-8").splitlines()
     any_header = re.compile(r"^\s*\[")
@@ -45,8 +47,17 @@ def set_case_keys(path: Path, values: dict[str, object], comment: str) -> str:
             (i for i in range(start + 1, len(lines)) if any_header.match(lines[i])), len(lines)
         )
         own = re.compile(r"^\s*(" + "|".join(map(re.escape, keys)) + r")\s*=")
-        body = [line for line in lines[start + 1 : end] if not own.match(line)]
-        lines = [*lines[: start + 1], *new, *body, *lines[end:]]
+        body, placed = [], set()
+        for line in lines[start + 1 : end]:
+            match = own.match(line)
+            if match is None:
+                body.append(line)
+                continue
+            key = match.group(1)
+            body += [f"{key} = {_toml_value(keys[key])}  # {comment}", f"# was: {line.strip()}"]
+            placed.add(key)
+        added = [line for key, line in zip(keys, new, strict=True) if key not in placed]
+        lines = [*lines[: start + 1], *added, *body, *lines[end:]]
     return "\n".join(lines) + "\n"
 
 

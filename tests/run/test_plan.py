@@ -240,8 +240,18 @@ def test_suggest_writes_the_case_the_advice_recommends(tmp_path, capsys):
     assert case.contact.youngs_modulus == warned[0].value
     after = plan.plan(case)
     assert not [a for a in after.advice if a.value is not None], after.text()
-    assert "# dem plan --suggest" in (out / "case.toml").read_text()
-    assert "was 50000000.0" in (out / "case.toml").read_text()
+    text = (out / "case.toml").read_text()
+    assert "# dem plan --suggest" in text and "was 50000000.0" in text
+    # nothing of the original is lost: each line is there, a changed key's as "# was: ..."
+    # (its unit and the comment lines that continue it stay where they were), and the header
+    # says the comments are the original case's
+    lines = text.splitlines()
+    for line in (PARITY / "case.toml").read_text().splitlines():
+        assert line in lines or f"# was: {line.strip()}" in lines, line
+    was = lines.index("# was: youngs_modulus = 5.0e7  # Pa, as specified for the LIGGGHTS and "
+                      "speed references. Too soft for")  # fmt: skip
+    assert lines[was - 1].startswith("youngs_modulus = ") and lines[was + 1].startswith("# the ")
+    assert lines[0].startswith("# dem plan --suggest") and "contact.youngs_modulus" in lines[1]
     assert not (out / "README.md").exists()  # it describes the case as it was
     # nothing is replaced: a second suggestion into the same folder is refused
     assert main(["plan", str(PARITY), "--suggest", str(out)]) == 2
