@@ -153,6 +153,8 @@ def velocity_cycles_figure(
     *,
     measured=None,
     title: str = "",
+    replicas=None,
+    pooled=None,
 ) -> Path:
     """Per-cycle mean x-velocity (m/s) with its running mean and +-1 standard-error band.
 
@@ -164,6 +166,9 @@ def velocity_cycles_figure(
         path: PNG file.
         measured: Boolean mask (C,) of measured cycles; settling cycles are drawn grey.
         title: Figure title.
+        replicas: The other fills of a pooled run: (seed, cycles, velocities) each, their
+            measured cycles drawn beside the first fill's.
+        pooled: (mean, standard error) pooled over the fills, m/s: a line and its band.
 
     """
     import numpy as np
@@ -175,9 +180,19 @@ def velocity_cycles_figure(
     fig, ax = plt.subplots(figsize=(6.5, 4), dpi=120)
     if np.any(~measured):
         ax.plot(cycle[~measured], velocity[~measured], "o", ms=3, color="0.6", label="settling")
-    ax.plot(cycle[measured], velocity[measured], "o-", ms=3, lw=0.8, color="C0", label="cycle")
-    ax.plot(cycle, m, color="C3", label="running mean")
-    ax.fill_between(cycle, m - s, m + s, color="C3", alpha=0.2, label="+-1 standard error")
+    first = "cycle" if not replicas else "cycle, fill 1"
+    ax.plot(cycle[measured], velocity[measured], "o-", ms=3, lw=0.8, color="C0", label=first)
+    for k, (seed, c_k, v_k) in enumerate(replicas or (), start=2):
+        ax.plot(c_k, v_k, "o-", ms=2, lw=0.6, alpha=0.7, color=f"C{(k + 1) % 10}",
+                label=f"fill {k} (seed {seed})")  # fmt: skip
+    if pooled is None:
+        ax.plot(cycle, m, color="C3", label="running mean")
+        ax.fill_between(cycle, m - s, m + s, color="C3", alpha=0.2, label="+-1 standard error")
+    else:
+        mean, err = pooled
+        ax.axhline(mean, color="C3", label=f"pooled over {len(replicas or ()) + 1} fills")
+        ax.axhspan(mean - err, mean + err, color="C3", alpha=0.2,
+                   label="+-1 pooled standard error (fill-to-fill spread included)")  # fmt: skip
     ax.set_xlabel("drive cycle (-)")
     ax.xaxis.get_major_locator().set_params(integer=True)
     ax.set_ylabel("cycle's mean x-velocity v (m/s)")

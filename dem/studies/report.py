@@ -289,6 +289,24 @@ def _cycle_series(summary: dict, results: dict | None):
     return None
 
 
+def _replica_series(d: Path, summary: dict) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The measured cycles of a pooled run's fills 2..N: (seed, cycles, velocities) each.
+
+    From ``replicas/k/summary.json`` (:mod:`dem.run.replicas`); a fill whose summary is missing
+    or unreadable is left out.
+    """
+    out = []
+    for k in range(1, int(summary.get("replicas") or 1)):
+        try:
+            own = json.loads((d / "replicas" / str(k) / "summary.json").read_text())
+            v = np.asarray(own["per_cycle_velocity"], dtype=np.float64)
+            settle = int(own.get("settle_cycles") or 0)
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        out.append((own.get("seed"), np.arange(settle, settle + v.size), v))
+    return out
+
+
 def _num(summary: dict, key: str) -> float:
     v = summary.get(key)
     return float(v) if isinstance(v, int | float) else math.nan
@@ -307,12 +325,18 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
         mean = np.full(v.size, np.nan)
         err = np.full(v.size, np.nan)
         mean[measured], err[measured] = running_statistics(v[measured])
+        others = _replica_series(d, summary)
+        pooled = None
+        if others:
+            pooled = (_num(summary, "mean_velocity"), _num(summary, "mean_velocity_stderr"))
         files.append(
             plots.velocity_cycles_figure(
-                c, v, mean, err, dest / "velocity_per_cycle.png", measured=measured, title=title
+                c, v, mean, err, dest / "velocity_per_cycle.png", measured=measured, title=title,
+                replicas=others, pooled=pooled,
             )
-        )
-        notes.append(f"per-cycle velocities from {source} ({v.size} cycles)")
+        )  # fmt: skip
+        notes.append(f"per-cycle velocities from {source} ({v.size} cycles)"
+                     + (f" and {len(others)} more fills' summaries" if others else ""))  # fmt: skip
     else:
         notes.append("no per-cycle velocities: velocity_per_cycle.png skipped")
 

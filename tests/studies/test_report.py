@@ -164,3 +164,31 @@ def test_report_text_names_which_error_bar_it_shows():
     assert "3 fills pooled" in _error_label({"replicas": 3})
     one = _error_label({"replicas": 1})
     assert "this run's per-cycle means" in one and "leaves out the fill-to-fill" in one
+
+
+def test_a_pooled_runs_per_cycle_figure_draws_every_fill_and_the_pooled_band(tmp_path, monkeypatch):
+    """Replica 0's series alone hid the fill-to-fill spread the pooled error includes."""
+    from dem.studies import plots
+
+    run = tmp_path / "run"
+    _run_folder(run, with_h5=False)
+    s = json.loads((run / "summary.json").read_text())
+    s |= {"replicas": 3, "seed": 1, "mean_velocity_stderr": 0.002}
+    (run / "summary.json").write_text(json.dumps(s))
+    for k, v in ((1, 0.05), (2, 0.06)):
+        own = dict(s, seed=1 + k, replicas=1, per_cycle_velocity=[v] * 6)
+        (run / "replicas" / str(k)).mkdir(parents=True)
+        (run / "replicas" / str(k) / "summary.json").write_text(json.dumps(own))
+    seen = {}
+    original = plots.velocity_cycles_figure
+
+    def spy(*args, **kwargs):
+        seen.update(kwargs)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(plots, "velocity_cycles_figure", spy)
+    make_report([run], tmp_path / "report")
+    assert [(seed, list(v)) for seed, _, v in seen["replicas"]] == [(2, [0.05] * 6),
+                                                                   (3, [0.06] * 6)]  # fmt: skip
+    assert seen["pooled"] == (s["mean_velocity"], 0.002)
+    assert _is_png(tmp_path / "report" / "velocity_per_cycle.png")
