@@ -145,8 +145,8 @@ def run_replicas(
             break
         more = fills_for(n, error, goal, case.run.max_replicas)
         if progress:
-            print(f"dem: {n} fills give +- {error:.2g} in v_norm, the target is {goal:.2g}: "
-                  f"{more - n} fills more", file=sys.stderr, flush=True)  # fmt: skip
+            say(f"dem: {n} fills give +- {error:.2g} in v_norm, the target is {goal:.2g}: "
+                f"{more - n} fills more")  # fmt: skip
         processes = _run_fills(case, out_dir, range(n, more), summaries, cores, started, options)
         n = more
     summary = pool_summaries([summaries[k] for k in range(n)], time.perf_counter() - started,
@@ -160,6 +160,17 @@ def run_replicas(
             _drop_run_files(replica_dir(out_dir, k))
     replace_text(out_dir / SUMMARY, json_text(summary))
     return summary
+
+
+def say(text: str) -> None:
+    """A line on stderr that starts a line of its own.
+
+    Replica 0's progress bar, drawn by a worker process on the same terminal, leaves its line
+    open; on a terminal the line is cleared first (as ``tqdm.write`` does), so a "done" line
+    is not glued to the bar; into a file or pipe the text is written as it is.
+    """
+    clear = "\r\x1b[K" if sys.stderr.isatty() else ""
+    print(clear + text, file=sys.stderr, flush=True)
 
 
 def target_gap(pooled: dict, target: float) -> tuple[float, float]:
@@ -267,12 +278,11 @@ def _run_fills(case, out_dir: Path, ks, summaries: dict[int, dict], cores: int, 
         _keep_own_summary(out_dir, k, result["summary"])
         if progress:
             s = result["summary"]
-            print(
+            say(
                 f"dem: replica {k} (seed {s['seed']}) done: v = "
                 f"{s['mean_velocity']:.4g} +- {s['mean_velocity_stderr']:.2g} m/s "
-                f"({len(summaries)} done, {time.perf_counter() - started:.0f} s)",
-                file=sys.stderr, flush=True,
-            )  # fmt: skip
+                f"({len(summaries)} done, {time.perf_counter() - started:.0f} s)"
+            )
 
     if jobs and workers == 1:  # one core: in this process, one after the other (no children,
         for job in jobs:  # so a daemonic Dask worker can run it too)

@@ -178,3 +178,20 @@ def test_a_run_with_a_target_error_pools_fills_until_it_reaches_it(tiny, tmp_pat
            for k in range(5)]  # fmt: skip
     p = measure.pooled([o["mean_velocity"] for o in own], [o["mean_velocity_stderr"] for o in own])
     assert s["mean_velocity"] == p.mean
+
+
+def test_a_done_line_clears_a_progress_bars_open_line_on_a_terminal(monkeypatch):
+    import io
+    import sys
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    term, pipe = Terminal(), io.StringIO()
+    monkeypatch.setattr(sys, "stderr", term)
+    replicas.say("dem: replica 1 done")
+    monkeypatch.setattr(sys, "stderr", pipe)
+    replicas.say("dem: replica 2 done")
+    assert term.getvalue() == "\r\x1b[Kdem: replica 1 done\n"
+    assert pipe.getvalue() == "dem: replica 2 done\n"
