@@ -302,23 +302,71 @@ def cmd_report(args) -> int:
 
 
 def cmd_export_liggghts(args) -> int:
-    """``dem export liggghts``: the case as a LIGGGHTS deck."""
-    from dem.io.liggghts.export import export_deck, plan_export
+    """``dem export liggghts``: the case as a LIGGGHTS deck (``--run``: run it and summarise)."""
+    from dem.io.liggghts.export import (
+        DECK_FILES,
+        RUN_FILES,
+        dem_run_line,
+        export_deck,
+        plan_export,
+    )
+    from dem.io.liggghts.launcher import (
+        LIGGGHTS_INSTALL,
+        LIGGGHTS_STDOUT,
+        LiggghtsError,
+        find_liggghts,
+        run_liggghts,
+        summarize_run,
+    )
     from dem.scene.case import load_case
 
     case = load_case(args.case_dir, set_overrides(args.set))
     plan = plan_export(case, timestep=args.timestep, settle_cycles=args.settle_cycles,
                        from_run=args.from_run)  # fmt: skip
     out = writable_path("OUT_DIR", args.out_dir, folder=True)
-    path = export_deck(plan, out, dump=not args.no_dump, overwrite=args.overwrite)
+    refuse_links(out, (*DECK_FILES, *RUN_FILES), "OUT_DIR")  # before LIGGGHTS is looked for
+    if args.run and find_liggghts() is None:  # say it now, not after the deck
+        print(f"dem: liggghts is not on PATH ({LIGGGHTS_INSTALL})", file=sys.stderr)
+        return 2
+    path = export_deck(plan, out, dump=not args.no_dump, overwrite=args.overwrite,
+                       every_step=args.run)  # fmt: skip
+    say = sys.stderr if args.json else sys.stdout  # with --json stdout holds the object alone
     print(f"wrote {path} (dt = {plan.timestep:.4g} s, {plan.settle_cycles} settling and "
-          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)")  # fmt: skip
+          f"{case.run.cycles} measured cycles, {plan.steps} measured steps)", file=say)  # fmt: skip
     if plan.settle_note:
-        print(f"settle: {plan.settle_note}")
+        print(f"settle: {plan.settle_note}", file=say)
     if case.run.replicas > 1:  # a deck is one fill
         print(f"replicas: the deck is one fill (run.seed {case.run.seed}); run.replicas = "
               f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
-              "and pool them")  # fmt: skip
+              "and pool them", file=say)  # fmt: skip
+    recipe = dem_run_line(plan, args.set)
+    print(f"the same bed in dem: {recipe}", file=say)
+    deck = {"deck": str(path), "timestep": plan.timestep, "settle_cycles": plan.settle_cycles,
+            "cycles": case.run.cycles, "steps": plan.steps, "dem_run": recipe}  # fmt: skip
+    if not args.run:
+        if args.json:
+            print_json(deck)
+        return 0
+    print(f"dem: running LIGGGHTS in {out} (fill, {plan.settle_cycles} settling and "
+          f"{case.run.cycles} measured cycles; it prints nothing until it ends)",
+          file=sys.stderr, flush=True)  # fmt: skip
+    try:
+        run = run_liggghts(out, min_loops=3 if plan.settle_steps > 0 else 2)
+        s = summarize_run(plan, out, run)
+    except LiggghtsError as exc:
+        print(f"dem: {str(exc).splitlines()[0]} (the end of its output: {out / LIGGGHTS_STDOUT})",
+              file=sys.stderr)  # fmt: skip
+        return 1
+    if args.json:
+        print_json(deck | {"summary": s})
+        return 0
+    err = s["mean_velocity_stderr"]
+    err_text = "" if err is None else f" +- {err:.3g}"
+    rate = s["particle_steps_per_s"]
+    rate_text = "" if rate is None else f"; {rate:.3g} particle-steps/s"
+    print(f"{s['engine_version'] or 'LIGGGHTS'}: mean velocity {s['mean_velocity']:.4g}{err_text} "
+          f"m/s (v_norm {s['mean_velocity_norm']:.4g}) over {s['cycles']} cycles{rate_text}; "
+          f"{out / 'summary.json'}")  # fmt: skip
     return 0
 
 

@@ -303,6 +303,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--overwrite", action="store_true",
         help="replace a deck already in OUT_DIR (in.dem, grain.multisphere, trough.stl)",
     )  # fmt: skip
+    e.add_argument("--run", action="store_true", help="run the deck in LIGGGHTS (on PATH) and "
+                   "write OUT_DIR/summary.json as dem run reports one")  # fmt: skip
+    e.add_argument("--json", action="store_true", help="print the deck (and with --run the "
+                   "run's summary) as one JSON object")  # fmt: skip
     e.set_defaults(func=c.cmd_export_liggghts)
 
     e = es.add_parser("lammps", help="write a LAMMPS deck (pair granular) and optionally run it")

@@ -10,7 +10,6 @@ returns the pair. The studies turn the pair into their own result entries.
 
 from __future__ import annotations
 
-import re
 import shutil
 import time
 from collections.abc import Callable
@@ -32,7 +31,6 @@ from dem.io.liggghts import (
 from .cycles import cycle_edges, cycle_means, drive_steps
 
 #: The deck's drive clock, ``variable tau equal (step-N)*dt``: N is the step the drive starts at.
-TAU_RE = re.compile(r"variable tau equal \(step-(\d+)\)")
 
 
 class ReferenceRun(NamedTuple):
@@ -86,10 +84,12 @@ def fresh_copy(source: Path, work: Path) -> None:
 
 def drive_start_step(deck: Path) -> int:
     """The step at which the deck's drive starts (its ``tau`` variable); SystemExit if none."""
-    found = TAU_RE.search(Path(deck).read_text())
+    from dem.io.liggghts.drive import drive_start_step as start_of
+
+    found = start_of(Path(deck).read_text())
     if found is None:
         raise SystemExit(f"no 'variable tau equal (step-N)*dt' line in {deck}")
-    return int(found.group(1))
+    return found
 
 
 def liggghts_missing() -> str | None:

@@ -141,21 +141,24 @@ def _run_with_bar(command, deck_dir, env, timeout, total_steps) -> tuple[str, st
 
 
 def per_cycle_velocities(vx: np.ndarray, period: float, dt: float, settle_cycles: int,
-                         cycles: int) -> np.ndarray:  # fmt: skip
+                         cycles: int, *, start: int = 0,
+                         error: type[Exception] = LammpsError) -> np.ndarray:  # fmt: skip
     """Mean of the per-step velocities over each measured cycle, on dem's cycle edges.
 
-    ``vx`` is ``vx_mean.txt`` (step, mean vx); the drive started at step 0 and step s holds the
-    velocity after s steps, so cycle c spans steps (edge c, edge c + 1].
+    ``vx`` is ``vx_mean.txt`` (step, mean vx, one row a step); the drive started at step
+    ``start`` (0 in a LAMMPS deck, the fill's last step in a LIGGGHTS one) and step s holds the
+    velocity after s steps, so cycle c spans steps (edge c, edge c + 1]. A cycle short of
+    samples raises ``error``: the run ended early.
     """
     steps = vx[:, 0].astype(np.int64)
     out = np.empty(cycles)
     for k in range(cycles):
         c = settle_cycles + k
-        lo, hi = drive.cycle_edge(0, c, period, dt), drive.cycle_edge(0, c + 1, period, dt)
+        lo, hi = drive.cycle_edge(start, c, period, dt), drive.cycle_edge(start, c + 1, period, dt)
         inside = (steps > lo) & (steps <= hi)
         if inside.sum() != hi - lo:
-            raise LammpsError(f"{VX_FILE}: cycle {c} has {int(inside.sum())} samples, not "
-                              f"{hi - lo}: the run ended early")  # fmt: skip
+            raise error(f"{VX_FILE}: cycle {c} has {int(inside.sum())} samples, not "
+                        f"{hi - lo}: the run ended early")  # fmt: skip
         out[k] = vx[inside, 1].mean()
     return out
 

@@ -16,6 +16,7 @@ direction; both are equal-style variables, |g(t)| and (g_x, 0, g_z). Before the 
 from __future__ import annotations
 
 import math
+import re
 
 from dem.config import GRAVITY
 from dem.io.liggghts.text import fmt
@@ -106,3 +107,13 @@ def drive_variables(d, gx0: float, gz0: float) -> list[str]:
         f"variable gx equal {fmt(gx0)}+{gx}",
         f"variable gz equal {fmt(gz0)}+{gz}",
     ]
+
+
+#: The drive's start in a deck: ``variable tau equal (step-N)*dt`` (:func:`drive_block`).
+TAU_RE = re.compile(r"variable tau equal \(step-(\d+)\)")
+
+
+def drive_start_step(deck_text: str) -> int | None:
+    """The step at which a deck's drive starts (its ``tau`` variable), or None if it has none."""
+    found = TAU_RE.search(deck_text)
+    return None if found is None else int(found.group(1))

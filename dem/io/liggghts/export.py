@@ -18,8 +18,9 @@ from typing import NamedTuple
 from dem.config import DEM_EXPORT_SETTLE_CYCLES
 from dem.errors import InputError
 from dem.io.files import refuse_links
-from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, write_deck
+from dem.io.liggghts.deck import CLUMP_FILE, DECK_NAME, VX_FILE, write_deck
 from dem.io.liggghts.geometry import MESH_FILE
+from dem.io.liggghts.launcher import LIGGGHTS_STDOUT, SUMMARY_NAME
 from dem.io.paths import refuse_replacing
 from dem.physics import drive
 from dem.scene.case import Case
@@ -27,6 +28,8 @@ from dem.scene.resolved import Scene, resolve
 
 #: The files ``dem export liggghts`` writes into its folder.
 DECK_FILES = (DECK_NAME, CLUMP_FILE, MESH_FILE)
+#: What ``--run`` writes beside the deck: LIGGGHTS's output, the velocities and the summary.
+RUN_FILES = (LIGGGHTS_STDOUT, VX_FILE, SUMMARY_NAME)
 
 
 class ExportPlan(NamedTuple):
@@ -126,8 +129,9 @@ def export_settle_cycles(
 
 
 def export_deck(
-    plan: ExportPlan, out_dir: str | os.PathLike, *, dump: bool = True, overwrite: bool = False
-) -> Path:
+    plan: ExportPlan, out_dir: str | os.PathLike, *, dump: bool = True, overwrite: bool = False,
+    every_step: bool = False,
+) -> Path:  # fmt: skip
     """Write the deck of ``plan`` into ``out_dir`` and return its path.
 
     Args:
@@ -136,6 +140,8 @@ def export_deck(
         dump: Write a particle dump every output frame.
         overwrite: Replace a deck already there (``in.dem``, ``grain.multisphere``,
             ``trough.stl``); without it such a folder is refused (``OUT_DIR``).
+        every_step: Write the mean x-velocity of every step (the run's summary cuts it into
+            dem's cycles, :func:`dem.io.liggghts.launcher.summarize_run`), not of every frame.
 
     """
     out = Path(out_dir)
@@ -145,4 +151,22 @@ def export_deck(
     return write_deck(
         plan.scene, out, timestep=plan.timestep, steps=plan.steps,
         settle_steps=plan.settle_steps, settle_note=plan.settle_note, dump=dump,
+        sample_steps=1 if every_step else None,
     )  # fmt: skip
+
+
+def dem_run_line(plan: ExportPlan, sets: list[str] | None = None) -> str:
+    """The ``dem run`` command that runs the same bed as the deck: its step and settle cycles.
+
+    The case folder, the export's ``--set`` keys, and ``run.timestep`` and ``run.settle_cycles``
+    as the deck has them (the deck is one fill: ``run.replicas = 1``).
+    """
+    import shlex
+
+    case = plan.scene.case
+    parts = ["dem", "run", str(case.directory)]
+    for text in sets or ():
+        parts += ["--set", text]
+    parts += ["--set", f"run.timestep={plan.timestep!r}",
+              "--set", f"run.settle_cycles={plan.settle_cycles}", "--replicas", "1"]  # fmt: skip
+    return shlex.join(parts)
