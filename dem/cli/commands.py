@@ -56,11 +56,62 @@ def cmd_velocity(args) -> int:
             args.eps_n, impact=args.impact or "paper",
         )  # fmt: skip
         result, lines = velocity_answer(r, args.frequency)
+    if args.bulk is not None or args.depth is not None or args.atlas is not None:
+        bulk, more = bulk_answer(args)
+        result["bulk"] = bulk
+        lines += more
     if args.json:
         print_json(result)
     else:
         print("\n".join(lines))
     return 0
+
+
+def bulk_answer(args) -> tuple[dict, list[str]]:
+    """``--bulk``: the atlas's estimate of the bed on this drive, as JSON and as lines."""
+    import dataclasses
+
+    from dem import pointmass
+    from dem.run import bulk as atlas
+
+    if args.bulk is None:
+        raise InputError("--bulk", None, "a grain shape (sphere, screw) with --depth and --atlas")
+    if args.depth is None:
+        raise InputError("--depth", None, "the bed's depth in grain layers, with --bulk")
+    if args.grain != "point":
+        raise InputError("--grain", args.grain, "point with --bulk (the atlas compares the bed "
+                         "with the point mass)")  # fmt: skip
+    path = args.atlas or atlas.default_table()
+    if path is None:
+        raise InputError("--bulk", args.bulk, "an atlas: the shipped one (dem/data/atlas) is not "
+                         "computed yet (validation/atlas/README.md says how far it is); give "
+                         "--atlas CSV, an atlas.csv of dem atlas")  # fmt: skip
+    if args.atlas is None:  # the shipped atlas's material and trough
+        for option, value in atlas.FIXED.items():
+            given = getattr(args, option[2:].replace("-", "_"))
+            if given != value:
+                raise InputError(option, given, f"{value:g}, as the shipped atlas was run (give "
+                                 "--atlas CSV of an atlas of your material)")  # fmt: skip
+    rows = atlas.read_table(path)
+    e = atlas.estimate(rows, args.bulk, depth=args.depth, friction=args.friction,
+                       throw_number=args.throw_number, angle=args.angle,
+                       source=str(path))  # fmt: skip
+    bounded = pointmass.velocity(
+        args.throw_number, args.angle, args.friction, args.inclination, args.eps_t, args.eps_n,
+        impact="coulomb",
+    ).velocity_norm  # fmt: skip
+    ratio = e.velocity_norm / bounded if abs(bounded) > 1e-3 else None
+    result = dataclasses.asdict(e) | {"pointmass_bounded_velocity_norm": bounded,
+                                      "ratio_bounded": ratio}  # fmt: skip
+    lines = [
+        f"bulk (atlas)       v_norm {e.velocity_norm:.3f} +- {e.stderr:.2g} for a bed of "
+        f"{args.bulk}s {args.depth:g} layers deep (interpolated between {len(e.corners)} "
+        f"atlas points, +- {e.interpolation:.2g} of it from the interpolation; {path})",
+    ]
+    if ratio is not None:
+        lines.append(f"bulk / point mass  {ratio:.3f} against the Coulomb-bounded point mass "
+                     f"({bounded:.3f})")  # fmt: skip
+    return result, lines
 
 
 def cmd_sweep(args) -> int:

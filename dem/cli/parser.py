@@ -86,6 +86,13 @@ def pointmass_parser(sub) -> None:
         help="rolling-sphere: eps_t of the centre's velocity, never past rolling "
         "(centre, the default: the DEM's law) or of the contact point's slip",
     )
+    p.add_argument("--bulk", metavar="SHAPE", help="also the atlas's estimate of a bed of "
+                   "these grains (sphere, screw) on this drive: dem atlas's table, interpolated, "
+                   "never extrapolated")  # fmt: skip
+    p.add_argument("--depth", type=number, metavar="LAYERS",
+                   help="--bulk: the bed's depth in grain layers (particles.layers)")  # fmt: skip
+    p.add_argument("--atlas", metavar="CSV", help="--bulk: an atlas.csv of dem atlas (default: "
+                   "the shipped one, dem/data/atlas)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=c.cmd_velocity, impact=None)  # --impact's default depends on --grain
 

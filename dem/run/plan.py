@@ -183,6 +183,8 @@ def plan(
     else:
         expected, parts = math.nan, {}
         error_source = "no study data: dem/data/speed_accuracy.json is missing"
+    if grains > 1:
+        atlas_advice(case, advice)
     relax_advice(case, record.friction_floor(case), advice)
     if getattr(case, "feeder", None) is not None:
         text = (
@@ -403,6 +405,29 @@ def suggest(
     replace_text(out / CASE_FILE, "\n".join(text_lines) + "\n", key="--suggest")
     after = plan(load_case(out), threads=threads, cycles=cycles)
     return Suggestion(out / CASE_FILE, {k: v for k, v in changes.items()}, before, after)
+
+
+def atlas_advice(case, advice: list) -> None:
+    """A note from the atlas: whether the point mass answers this bed (:mod:`dem.run.bulk`)."""
+    from dem.run import bulk
+
+    said = bulk.point_mass_answers(case)
+    if said is None:
+        return
+    if said["answers"] is None:
+        advice.append(Advice("note", "particles.layers", f"the atlas does not describe this "
+                             f"bed: {said['why']}"))  # fmt: skip
+        return
+    share = f"{said['ratio']:.3f} +- {said['ratio_stderr']:.2g} of the Coulomb-bounded point mass"
+    if said["answers"]:
+        text = (f"by the atlas this bed of {said['layers']:.2g} layers conveys at {share}: "
+                f"within the {100 * said['accuracy']:g} % asked, the point mass answers "
+                "(dem pointmass velocity) without this run")  # fmt: skip
+    else:
+        text = (f"by the atlas this bed of {said['layers']:.2g} layers conveys at {share}: "
+                f"more than the {100 * said['accuracy']:g} % asked from the point mass, so the "
+                "DEM run is needed")  # fmt: skip
+    advice.append(Advice("note", "particles.layers", text))
 
 
 def _case_value(case, dotted: str) -> str:
