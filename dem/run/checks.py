@@ -53,7 +53,8 @@ def read_checkpoint(
             + "; ".join(changed) + ". Resume with the case it was made with, or start "
             "again with --overwrite",
         )  # fmt: skip
-    loop.setdefault("cycles", loop["total_cycles"] - (settle or 0))  # older checkpoints
+    if "cycles" not in loop:  # older checkpoints (setdefault would evaluate this every time,
+        loop["cycles"] = loop["total_cycles"] - (settle or 0)  # and fail on an "auto" settle)
     loop.setdefault("settle_cycles", settle)
     _check_frames_setting(loop, path, frames=frames, lab_frame=lab_frame)
     asked = loop["cycles"] - loop.get("extended_cycles", 0)  # less what steadiness added

@@ -113,3 +113,21 @@ def test_the_steadiness_study_replays_the_settle_dem_run_takes(tmp_path):
     series = np.array(every["per_cycle_velocity"]) / case.drive.velocity_scale
     assert beds.replay_settle(series, settle_floor(case), "mser+trend", 2.0) == settle
     assert every["per_cycle_velocity"][settle : settle + 3] == auto["per_cycle_velocity"][:3]
+
+
+@pytest.mark.integration
+def test_a_run_stopped_while_its_automatic_settle_goes_on_resumes_bit_for_bit(
+    tmp_path, monkeypatch
+):
+    """The checkpoint of an "auto" settle has no total yet: reading it used to compute the
+    old-format default anyway (None - int), so such a run could not be resumed."""
+    text = SMALL_CASE.replace("settle_cycles = 2", 'settle_cycles = "auto"')
+    text = text.replace("frames_per_cycle = 3", "frames_per_cycle = 1")
+    case = load_case(write_case(tmp_path / "case", text.replace("cycles = 6", "cycles = 3")))
+    ref = run_case(case, tmp_path / "straight", progress=False, threads=1)
+    steps_per_cycle = ref["steps"] / (ref["settle_cycles"] + 3)
+    check = int(2.5 * steps_per_cycle / config.DEM_CHECK_INTERVAL) + 1  # the settle's 3rd cycle
+    stop_mid_frame(case, tmp_path / "cut", monkeypatch, check, ref["timestep"])
+    resumed = run_case(case, tmp_path / "cut", progress=False, threads=1, resume=True)
+    assert resumed["settle_cycles"] == ref["settle_cycles"]
+    assert resumed["per_cycle_velocity"] == ref["per_cycle_velocity"]
