@@ -385,46 +385,49 @@ def run_atlas(grid_path: str | Path, out: str | Path, *, workers: int | None = N
     if dry_run:
         return {"points": len(points), "done": len(done), "todo": len(todo),
                 "stale": len(stale)}  # fmt: skip
-    _advise(todo, grid, device, say)
-    for p, _ in stale:
-        target = out / STALE_DIR / f"{p.shape}-{p.folder.name}-{time.strftime('%Y%m%dT%H%M%S')}"
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.move(str(p.folder), str(target))
-        say(f"dem atlas: stale point {p.name} moved to {target}")
-    failed: dict[str, str] = {}
-    stopped = None
-    started = time.perf_counter()
-    try:
-        with _stop_on_signals():
-            if workers and workers > 1 or scheduler:
-                failed = _run_on_dask(todo, grid, scheduler, workers, device, say)
-            else:
-                for i, p in enumerate(todo):
-                    t0 = time.perf_counter()
-                    try:
-                        s = run_point(p, grid, threads, device)
-                    except AtlasStopped:
-                        raise
-                    except RunInterrupted as stop:  # run_case's own handler took the signal
-                        raise AtlasStopped(stop.signum) from None
-                    except Exception as exc:  # one point's failure leaves the others running
-                        from dem.studies.sweep import failure_text
+    from dem.run.output import locked
 
-                        failed[p.name] = failure_text(exc, p.folder)
-                        say(f"dem atlas: point {p.name} failed: {failed[p.name]}")
-                        continue
-                    say(_point_line(p, s, i + 1, len(todo), time.perf_counter() - t0,
-                                    time.perf_counter() - started))  # fmt: skip
-    except AtlasStopped as stop:
-        stopped = stop.signum
-        say(f"dem atlas: {stop} - the finished points are kept; the same command continues "
-            "(an interrupted point from its finished fills and checkpoints)")  # fmt: skip
-    cases = {p.index: point_case(grid, p.shape, p.overrides, device) for p in points}
-    rows = gather(points, failed, cases)
-    path = write_table(rows, out, grid)
-    plot_maps(rows, out / f"{TABLE}.png")
-    finished = sum(r["status"] == "done" for r in rows)
-    say(f"dem atlas: {finished} of {len(points)} points finished; table {path}")
+    with locked(out):  # a second atlas into this folder is refused, before it moves anything
+        _advise(todo, grid, device, say)
+        for p, _ in stale:
+            target = out / STALE_DIR / f"{p.shape}-{p.folder.name}-{time.strftime('%Y%m%dT%H%M%S')}"
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.move(str(p.folder), str(target))
+            say(f"dem atlas: stale point {p.name} moved to {target}")
+        failed: dict[str, str] = {}
+        stopped = None
+        started = time.perf_counter()
+        try:
+            with _stop_on_signals():
+                if workers and workers > 1 or scheduler:
+                    failed = _run_on_dask(todo, grid, scheduler, workers, device, say)
+                else:
+                    for i, p in enumerate(todo):
+                        t0 = time.perf_counter()
+                        try:
+                            s = run_point(p, grid, threads, device)
+                        except AtlasStopped:
+                            raise
+                        except RunInterrupted as stop:  # run_case's own handler took the signal
+                            raise AtlasStopped(stop.signum) from None
+                        except Exception as exc:  # one point's failure leaves the others running
+                            from dem.studies.sweep import failure_text
+
+                            failed[p.name] = failure_text(exc, p.folder)
+                            say(f"dem atlas: point {p.name} failed: {failed[p.name]}")
+                            continue
+                        say(_point_line(p, s, i + 1, len(todo), time.perf_counter() - t0,
+                                        time.perf_counter() - started))  # fmt: skip
+        except AtlasStopped as stop:
+            stopped = stop.signum
+            say(f"dem atlas: {stop} - the finished points are kept; the same command continues "
+                "(an interrupted point from its finished fills and checkpoints)")  # fmt: skip
+        cases = {p.index: point_case(grid, p.shape, p.overrides, device) for p in points}
+        rows = gather(points, failed, cases)
+        path = write_table(rows, out, grid)
+        plot_maps(rows, out / f"{TABLE}.png")
+        finished = sum(r["status"] == "done" for r in rows)
+        say(f"dem atlas: {finished} of {len(points)} points finished; table {path}")
     return {"points": len(points), "done": finished, "failed": failed, "csv": str(path),
             "stopped": stopped}  # fmt: skip
 

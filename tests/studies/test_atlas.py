@@ -161,3 +161,18 @@ def test_sigterm_stops_the_atlas_and_the_same_command_finishes_it(tmp_path, thre
     assert main(["atlas", str(path), "--out", str(out), "--threads", threads]) == 0
     assert first.stat().st_mtime_ns == stamp
     assert [r["status"] for r in read_csv(out / "atlas.csv")] == ["done", "done"]
+
+
+def test_a_second_atlas_into_the_same_folder_is_refused_before_it_moves_anything(tmp_path):
+    from dem.run.output import lock_output
+
+    path = write_grid(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    held = lock_output(out)  # an atlas running there
+    try:
+        with pytest.raises(InputError, match="--out"):
+            atlas.run_atlas(path, out, progress=False)
+    finally:
+        held.close()
+    assert not (out / "points").exists()
