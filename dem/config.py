@@ -198,3 +198,8 @@ BED_PACKING = 0.6
 #: (``output.flight_phases``, :mod:`dem.run.flight`): the bed's state, not its transport, so
 #: it is not part of the measured velocity.
 DEM_FLIGHT_CYCLES = 2
+
+#: Seconds over which the thread guard samples the CPUs' idle time before a run starts
+#: (:func:`dem.engine.threads.busy_cores`): long enough for a busy core to show (the kernel
+#: counts in 10 ms ticks), short beside a run.
+DEM_THREAD_GUARD_SAMPLE_S = 0.25

@@ -8,7 +8,8 @@ busy process: 2 threads 0.2-0.4e7 particle-steps/s, 1 thread 1.6e7; validation/p
 (``numba.set_num_threads``), and then runs at one thread's full speed.
 
 :class:`ThreadGuard` times each chunk of steps (``DEM_CHECK_INTERVAL``) on the thread count it
-chose. It starts on N threads, or on one where the load average leaves fewer than N cores free
+chose. It starts on N threads, or on one where the cores busy now (the CPUs' idle time sampled
+over a quarter of a second, :func:`busy_cores`) leave fewer than N free
 (:func:`starting_threads`): the first two chunks on that choice (the first, which pays one-time
 costs, is not timed), the third a short try (``DEM_THREAD_GUARD_TRY_STEPS``) of the other, then on
 whichever was faster per step (the choice it keeps is re-timed every chunk, so it leaves a choice
@@ -33,8 +34,44 @@ import numba
 from dem import config
 
 
-def busy_cores() -> float:
-    """Cores other processes keep busy: the 1-minute load average (0 where it is unknown)."""
+def cpu_times() -> list[tuple[int, int]] | None:
+    """(idle, total) jiffies of every CPU from /proc/stat, or None where there is none."""
+    try:
+        with open("/proc/stat", encoding="ascii") as handle:
+            lines = handle.read().splitlines()
+    except OSError:
+        return None
+    out = []
+    for line in lines:
+        name, *fields = line.split()
+        if name.startswith("cpu") and name != "cpu":
+            ticks = [int(x) for x in fields[:8]]  # user nice system idle iowait irq softirq steal
+            out.append((ticks[3] + ticks[4], sum(ticks)))
+    return out or None
+
+
+def busy_cores(sample_s: float | None = None) -> float:
+    """Cores busy now: the CPUs' busy time over ``sample_s``, summed over the CPUs.
+
+    ``sample_s`` defaults to ``DEM_THREAD_GUARD_SAMPLE_S``; where /proc/stat is missing, the
+    1-minute load average. Sampled, not averaged over a minute: the load average still holds a
+    run that ended a minute
+    ago (in a sweep, replicas or an atlas the run before this one), so a guard that read it started
+    back-to-back runs on one thread on an idle machine. dem itself is waiting while it samples.
+    """
+    import time
+
+    sample_s = config.DEM_THREAD_GUARD_SAMPLE_S if sample_s is None else sample_s
+    before = cpu_times()
+    if before is not None and sample_s > 0.0:
+        time.sleep(sample_s)
+        after = cpu_times()
+        if after is not None and len(after) == len(before):
+            busy = 0.0
+            for (i0, t0), (i1, t1) in zip(before, after, strict=True):
+                if t1 > t0:
+                    busy += 1.0 - (i1 - i0) / (t1 - t0)
+            return max(busy, 0.0)
     try:
         return max(os.getloadavg()[0], 0.0)
     except OSError:  # no load average on this platform
@@ -42,11 +79,10 @@ def busy_cores() -> float:
 
 
 def starting_threads(threads: int, cores: int | None = None, busy: float | None = None) -> int:
-    """``threads``, or one where the load leaves fewer than ``threads`` cores free.
+    """``threads``, or one where the cores busy now leave fewer than ``threads`` free.
 
-    A core counts as free when less than half of it is busy (1-minute load average). The load
-    average lags (it still shows a job that ended a minute ago); the guard corrects a wrong start
-    within three chunks.
+    A core counts as free when less than half of it is busy (:func:`busy_cores`, sampled now).
+    The guard corrects a wrong start within three chunks.
     """
     cores = int(cores or os.cpu_count() or 1)
     busy = busy_cores() if busy is None else float(busy)
@@ -62,8 +98,10 @@ class ThreadGuard:
     """
 
     def __init__(self, threads: int, period: int | None = None, *, start: int | None = None,
-                 note: Callable[[str], None] | None = None):  # fmt: skip
+                 note: Callable[[str], None] | None = None,
+                 busy: float | None = None):  # fmt: skip
         self.threads = int(threads)
+        self.busy_at_start = busy
         self.start = self.threads if start is None else int(start)
         if self.start not in (1, self.threads):
             raise ValueError(f"start must be 1 or {self.threads}, not {self.start}")
@@ -77,9 +115,10 @@ class ThreadGuard:
         self.note = note
         self._noted = False
         if self.start == 1 and self.threads > 1:
+            busy = busy_cores() if busy is None else busy
             self._say(
-                f"{busy_cores():.1f} of {os.cpu_count()} cores busy (load average): starting "
-                f"on one thread, trying {self.threads} now and then"
+                f"{busy:.1f} of {os.cpu_count()} cores busy now: starting on one thread, trying "
+                f"{self.threads} now and then"
             )
 
     def _say(self, text: str) -> None:
@@ -147,6 +186,8 @@ class ThreadGuard:
         total = sum(self.steps.values())
         return {
             "threads": self.threads,
+            "started_on": self.start,
+            "busy_cores_at_start": self.busy_at_start,
             "steps_on_one_thread": self.steps[1],
             "fraction_on_one_thread": self.steps[1] / total if total else 0.0,
             "seconds_per_step": {str(k): v for k, v in self.seconds_per_step.items()},

@@ -41,7 +41,7 @@ import numba
 from dem import config
 from dem.engine import setup
 from dem.engine.device import check_device
-from dem.engine.threads import ThreadGuard, starting_threads
+from dem.engine.threads import ThreadGuard, busy_cores, starting_threads
 from dem.errors import InputError, SimulationError
 from dem.io import checkpoint as checkpoint_io
 from dem.io.files import json_text, replace_text
@@ -153,8 +153,9 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         sim = setup.from_case(scene)
         fill_wall = time.perf_counter() - t0
     if config.DEM_THREAD_GUARD and n_threads > 1:
-        sim.guard = ThreadGuard(n_threads, start=starting_threads(n_threads),
-                                note=_note if show else None)  # fmt: skip
+        busy = busy_cores()
+        sim.guard = ThreadGuard(n_threads, start=starting_threads(n_threads, busy=busy),
+                                note=_note if show else None, busy=busy)  # fmt: skip
     if resume:
         try:
             checkpoint_io.load_state(sim, state)

@@ -216,3 +216,37 @@ def test_the_guard_changes_the_wall_time_only(tmp_path, monkeypatch):
     two = run_case(case, tmp_path / "b", threads=2, progress=False, frames=False)
     one = run_case(case, tmp_path / "c", threads=1, progress=False, frames=False)
     assert guarded["per_cycle_velocity"] == two["per_cycle_velocity"] == one["per_cycle_velocity"]
+
+
+def test_busy_cores_are_sampled_now_not_the_minutes_average(monkeypatch):
+    """A core spinning in another process shows within the sample; once it stops, the next
+    sample is idle again (the 1-minute load average would still hold it)."""
+    import multiprocessing
+    import os
+    import time
+
+    from dem.engine import threads
+
+    if threads.cpu_times() is None:
+        pytest.skip("no /proc/stat here: the load average is the fallback")
+    samples = iter([[(0, 0), (0, 0)], [(50, 100), (0, 100)]])  # CPU 0 half idle, CPU 1 busy
+    monkeypatch.setattr(threads, "cpu_times", lambda: next(samples))
+    assert threads.busy_cores(0.01) == pytest.approx(1.5)
+    monkeypatch.undo()
+    spinner = multiprocessing.get_context("spawn").Process(target=_spin, args=(2.0,))
+    spinner.start()
+    try:
+        time.sleep(0.6)  # the spawned interpreter starts
+        busy = threads.busy_cores(0.5)
+    finally:
+        spinner.join()
+    assert busy >= 0.7  # the spinner's core, whatever else runs
+    assert os.cpu_count() >= 1
+
+
+def _spin(seconds):
+    import time
+
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
