@@ -7,6 +7,7 @@ A grid file (TOML) names base cases by grain shape and the axes over which their
     max_replicas = 9           # ... or this many fills
     cycles = 20                # measured cycles of each fill (default: the base case's)
     flight_phases = 12         # phase bins at which the grains in flight are counted
+    seed = 1001                # the first fill's seed (default: the base case's): a refill
 
     [atlas.cases]              # one base case per shape, relative to this file
     sphere = "../../cases/sphere-bed"
@@ -73,7 +74,8 @@ TABLE = "atlas"
 #: Most points one atlas runs (each is several whole bulk runs).
 MAX_POINTS = 5000
 #: Keys of ``[atlas]``.
-ATLAS_KEYS = ("target_error", "max_replicas", "cycles", "stiffness", "flight_phases", "cases")
+ATLAS_KEYS = ("target_error", "max_replicas", "cycles", "stiffness", "flight_phases", "seed",
+              "cases")  # fmt: skip
 #: ``[atlas] stiffness``: "converged" raises a point's Young's modulus (or linear stiffness) to
 #: what the stiffness rule asks for its bed (:mod:`dem.run.stiffness`), its time step kept at
 #: the same fraction of the stability limit; "as given" runs the base case's.
@@ -108,6 +110,7 @@ class Grid:
     flight_phases: int
     cases: dict  # shape -> case folder
     points: list  # (shape, overrides)
+    seed: int | None = None  # the first fill's seed (None: the base case's run.seed)
 
 
 def read_grid(path: str | Path) -> Grid:
@@ -146,6 +149,11 @@ def read_grid(path: str | Path) -> Grid:
     if not isinstance(phases, int) or isinstance(phases, bool) or not 0 <= phases <= 360:
         raise InputError("atlas.flight_phases", phases, "a whole number of phase bins in "
                          "[0, 360] (0: the grains in flight are not counted)", where)  # fmt: skip
+    seed = atlas.get("seed")
+    if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
+                             or not 0 <= seed < 2**62):  # fmt: skip
+        raise InputError("atlas.seed", seed, "a whole number in [0, 2^62): the first fill's "
+                         "seed at every point (default: the base case's run.seed)", where)
     stiffness = atlas.get("stiffness", "converged")
     if stiffness not in STIFFNESS:
         raise InputError("atlas.stiffness", stiffness, f"one of {', '.join(STIFFNESS)}", where)
@@ -171,7 +179,8 @@ def read_grid(path: str | Path) -> Grid:
     if len(unique) > MAX_POINTS:
         raise InputError("grid", len(unique), f"at most {MAX_POINTS} points (each is several "
                          "bulk runs): fewer values, or several atlases", where)  # fmt: skip
-    return Grid(path.resolve(), float(target), most, cycles, stiffness, phases, folders, unique)
+    return Grid(path.resolve(), float(target), most, cycles, stiffness, phases, folders, unique,
+                seed)  # fmt: skip
 
 
 def _number(value, key: str, where: str) -> float:
@@ -225,6 +234,8 @@ def point_case(grid: Grid, shape: str, overrides: dict, device: str | None = Non
     keys = dict(overrides) | {"run.target_error": grid.target_error,
                               "run.max_replicas": grid.max_replicas,
                               "output.flight_phases": grid.flight_phases}  # fmt: skip
+    if grid.seed is not None:
+        keys["run.seed"] = grid.seed
     if device is not None:
         keys["run.device"] = device
     case = load_case(grid.cases[shape], keys)

@@ -66,6 +66,14 @@ def test_a_grid_file_is_read_and_checked_before_anything_runs(tmp_path):
             atlas.read_grid(write_grid(tmp_path, text))
     with pytest.raises(InputError, match=r"atlas\.target_error.*\[1e-4, 0\.5\]"):
         atlas.read_grid(write_grid(tmp_path, GRID.replace("0.5\nmax", "0.9\nmax")))
+    seeded = atlas.read_grid(
+        write_grid(tmp_path, GRID.replace("cycles = 2", "cycles = 2\nseed = 1001"))
+    )
+    case = atlas.point_case(seeded, "sphere", seeded.points[0][1])
+    assert seeded.seed == 1001 and case.run.seed == 1001  # a refill of the same points
+    assert atlas.point_case(g, "sphere", g.points[0][1]).run.seed == 3  # the base case's
+    with pytest.raises(InputError, match=r"atlas\.seed.*whole number"):
+        atlas.read_grid(write_grid(tmp_path, GRID.replace("cycles = 2", "cycles = 2\nseed = -1")))
     with pytest.raises(InputError, match=r"atlas\.spead.*a key of \[atlas\]"):
         atlas.read_grid(write_grid(tmp_path, GRID.replace("cycles = 2", "spead = 2")))
     # a point's case is checked at the door, named

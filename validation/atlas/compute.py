@@ -1,5 +1,5 @@
-"""Compute the shipped atlas in the background, resumably: the grid, the held-out points, the
-paper's drive; then ship the tables to dem/data/atlas with their provenance.
+"""Compute the shipped atlas in the background, resumably: the grid, the held-out points, a
+refill, the paper's drive; then ship the tables to dem/data/atlas with their provenance.
 
     nohup nice -n 10 .venv/bin/python validation/atlas/compute.py > validation/atlas/run/log 2>&1 &
     .venv/bin/python validation/atlas/compute.py --status      # how far, and what it cost so far
@@ -9,7 +9,8 @@ Each stage is ``dem atlas GRID --out FOLDER`` (a rerun never reruns a finished p
 continues an interrupted one); SIGTERM or SIGINT to this script is passed to the running stage,
 which writes its table and stops, and this script stops after it. When every point of every
 stage is finished the tables are copied to ``dem/data/atlas/`` (``atlas.csv``, ``holdout.csv``,
-``paper_drive.csv`` with their ``.json`` sidecars) beside ``provenance.json``: the grids, the
+``refill.csv``, ``paper_drive.csv`` with their ``.json`` sidecars) beside ``provenance.json``:
+the grids, the
 commands, dem's version and commit, the machine, and the cost (CPU seconds of the fills' step
 loops and the wall seconds of the points, summed).
 """
@@ -32,6 +33,7 @@ DATA = ROOT / "dem" / "data" / "atlas"
 STAGES = (
     ("grid.toml", "run", "atlas"),
     ("holdout.toml", "run-holdout", "holdout"),
+    ("refill.toml", "run-refill", "refill"),
     ("paper_drive.toml", "run-paper", "paper_drive"),
 )
 
