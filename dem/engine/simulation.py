@@ -36,6 +36,7 @@ from dem.engine.checks import InstabilityChecks
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.contact import P_BETA
+from dem.kernels.forces import N_WALLS
 from dem.kernels.forces import contact_counts as kernel_contact_counts
 from dem.kernels.integrate import (
     DONE,
@@ -527,6 +528,25 @@ class Simulation(InstabilityChecks):
         s = self.spheres
         return float(np.sum(s.mass * s.v[:, 0]) / np.sum(s.mass))
 
+    def contact_snapshot(self) -> dict:
+        """Every touching contact now: kind, spheres, point, normal, forces and overlap.
+
+        :func:`dem.kernels.snapshot.contact_snapshot` on the pair list the last force
+        evaluation checked (as :meth:`contact_counts`), the state left as it is. A mesh
+        trough's triangle contacts are not listed.
+        """
+        from dem.kernels.snapshot import contact_snapshot
+
+        s, pairs, g = self.spheres, self.pairs, self.geom
+        out = _snapshot_arrays(pairs.n_pairs + N_WALLS * s.n)
+        n = contact_snapshot(
+            self.law.model_id, self.law.params, s.x, s.v, s.omega, s.radius, s.mass,
+            pairs.pair_i, pairs.pair_j, pairs.n_pairs, pairs.hist, s.wall_hist, g.length,
+            0.5 * g.width, g.back, self.dt, out["kind"], out["i"], out["j"], out["point"],
+            out["normal"], out["normal_force"], out["tangential_force"], out["overlap"],
+        )  # fmt: skip
+        return {k: a[:n] for k, a in out.items()}
+
     def contact_counts(self) -> np.ndarray:
         """Touching neighbours plus touching walls per sphere, (n,) int64.
 
@@ -542,6 +562,13 @@ class Simulation(InstabilityChecks):
             self.geom, self.mesh_layout(), count,
         )  # fmt: skip
         return count
+
+
+def _snapshot_arrays(rows: int) -> dict:
+    return {"kind": np.zeros(rows, np.int64), "i": np.zeros(rows, np.int64),
+            "j": np.zeros(rows, np.int64), "point": np.zeros((rows, 3)),
+            "normal": np.zeros((rows, 3)), "normal_force": np.zeros(rows),
+            "tangential_force": np.zeros((rows, 3)), "overlap": np.zeros(rows)}  # fmt: skip
 
 
 def rest_speed(radius: np.ndarray) -> float:

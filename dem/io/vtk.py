@@ -97,10 +97,19 @@ VELOCITY_ARRAYS = ("velocity_trough", "speed_trough", "velocity_lab", "speed_lab
 GRAIN_ARRAYS = ("grain_id", "clump_id", "mass", "axis", "orientation", "velocity",
                 "velocity_trough", "velocity_lab", "speed_trough", "speed_lab",
                 "angular_velocity", "contact_count", "spheres")  # fmt: skip
-#: Block names of the collection's parts 0, 1, 2 (ParaView shows them as /Root/<name>).
-BLOCK_NAMES = ("spheres", "trough", "grains")
+#: Block names of the collection's parts, in order (ParaView shows them as /Root/<name>); a
+#: frame lists grains only for clumps and contacts only with ``output.contacts``.
+BLOCK_NAMES = ("spheres", "trough", "grains", "contacts")
 #: A grains file of frame NNNNNN.
 GRAINS_FILE_RE = re.compile(r"grains_\d{6}\.vtp")
+#: A contacts file of frame NNNNNN.
+CONTACTS_FILE_RE = re.compile(r"contacts_\d{6}\.vtp")
+#: Point data of the contacts dataset (one point per contact, at the middle of its overlap).
+CONTACT_ARRAYS = ("kind", "sphere_i", "sphere_j", "normal", "normal_force",
+                  "normal_force_vector", "tangential_force", "tangential_force_magnitude",
+                  "overlap")  # fmt: skip
+#: ``kind`` of a contact: a pair, or a sphere on the floor, a side wall (y < 0, y > 0), the back.
+CONTACT_KINDS = ("pair", "floor", "side wall y-", "side wall y+", "back wall")
 
 
 def trough_polydata(
@@ -218,14 +227,20 @@ class VTKSeriesWriter:
         # frames with a grains file: a resumed run's from its files, a new run's none (a grains
         # file an earlier run left is removed: only this writer's are listed)
         self._grain_frames: set[int] = set()
+        self._contact_frames: set[int] = set()
         if self._entries:
             self._grain_frames = {
                 i for i in range(len(self._entries))
                 if (self.frames_dir / _grains_name(i)).is_file()
             }  # fmt: skip
+            self._contact_frames = {
+                i for i in range(len(self._entries))
+                if (self.frames_dir / _contacts_name(i)).is_file()
+            }  # fmt: skip
         else:
             for path in self.frames_dir.iterdir():
-                if GRAINS_FILE_RE.fullmatch(path.name) and not path.is_symlink() and path.is_file():
+                stale = GRAINS_FILE_RE.fullmatch(path.name) or CONTACTS_FILE_RE.fullmatch(path.name)
+                if stale and not path.is_symlink() and path.is_file():
                     path.unlink()
 
     @property
@@ -252,6 +267,7 @@ class VTKSeriesWriter:
         *,
         drive_velocity: np.ndarray | None = None,
         bodies=None,
+        contacts: dict | None = None,
     ) -> Path:
         """Write one frame (spheres, trough, and grains for clumps) and rewrite the collection.
 
@@ -275,6 +291,10 @@ class VTKSeriesWriter:
                 ``q``, ``omega``, ``mass``, ``moments``, ``offsets`` and ``body_of``), indexed by
                 ``clump_id``: a grains dataset (``grains_NNNNNN.vtp``) is written beside the
                 spheres. None for spheres.
+            contacts: Every contact of the frame (:meth:`dem.engine.simulation.Simulation.
+                contact_snapshot`): a contacts dataset (``contacts_NNNNNN.vtp``, one point a
+                contact, :data:`CONTACT_ARRAYS`, the walls' summed loads as field data). None:
+                none written.
 
         Returns:
             Path of the sphere ``.vtp`` file.
@@ -334,6 +354,12 @@ class VTKSeriesWriter:
             self._field_data(grains, time, shift, drive_v)
             save_vtp(grains, self.frames_dir / _grains_name(index))
             self._grain_frames.add(index)
+        if contacts is not None:
+            touching = _contacts_polydata(contacts, self._section, shift if self.lab_frame
+                                          else np.zeros(3))  # fmt: skip
+            self._field_data(touching, time, shift, drive_v)
+            save_vtp(touching, self.frames_dir / _contacts_name(index))
+            self._contact_frames.add(index)
         p_name = f"particles_{index:06d}.vtp"
         save_vtp(mesh, self.frames_dir / p_name)
         t_name = self._write_trough(index, shift)
@@ -420,12 +446,14 @@ class VTKSeriesWriter:
             "  <Collection>",
         ]
         for index, (t, p_name, t_name) in enumerate(self._entries):
-            parts = [p_name, t_name]
+            parts = [("spheres", p_name), ("trough", t_name)]
             if index in self._grain_frames:
-                parts.append(_grains_name(index))
-            for part, name in enumerate(parts):
+                parts.append(("grains", _grains_name(index)))
+            if index in self._contact_frames:
+                parts.append(("contacts", _contacts_name(index)))
+            for part, (block_name, name) in enumerate(parts):
                 file = quoteattr(f"{FRAMES_DIR}/{name}")
-                block = quoteattr(BLOCK_NAMES[part])
+                block = quoteattr(block_name)
                 lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" '
                              f"name={block} file={file}/>")  # fmt: skip
         lines += ["  </Collection>", "</VTKFile>", ""]
@@ -508,6 +536,43 @@ def save_vtp(mesh: pv.PolyData, path: Path) -> None:
 
 def _grains_name(index: int) -> str:
     return f"grains_{index:06d}.vtp"
+
+
+def _contacts_name(index: int) -> str:
+    return f"contacts_{index:06d}.vtp"
+
+
+def _contacts_polydata(contacts: dict, section, shift: np.ndarray) -> pv.PolyData:
+    """One point per contact (the middle of its overlap), its arrays, and the walls' loads.
+
+    The points are wrapped into the section (and shifted in the lab frame); the loads on the
+    trough, summed as field data: the floor's normal force (N), the side walls' and the back
+    wall's, and the total force of every wall contact on the grains.
+    """
+    point = section.wrap(np.asarray(contacts["point"], dtype=np.float64)) + shift
+    mesh = pv.PolyData(point.astype(np.float32))
+    normal = np.asarray(contacts["normal"], dtype=np.float64)
+    fn = np.asarray(contacts["normal_force"], dtype=np.float64)
+    ft = np.asarray(contacts["tangential_force"], dtype=np.float64)
+    kind = np.asarray(contacts["kind"], dtype=np.int64)
+    mesh.point_data["kind"] = kind.astype(np.int32)
+    mesh.point_data["sphere_i"] = np.asarray(contacts["i"]).astype(np.int32)
+    mesh.point_data["sphere_j"] = np.asarray(contacts["j"]).astype(np.int32)
+    mesh.point_data["normal"] = normal.astype(np.float32)
+    mesh.point_data["normal_force"] = fn.astype(np.float32)
+    mesh.point_data["normal_force_vector"] = (fn[:, None] * normal).astype(np.float32)
+    mesh.point_data["tangential_force"] = ft.astype(np.float32)
+    mesh.point_data["tangential_force_magnitude"] = np.linalg.norm(ft, axis=1).astype(np.float32)
+    mesh.point_data["overlap"] = np.asarray(contacts["overlap"]).astype(np.float32)
+    mesh.set_active_scalars("normal_force")
+    wall = kind > 0
+    total = fn[wall, None] * normal[wall] + ft[wall]
+    mesh.field_data["floor_normal_force"] = np.array([fn[kind == 1].sum()])
+    mesh.field_data["side_wall_normal_force"] = np.array([fn[(kind == 2) | (kind == 3)].sum()])
+    mesh.field_data["back_wall_normal_force"] = np.array([fn[kind == 4].sum()])
+    mesh.field_data["wall_force_on_grains"] = total.sum(axis=0) if wall.any() else np.zeros(3)
+    mesh.field_data["contact_kinds"] = np.array(CONTACT_KINDS)
+    return mesh
 
 
 def _velocities(mesh: pv.PolyData, rel: np.ndarray, drive_v: np.ndarray | None) -> None:

@@ -322,6 +322,7 @@ ADDED_KEYS = {
     "run.target_error": None,
     "run.max_replicas": 12,
     "output.flight_phases": 0,
+    "output.contacts": False,
 }
 
 

@@ -80,6 +80,7 @@ class VTKFrames:
             entries=[tuple(e) for e in progress.vtk_entries], lab_frame=lab_frame, mesh=sim.mesh,
             period=sim.trough.length, back_wall=sim.trough.finite,
         )  # fmt: skip
+        self.contacts = case.output.contacts
 
     def frame(self, frame: Frame, progress: Progress) -> None:
         """Write the frame's spheres (and the trough, and clump grains) and the collection."""
@@ -91,6 +92,7 @@ class VTKFrames:
         self.series.write_frame(
             t, s.x, s.radius, s.v, frame.grain_id, s.body, frame.contact_count,
             frame.orientation, drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
+            contacts=sim.contact_snapshot() if self.contacts else None,
         )  # fmt: skip
         progress.vtk_entries = self.series.entries
 

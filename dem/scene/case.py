@@ -328,7 +328,8 @@ def _read_feeder(t: Table, length: float) -> FeederSpec:
 def _read_output(t: Table) -> OutputSpec:
     t.check_known()
     return OutputSpec(frames_per_cycle=t.read("frames_per_cycle"),
-                      flight_phases=t.read("flight_phases"))  # fmt: skip
+                      flight_phases=t.read("flight_phases"),
+                      contacts=t.read("contacts"))  # fmt: skip
 
 
 # --- checks across tables ------------------------------------------------------------------------
@@ -602,6 +603,14 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
     check_section_length(length, r_max, skin, reach, source=str(case.source))
     step = timestep_for(case)  # checks a given run.timestep against the limit
     steps_per_cycle = 1.0 / (case.drive.frequency * step.dt)
+    if case.output.contacts and (case.trough.mesh is not None or case.run.device == "cuda"):
+        where = (
+            "a mesh trough (its triangle contacts are not listed yet)"
+            if case.trough.mesh is not None
+            else "the GPU engine (run.device = 'cuda')"
+        )
+        raise table("output").error("contacts", True, f"false for {where}: the contacts are "
+                                    "listed for flat troughs on the CPU engine")  # fmt: skip
     if case.output.frames_per_cycle > steps_per_cycle:
         raise table("output").error(
             "frames_per_cycle",

@@ -135,7 +135,11 @@ RUN = (
     _whole("max_replicas", 12),
     Key("device", "choice", default="cpu", choices=DEVICES),
 )
-OUTPUT = (_whole("frames_per_cycle", 4), _whole("flight_phases", 0))
+OUTPUT = (
+    _whole("frames_per_cycle", 4),
+    _whole("flight_phases", 0),
+    Key("contacts", "boolean", default=False),
+)
 #: [feeder]: its presence makes the trough finite.
 FEEDER = (
     _number("feed_rate", 0.0),

@@ -332,11 +332,15 @@ class OutputSpec:
         flight_phases: Phase bins of one drive cycle at which the fraction of grains in
             flight (touching nothing) is sampled over :data:`dem.config.DEM_FLIGHT_CYCLES`
             cycles after the measured ones (:mod:`dem.run.flight`); 0: not sampled.
+        contacts: Write every contact of each frame (point, normal and tangential force,
+            overlap; the walls' loads) as the frames' ``contacts`` block
+            (:mod:`dem.kernels.snapshot`).
 
     """
 
     frames_per_cycle: int = 4
     flight_phases: int = 0
+    contacts: bool = False
 
 
 @dataclass(frozen=True)

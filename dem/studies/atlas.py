@@ -152,8 +152,13 @@ def read_grid(path: str | Path) -> Grid:
     seed = atlas.get("seed")
     if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
                              or not 0 <= seed < 2**62):  # fmt: skip
-        raise InputError("atlas.seed", seed, "a whole number in [0, 2^62): the first fill's "
-                         "seed at every point (default: the base case's run.seed)", where)
+        raise InputError(
+            "atlas.seed",
+            seed,
+            "a whole number in [0, 2^62): the first fill's "
+            "seed at every point (default: the base case's run.seed)",
+            where,
+        )
     stiffness = atlas.get("stiffness", "converged")
     if stiffness not in STIFFNESS:
         raise InputError("atlas.stiffness", stiffness, f"one of {', '.join(STIFFNESS)}", where)

@@ -313,3 +313,27 @@ def test_a_resumed_writer_keeps_its_grains_and_a_new_one_drops_stale_ones(tmp_pa
     VTKSeriesWriter(tmp_path, L, W, 0.0).write_frame(0.0, **_frame(np.random.default_rng(8), 4))
     assert not list((tmp_path / "frames").glob("grains_*.vtp"))
     assert len(_blocks(tmp_path / "particles.pvd")) == 2
+
+
+def test_a_frames_contacts_are_a_named_block_with_the_walls_loads(tmp_path):
+    snap = {
+        "kind": np.array([0, 1, 1]), "i": np.array([0, 0, 1]), "j": np.array([1, -1, -1]),
+        "point": np.array([[0.01, 0.0, 0.004], [0.01, 0.0, 0.0], [0.02, 0.0, 0.0]]),
+        "normal": np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]),
+        "normal_force": np.array([0.5, 1.0, 2.0]),
+        "tangential_force": np.array([[0.1, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.0]]),
+        "overlap": np.array([1e-6, 2e-6, 3e-6]),
+    }  # fmt: skip
+    f = _frame(np.random.default_rng(2), 2)
+    w = VTKSeriesWriter(tmp_path, L, W, 0.0)
+    w.write_frame(0.0, **f, contacts=snap)
+    w.write_frame(0.01, **f)  # a frame without contacts lists none
+    w.close()
+    t, blocks = read_frame(tmp_path, 0)
+    assert blocks.keys() == ["spheres", "trough", "contacts"]
+    c = blocks["contacts"]
+    assert c.n_points == 3 and list(c["kind"]) == [0, 1, 1]
+    assert c.field_data["floor_normal_force"][0] == pytest.approx(3.0)
+    assert np.allclose(c.field_data["wall_force_on_grains"], [0.0, 0.2, 3.0])
+    assert np.allclose(c["normal_force_vector"][0], [0.0, 0.0, 0.5])
+    assert read_frame(tmp_path, 1)[1].keys() == ["spheres", "trough"]
