@@ -277,11 +277,15 @@ def _restitution_row(law: Law, c: Contact, speed: float, label: str) -> dict:
     """The rebound of one normal impact on the wall against the set e and the law's e_n."""
     scene = collide.scene_for(_case_keys(law, c, R_AO, MATERIALS["al2o3"][2]))
     runs = _converge(lambda dt: collide.wall_collision(scene, (0.0, speed), timestep=dt))
-    e_n = contact.normal_law_restitution(scene.law.model_id,
-                                         scene.law.wall_params[contact.P_BETA])  # fmt: skip
+    # the law's own rebound: e_n of its dashpot, clamped with limit_force; 0 for the impact
+    # law's perfectly plastic contact of eps_n = 0 (dem.kernels.contact.plastic_normal), which
+    # never pulls, limit_force or not
+    plastic = bool(scene.law.wall_params[contact.P_PLASTIC])
+    e_n = float(scene.law.wall_params[contact.P_NORMAL_E])
     return {
         "test": 2, "case": label, "law": law.name, "normal": law.normal, "tangential": "any",
-        "limit_force": law.limit_force, "kind": "restitution", "set": c.restitution,
+        "limit_force": law.limit_force, "plastic": plastic, "kind": "restitution",
+        "set": c.restitution,
         "dt_s": [r["dt_s"] for r in runs],
         "normal_law_restitution": e_n,
         "restitution": _quantity([r["restitution"] for r in runs], c.restitution, runs,
@@ -557,8 +561,8 @@ def verdict(q: dict, kind: str, slack: float = 0.0) -> bool:
     """Whether quantity ``q`` is within :data:`TOLERANCES` [kind] (plus ``slack``); for
     "passivity", one-sided: the energy change at most the tolerance."""
     if kind == "passivity":
-        return q["error"] <= TOLERANCES[kind][0] + slack
-    return abs(q["error"]) <= TOLERANCES[kind][0] + slack
+        return bool(q["error"] <= TOLERANCES[kind][0] + slack)
+    return bool(abs(q["error"]) <= TOLERANCES[kind][0] + slack)
 
 
 def _slide_note(r: dict) -> str:
@@ -582,7 +586,8 @@ def summarise(rows: list[dict]) -> list[dict]:
     """The key numbers: one line per test, case or law and quantity (results.csv, README).
 
     ``pass`` is True or False, or None where a number is reported, not judged: the set e of a
-    ``limit_force`` law (designed to rebound at e_n, judged there), and the rigid-body check of
+    ``limit_force`` law (designed to rebound at e_n, judged there; not the plastic contact of
+    eps_n = 0, which rebounds at 0 with or without it), and the rigid-body check of
     a law whose contact slid throughout at no point of a test (not applicable: its note says
     how far from sliding it was; its design checks carry the verdict).
     """
@@ -605,11 +610,15 @@ def summarise(rows: list[dict]) -> list[dict]:
             for key in ("peak_force_n", "max_overlap_m", "duration_s"):
                 add(r["test"], r["case"], r["law"], key, r[key], "normal", what)
         elif r["kind"] == "restitution":
-            design = "the set e" if not r["limit_force"] else "e_n of the clamped dashpot"
+            clamped = r["limit_force"] and not r.get("plastic", False)
+            design = (
+                "e_n of the clamped dashpot" if clamped
+                else "the plastic contact: 0" if r.get("plastic") else "the set e"
+            )  # fmt: skip
             q = dict(r["restitution"])
             add(r["test"], r["case"], r["law"], "restitution vs set", q, "restitution", design,
-                note=f"after: {r['after']}", judged=not r["limit_force"])  # fmt: skip
-            if r["limit_force"]:
+                note=f"after: {r['after']}", judged=not clamped)  # fmt: skip
+            if clamped:
                 q2 = dict(q, reference=r["normal_law_restitution"],
                           error=q["value"] - r["normal_law_restitution"],
                           errors=[e + q["reference"] - r["normal_law_restitution"]

@@ -299,10 +299,11 @@ def fig_coulomb(data, out: Path) -> None:
     axes[0].axhline(-1.0, color="k", linewidth=0.8)
     axes[0].axhline(1.0, color="k", linewidth=0.8, linestyle="--")
     axes[0].set_xlabel("time since first touch / contact duration (-)")
-    axes[0].set_ylabel("F_t / (mu F_n) along the slip's direction (-)")
+    axes[0].set_ylabel("F_t / (mu F_n) along the incoming slip (-)")
     axes[0].set_ylim(-1.2, 1.2)
-    axes[0].set_title("Test 5, psi_1 = 1: friction at the cap must oppose the slip (-1)",
-                      fontsize=9)  # fmt: skip
+    axes[0].set_title("Test 5, psi_1 = 1: -1 is Coulomb's sliding against the incoming slip; "
+                      "+1 late: Mindlin's\nspring returning, capped, what a reversed slip "
+                      "stored", fontsize=9)  # fmt: skip
     axes[0].legend(fontsize=6)
     for ax in (axes[1],):
         ax.set_xscale("log")
