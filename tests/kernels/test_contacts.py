@@ -218,6 +218,35 @@ def test_coulomb_convention_never_exceeds_the_friction_limit(model):
     assert worst["liggghts"] > 1.05
 
 
+def test_coulomb_reset_never_adds_spring_force_along_the_slip():
+    """The 'coulomb' law's reset (contact.coulomb_tangential): where the plain reset, the spring
+    set to the capped force less the dashpot's, stores no more force along the slip than the
+    spring held (none if it held none), the result is the plain one bit for bit; elsewhere the
+    force is the same and only the stored spring differs, holding at most what it held along
+    the slip. The plain arithmetic is the impact law's stick's (passive False)."""
+    rng = np.random.default_rng(11)
+    kept = changed = 0
+    for _ in range(4000):
+        kt, gt = rng.uniform(0.5, 2.0), rng.uniform(0.0, 2.0) * (rng.random() < 0.9)
+        s, v = rng.normal(0.0, 1.0, 3), rng.normal(0.0, 1.0, 3)
+        f_max = rng.uniform(0.0, 1.5) * np.linalg.norm(-kt * s - gt * v)
+        new = np.array(contact.coulomb_tangential(kt, gt, f_max, *s, *v, True))
+        plain = np.array(contact.coulomb_tangential(kt, gt, f_max, *s, *v, False))
+        f_old = -kt * s  # the spring's force before the reset
+        held = max(float(np.dot(f_old, v)), 0.0)
+        stored = float(np.dot(-kt * plain[3:], v))
+        if stored <= held:
+            assert np.array_equal(new, plain)
+            kept += 1
+        else:
+            assert np.array_equal(new[:3], plain[:3])
+            tol = 1e-12 * np.linalg.norm(f_old) * np.linalg.norm(v)
+            assert np.dot(-kt * new[3:], v) <= held + tol
+            assert gt > 0.0  # without a dashpot the capped force is the spring's own: no change
+            changed += 1
+    assert kept > 1000 and changed > 100
+
+
 def test_wall_lever_arm_moves_the_contact_point_into_the_overlap():
     """A spinning sphere pressed into the floor: the wall torque is -c n x F_t with c = r - delta
     ("surface") or r - delta / 2 ("midpoint"), and the slip velocity is the spin times the same

@@ -61,11 +61,17 @@ def one_contact(model, c, n, delta, vr, wi, wj, ci, cj, m_eff, r_eff, shear, dt,
     s = shear + vt * dt
     s = s - np.dot(s, n) * n
     if c.get("tangential", "coulomb") == "coulomb":
-        # total force (spring + dashpot) capped at mu |F_n|, spring reset to match
+        # total force (spring + dashpot) capped at mu |F_n|, the spring reset to the capped
+        # force's part the dashpot does not take, but never to more force along the slip v_t
+        # than it held (none if it held none)
         ft = -kt * s - gt * vt
         if np.linalg.norm(ft) > c["mu"] * abs(fn):
             ft = ft / np.linalg.norm(ft) * c["mu"] * abs(fn)
-            s = -(ft + gt * vt) / kt
+            spring = ft + gt * vt
+            along, held = np.dot(spring, vt), max(-kt * np.dot(s, vt), 0.0)
+            if along > held:
+                spring = spring - (along - held) / np.dot(vt, vt) * vt
+            s = -spring / kt
         return _with_torques(fn, n, ft, ci, cj, wi, wj, r_eff, c, s)
     ft = -kt * s
     if np.linalg.norm(ft) > c["mu"] * abs(fn):

@@ -44,7 +44,9 @@ tangential law: that is what each law decides (:func:`impact_design`, :func:`law
   velocity, the contact point 1 - 7/2 (1 - eps_t) of its slip (0.3 at eps_t = 0.8).
 - ``"coulomb"``: a tangential spring and dashpot whose k_t / S_n is derived from eps_t
   (:mod:`dem.physics.tangential`) so that an impact that sticks keeps eps_t of the centre's
-  tangential velocity; the total force capped at mu |F_n|.
+  tangential velocity; the total force capped at mu |F_n|, the spring then reset to the capped
+  force less the dashpot's, but never to more force along the slip than it held (none if it
+  held none: :func:`dem.kernels.contact.coulomb_tangential`).
 - ``"liggghts"``: LIGGGHTS's history law; for Hertz, Mindlin's no-slip stiffness
   k_t = 8 G* a in total form (F_t = -k_t(a) s), the spring alone capped at mu |F_n|; for the
   linear law k_t = kappa k_n (2/7 by default).
@@ -164,7 +166,11 @@ def law_reference(law: dict, u1, vn, m_eff: float, r_eff: float, *,
             ft = spring - gt * u
             over = np.abs(ft) > cap
             ft = np.where(over, cap * np.sign(ft), ft)
-            spring = np.where(over, ft + gt * u, spring)
+            # ... but never to more force along the slip than the spring held
+            reset = ft + gt * u
+            held = np.maximum(spring * u, 0.0)
+            reset = np.where(reset * u > held, np.where(held > 0.0, spring, 0.0), reset)
+            spring = np.where(over, reset, spring)
         elif law["tangential"] == "liggghts":  # the spring capped; dashpot only while sticking
             over = np.abs(spring) > cap
             ft = np.where(over, cap * np.sign(spring), spring - gt * u)

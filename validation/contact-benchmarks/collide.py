@@ -190,6 +190,39 @@ def _kinematics(kind, x, v, w, radius, n):
     return float(vr @ n), float(u @ t), t
 
 
+#: A contact slid throughout where its friction departs from Coulomb's bound by at most this
+#: share of the bound's impulse (below it and above it, each), and a step is below (above) the
+#: bound where its friction is (1 -+ SLIDE_TOL) of it: a fifth of the sliding impulse's tolerance.
+SLIDE_TOL = 1e-3
+
+
+def slide_measure(fn: np.ndarray, against: np.ndarray, friction: float) -> dict:
+    """Whether a contact slid throughout, from its steps in contact (first to last overlap).
+
+    Rigid-body theory's sliding impact (Maw et al.'s limit) has, on every instant of contact,
+    the friction mu F_n against the slip, F_n >= 0 the compressive normal force: Coulomb's bound
+    B = mu max(F_n, 0). ``fn``: F_n of each step, N; ``against``: the tangential force along
+    the incoming slip's opposite (> 0 opposes the slip), N. Returned: ``below`` and ``above``,
+    the shares of the steps whose friction is below (the contact sticks, or pushes the slip)
+    and above B (a dashpot beyond the cap while the spring sticks, friction while the normal
+    force pulls) by more than :data:`SLIDE_TOL` of it; ``shortfall`` and ``excess``, the
+    friction's impulse below and above B over B's impulse; ``slid``: both impulses within
+    SLIDE_TOL, the stated equivalent of "at Coulomb's bound on every step".
+    """
+    bound = friction * np.maximum(fn, 0.0)
+    total = float(bound.sum())
+    shortfall = float(np.maximum(bound - against, 0.0).sum()) / total if total > 0 else 1.0
+    excess = float(np.maximum(against - bound, 0.0).sum()) / total if total > 0 else 0.0
+    floor = 1e-9 * float(bound.max(initial=0.0))  # a force of zero's round-off (1e-18 N)
+    return {
+        "below": float(np.mean(against < (1.0 - SLIDE_TOL) * bound - floor)),
+        "above": float(np.mean(against > (1.0 + SLIDE_TOL) * bound + floor)),
+        "shortfall": shortfall,
+        "excess": excess,
+        "slid": shortfall <= SLIDE_TOL and excess <= SLIDE_TOL,
+    }
+
+
 def measure(h: dict, kind: str, dt: float, radius: np.ndarray, mass: np.ndarray,
             friction: float) -> dict:  # fmt: skip
     """What one collision gives (module docstring): times s, overlaps m, forces N, speeds m/s.
@@ -198,7 +231,8 @@ def measure(h: dict, kind: str, dt: float, radius: np.ndarray, mass: np.ndarray,
     force exceeded Coulomb's bound). ``tangential_energy_change``: the kinetic energy of the
     relative tangential motion and of the spins after the collision over before, minus 1: a
     passive contact (friction, dashpots, a spring that returns what it took) cannot make it
-    positive.
+    positive. ``slide``: whether the contact slid throughout as rigid-body theory's Coulomb
+    friction does (:func:`slide_measure`).
     """
     x, v, w, f = h["x"], h["v"], h["omega"], h["f"]
     gaps, normals = zip(*(_gap_normal(kind, xi, radius) for xi in x), strict=True)
@@ -246,6 +280,8 @@ def measure(h: dict, kind: str, dt: float, radius: np.ndarray, mass: np.ndarray,
         return 0.5 * m * vt * vt + 0.5 * float(np.sum(inertia * w[k, :, 1] ** 2))
 
     energy_in = tangential_energy(0, n_before)
+    span = slice(first, last + 1)
+    slide = slide_measure(fn[span], -ft_t[span] * (1.0 if u1 >= 0.0 else -1.0), friction)
     return {
         "dt_s": dt,
         "contact_steps": last - first + 1,
@@ -270,6 +306,7 @@ def measure(h: dict, kind: str, dt: float, radius: np.ndarray, mass: np.ndarray,
         "masses": [float(m) for m in mass],
         "radii": [float(r) for r in radius],
         "coulomb_excess": excess - 1.0,
+        "slide": slide,
         "tangential_energy_change": (tangential_energy(after, n_after) - energy_in) / energy_in
         if energy_in > 0.0
         else 0.0,

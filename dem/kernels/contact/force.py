@@ -112,7 +112,7 @@ def contact_core(
                                                             vtz)  # fmt: skip
         else:
             ftx, fty, ftz, h0, h1, h2 = coulomb_tangential(kt, gt, f_max, sx, sy, sz, vtx, vty,
-                                                           vtz)  # fmt: skip
+                                                           vtz, True)  # fmt: skip
     # torques -c n x F_t, plus rolling resistance
     cx = ny * ftz - nz * fty
     cy = nz * ftx - nx * ftz
