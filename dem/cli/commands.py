@@ -411,13 +411,7 @@ def cmd_export_liggghts(args) -> int:
     if args.json:
         print_json(deck | {"summary": s})
         return 0
-    err = s["mean_velocity_stderr"]
-    err_text = "" if err is None else f" +- {err:.3g}"
-    rate = s["particle_steps_per_s"]
-    rate_text = "" if rate is None else f"; {rate:.3g} particle-steps/s"
-    print(f"{s['engine_version'] or 'LIGGGHTS'}: mean velocity {s['mean_velocity']:.4g}{err_text} "
-          f"m/s (v_norm {s['mean_velocity_norm']:.4g}) over {s['cycles']} cycles{rate_text}; "
-          f"{out / 'summary.json'}")  # fmt: skip
+    print(engine_line(s["engine_version"] or "LIGGGHTS", s, out))
     return 0
 
 
@@ -467,14 +461,20 @@ def cmd_export_lammps(args) -> int:
     if args.json:
         print_json(deck | {"summary": s})
         return 0
+    print(engine_line(f"LAMMPS {s['engine_version']}", s, out, ranks=args.ranks))
+    return 0
+
+
+def engine_line(name: str, s: dict, out: Path, ranks: int | None = None) -> str:
+    """The result of another engine's run of an exported deck, in one line (its summary ``s``)."""
     err = s["mean_velocity_stderr"]
     err_text = "" if err is None else f" +- {err:.3g}"
     rate = s["particle_steps_per_s"]
-    print(f"LAMMPS {s['engine_version']}: mean velocity {s['mean_velocity']:.4g}{err_text} m/s "
-          f"(v_norm {s['mean_velocity_norm']:.4g}) over {s['cycles']} cycles; "
-          f"{rate:.3g} particle-steps/s on {args.ranks} rank(s); "
-          f"{out / 'summary.json'}")  # fmt: skip
-    return 0
+    on = "" if ranks is None else f" on {ranks} rank(s)"
+    rate_text = "" if rate is None else f"; {rate:.3g} particle-steps/s{on}"
+    return (f"{name}: mean velocity {s['mean_velocity']:.4g}{err_text} m/s (v_norm "
+            f"{s['mean_velocity_norm']:.4g}) over {s['cycles']} cycles{rate_text}; "
+            f"{out / 'summary.json'}")  # fmt: skip
 
 
 def cmd_calibrate(args) -> int:

@@ -102,7 +102,7 @@ def test_device_option_on_every_command_with_threads():
         yield path, {o for a in parser._actions for o in a.option_strings}, parser
 
     with_threads = [(path, p) for path, opts, p in commands(build_parser()) if "--threads" in opts]
-    assert {path for path, _ in with_threads} == {("run",), ("plan",), ("sweep",)}
+    assert {path for path, _ in with_threads} == {("run",), ("plan",), ("sweep",), ("atlas",)}
     for path, p in with_threads:
         device = next(a for a in p._actions if "--device" in a.option_strings)
         assert tuple(device.choices) == SCHEMA_DEVICES and device.default is None, path

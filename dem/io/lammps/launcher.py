@@ -166,28 +166,40 @@ def per_cycle_velocities(vx: np.ndarray, period: float, dt: float, settle_cycles
 def summarize_run(plan, deck_dir: Path, log: str, wall: float, ranks: int) -> dict:
     """``summary.json`` of a LAMMPS run of ``plan`` (:class:`dem.io.liggghts.export.ExportPlan`)."""
     case = plan.scene.case
-    trough = plan.scene.trough
     vx = np.loadtxt(deck_dir / VX_FILE, comments="#", ndmin=2)
-    per_cycle = per_cycle_velocities(vx, trough.period, plan.timestep, plan.settle_cycles,
-                                     case.run.cycles)  # fmt: skip
-    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
+    per_cycle = per_cycle_velocities(vx, plan.scene.trough.period, plan.timestep,
+                                     plan.settle_cycles, case.run.cycles)  # fmt: skip
     loops = loop_times(log)
-    measured = loops[-1] if loops else None
+    return write_engine_summary(plan, deck_dir, per_cycle, engine="lammps",
+                                version=lammps_version(log), measured=loops[-1] if loops else None,
+                                wall=wall, extra={"ranks": ranks})  # fmt: skip
+
+
+def write_engine_summary(plan, deck_dir: Path, per_cycle, *, engine: str, version: str | None,
+                         measured, wall: float, extra: dict | None = None) -> dict:  # fmt: skip
+    """``summary.json`` of another engine's run of an exported deck, as ``dem run`` reports one.
+
+    ``per_cycle``: the measured cycles' mean velocities, m/s (on dem's cycle edges);
+    ``measured``: the ``Loop time`` of the measured steps (:class:`dem.io.liggghts.readers.
+    LoopTime`, None if absent); ``wall``: the process's wall time, s. Written into
+    ``deck_dir``; returned with NaN for what is undefined.
+    """
+    case = plan.scene.case
+    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
     n = case.particles.count
-    spheres = n * case.particles.spheres_per_grain
     summary = {
         "case": case.name,
         "overrides": dict(case.overrides),
-        "engine": "lammps",
-        "engine_version": lammps_version(log),
-        "ranks": ranks,
+        "engine": engine,
+        "engine_version": version,
+        **(extra or {}),
         **stat.summary_fields(),
         "velocity_scale": case.drive.velocity_scale,
         "cycles": case.run.cycles,
         "settle_cycles": plan.settle_cycles,
         "per_cycle_velocity": [float(u) for u in per_cycle],
         "grains": n,
-        "spheres": spheres,
+        "spheres": n * case.particles.spheres_per_grain,
         "timestep": plan.timestep,
         "steps": plan.steps,
         "wall_time_s": measured.seconds if measured else None,

@@ -131,12 +131,9 @@ def summarize_run(plan, deck_dir: Path, run: LiggghtsRun) -> dict:
     """
     import numpy as np
 
-    from dem.io.files import finite_or_none, json_text
-    from dem.io.lammps.launcher import per_cycle_velocities
+    from dem.io.lammps.launcher import per_cycle_velocities, write_engine_summary
     from dem.io.liggghts.deck import VX_FILE
     from dem.io.liggghts.drive import drive_start_step
-    from dem.physics import measure
-    from dem.provenance import record
 
     case = plan.scene.case
     deck = (deck_dir / DECK_NAME).read_text(encoding="utf-8", errors="replace")
@@ -150,30 +147,7 @@ def summarize_run(plan, deck_dir: Path, run: LiggghtsRun) -> dict:
     per_cycle = per_cycle_velocities(vx, plan.scene.trough.period, plan.timestep,
                                      plan.settle_cycles, case.run.cycles, start=start,
                                      error=LiggghtsError)  # fmt: skip
-    stat = measure.conveying_velocity(per_cycle, scale=case.drive.velocity_scale)
-    measured = run.loop_times[-1] if run.loop_times else None
-    summary = {
-        "case": case.name,
-        "overrides": dict(case.overrides),
-        "engine": "liggghts",
-        "engine_version": run.version,
-        **stat.summary_fields(),
-        "velocity_scale": case.drive.velocity_scale,
-        "cycles": case.run.cycles,
-        "settle_cycles": plan.settle_cycles,
-        "per_cycle_velocity": [float(u) for u in per_cycle],
-        "grains": case.particles.count,
-        "spheres": case.particles.count * case.particles.spheres_per_grain,
-        "timestep": plan.timestep,
-        "steps": plan.steps,
-        "wall_time_s": measured.seconds if measured else None,
-        "process_wall_time_s": run.wall_s,
-        "particle_steps_per_s": (
-            measured.atoms * measured.steps / measured.seconds
-            if measured and measured.seconds > 0
-            else None
-        ),  # fmt: skip
-        "provenance": record(),
-    }
-    replace_text(deck_dir / SUMMARY_NAME, json_text(summary, indent=1) + "\n", key="OUT_DIR")
-    return finite_or_none(summary)
+    return write_engine_summary(plan, deck_dir, per_cycle, engine="liggghts",
+                                version=run.version,
+                                measured=run.loop_times[-1] if run.loop_times else None,
+                                wall=run.wall_s)  # fmt: skip
