@@ -387,9 +387,11 @@ def cmd_export_liggghts(args) -> int:
     if plan.settle_note:
         print(f"settle: {plan.settle_note}", file=say)
     if case.run.replicas > 1:  # a deck is one fill
-        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); run.replicas = "
-              f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
-              "and pool them", file=say)  # fmt: skip
+        from dem.run.replicas import fill_keys
+
+        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); "
+              f"{fill_keys(case.run)} is not written: run it with other seeds (--set "
+              "run.seed=N) and pool them", file=say)  # fmt: skip
     recipe = dem_run_line(plan, args.set)
     print(f"the same bed in dem: {recipe}", file=say)
     deck = {"deck": str(path), "timestep": plan.timestep, "settle_cycles": plan.settle_cycles,
@@ -443,9 +445,11 @@ def cmd_export_lammps(args) -> int:
     if plan.settle_note:
         print(f"settle: {plan.settle_note}")
     if case.run.replicas > 1:  # a deck is one fill
-        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); run.replicas = "
-              f"{case.run.replicas} is not written: run it with other seeds (--set run.seed=N) "
-              "and pool them")  # fmt: skip
+        from dem.run.replicas import fill_keys
+
+        print(f"replicas: the deck is one fill (run.seed {case.run.seed}); "
+              f"{fill_keys(case.run)} is not written: run it with other seeds (--set "
+              "run.seed=N) and pool them")  # fmt: skip
     if not args.run:
         if args.json:
             print_json(deck)

@@ -49,6 +49,13 @@ POOLED = (
 )
 
 
+def fill_keys(run) -> str:
+    """The keys that ask for more than one fill, as the notes of one-fill commands name them."""
+    if run.target_error is not None:
+        return f"run.target_error = {run.target_error:g} (with run.replicas = {run.replicas})"
+    return f"run.replicas = {run.replicas}"
+
+
 def replica_case(case, k: int):
     """Replica ``k`` of ``case``: seeded ``run.seed + k``, one fill."""
     return replace(case, run=replace(case.run, seed=case.run.seed + k, replicas=1))

@@ -253,7 +253,9 @@ def bulk_optimum(
                 f"{x:g} (holding {hold}) {err.key} = {err.value!r}: {err.allowed}",
             ) from None  # fmt: skip
     if progress and case.run.replicas > 1:
-        print(f"dem optimum: run.replicas = {case.run.replicas} is not applied: the search "
+        from dem.run.replicas import fill_keys
+
+        print(f"dem optimum: {fill_keys(case.run)} is not applied: the search "
               "runs one fill a point and adds fills where the noise needs them",
               file=sys.stderr)  # fmt: skip
     objective = "velocity_norm" if (over, hold) == ("drive.angle", "throw_number") else "velocity"

@@ -277,9 +277,11 @@ def one_fill_note(command: str, case_dir: Path, sets, progress: bool) -> None:
 
     if not progress or any(key == "run.seed" for key, _ in sets):
         return
-    replicas = load_case(case_dir).run.replicas
-    if replicas > 1:
-        print(f"{command}: run.replicas = {replicas} is not applied: each point is one fill "
+    from dem.run.replicas import fill_keys
+
+    run = load_case(case_dir).run
+    if run.replicas > 1:
+        print(f"{command}: {fill_keys(run)} is not applied: each point is one fill "
               "(its error bar leaves out the fill-to-fill spread); sweep run.seed too "
               "(--set run.seed=1,2,3) and pool the fills of a point", file=sys.stderr,
               flush=True)  # fmt: skip
