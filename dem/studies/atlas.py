@@ -452,6 +452,8 @@ def _advise(todo: list[AtlasPoint], grid: Grid, device: str | None, say) -> None
     """The plan's warnings for the points to run, each distinct one once, with how many."""
     from dem.run import plan
 
+    if len(todo) > 20:
+        say(f"dem atlas: planning the {len(todo)} points to run (their advice, once each)")
     seen: dict[tuple[str, str], list[tuple[str, str]]] = {}
     for p in todo:
         case = point_case(grid, p.shape, p.overrides, device)
