@@ -6,8 +6,9 @@
 What a user on a shared workstation gets from ``dem run CASE`` (no ``--threads``: the default,
 all cores, with the thread guard) against ``dem run CASE --threads 1``: the wall time of the
 whole command, in a fresh process (import, cache load, fill, settle, settling and measured
-cycles, summary), with ``--no-frames``. Busy processes are Python loops (``while True: pass``),
-started a second before the measured command and killed after it. The configurations alternate
+cycles, summary), with ``--no-frames`` and one fill (``--replicas 1``: the shipped beds pool
+three fills, which run as processes side by side, not as threads). Busy processes are Python
+loops (``while True: pass``), started a second before the measured command and killed after it. The configurations alternate
 (default, one thread, default, ...) within each busy level and case, so slow drifts of the
 machine's load fall on both; the 1-minute load average is recorded before each command.
 
@@ -40,7 +41,9 @@ def run(case: str, extra: list[str], out: Path, cycles: int | None) -> tuple[flo
     if out.exists():
         shutil.rmtree(out)
     dem = str(Path(sys.executable).with_name("dem"))
-    cmd = [dem, "run", str(ROOT / "cases" / case), "--out", str(out), "--no-frames", *extra]
+    # one fill: the shipped beds pool three (run.replicas), which run as processes, not threads
+    cmd = [dem, "run", str(ROOT / "cases" / case), "--out", str(out), "--no-frames",
+           "--replicas", "1", *extra]  # fmt: skip
     if cycles is not None:
         cmd += ["--cycles", str(cycles)]
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}
