@@ -91,9 +91,9 @@ def test_with_rotation_locked_the_floor_impact_agrees_to_round_off():
 def test_the_twin_with_lammps_conventions_reproduces_lammps():
     """dem's contact routine and coefficient row, stepped with LAMMPS's five conventions (slip
     and floor-torque arm r, spring rotated keeping its length, e as written, the spring's plain
-    reset), reproduces the LAMMPS run (measured <= 2e-13): every mapped word carries dem's coefficient exactly. With
-    dem's conventions it reproduces dem's run; the spring's rotation alone changes F_t(t) by
-    < 1e-6 (measured 1.6e-7)."""
+    reset), reproduces the LAMMPS run (measured <= 2e-13): every mapped word carries dem's
+    coefficient exactly. With dem's conventions it reproduces dem's run; the spring's rotation
+    alone changes F_t(t) by < 1e-6 (measured 1.6e-7)."""
     row = two_grain.collide("hertz-5e7", 0.5, "pair-30", explain=True)
     twin = row["twin"]
     for key in ("reproduces_dem", "reproduces_lammps"):
