@@ -6,11 +6,11 @@ number of every law must lie within its tolerance (``TOLERANCES`` there, each wi
 README.md of that folder), but the laws' own disagreements that the study measured and explains
 (:data:`KNOWN`: each must still disagree, so a fix takes it off the list). Two kinds of number
 are reported and not judged, each for a measured reason: the set e of a ``limit_force`` law
-(designed to rebound at e_n, and judged there), and the rigid-body sliding check of a law whose contact slid
-throughout (its friction at Coulomb's bound mu max(F_n, 0), measured step by step) at no point
-of a test, whose design checks then carry the verdict. Where the error is the time step's it
-must fall as dt halves, at the order of its scheme: second for the elastic impacts, first for
-the dashpot's restitution. About 45 s on one core once dem's kernels are compiled.
+(designed to rebound at e_n, and judged there), and the rigid-body sliding check of a law whose
+contact slid throughout (its friction at Coulomb's bound mu max(F_n, 0), measured step by step)
+at no point of a test, whose design checks then carry the verdict. Where the error is the time
+step's it must fall as dt halves, at the order of its scheme: second for the elastic impacts,
+first for the dashpot's restitution. About 45 s on one core once dem's kernels are compiled.
 """
 
 import importlib.util

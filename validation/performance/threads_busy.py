@@ -8,9 +8,10 @@ all cores, with the thread guard) against ``dem run CASE --threads 1``: the wall
 whole command, in a fresh process (import, cache load, fill, settle, settling and measured
 cycles, summary), with ``--no-frames`` and one fill (``--replicas 1``: the shipped beds pool
 three fills, which run as processes side by side, not as threads). Busy processes are Python
-loops (``while True: pass``), started a second before the measured command and killed after
-it. The configurations alternate (default, one thread, default, ...) within each busy level and case, so slow drifts of the
-machine's load fall on both; the 1-minute load average is recorded before each command.
+loops (``while True: pass``), started a second before the measured command and killed after it.
+The configurations alternate (default, one thread, default, ...) within each busy level and
+case, so slow drifts of the machine's load fall on both; the 1-minute load average is recorded
+before each command.
 
 Both commands must report the same per-cycle velocity to the last bit (the guard changes only the
 wall time); the script stops if they do not. Writes threads_busy.json and threads_busy.csv (one
