@@ -29,9 +29,12 @@ Conventions stated in the deck, not refused (:func:`convention_notes`): LAMMPS t
 velocity with the full radii (R_i w_i + R_j w_j) x n and its wall torque at the full radius r,
 which dem does with ``[contact] slip_lever_arm = "radius"`` and ``wall_lever_arm = "radius"``
 (by default dem takes r - delta/2 and r - f_w delta, a difference of order delta / r); and it
-rotates the spring onto the new tangent plane keeping its length where dem projects it.
-e = 0 (critical damping, beta = -1 in dem) is written as e = 1e-300: LAMMPS evaluates ln e,
-which is NaN at 0, and beta is then -0.99999.
+rotates the spring onto the new tangent plane keeping its length where dem projects it; and
+where the cap binds it resets the spring to the capped force less the dashpot's even where that
+stores force along the slip, which dem's ``coulomb`` law never does (they part only after F_n
+turns into the dashpot's pull; validation/lammps-two-grain). e = 0 (critical damping, beta = -1
+in dem) is written as e = 1e-300: LAMMPS evaluates ln e, which is NaN at 0, and beta is then
+-0.99999.
 """
 
 from __future__ import annotations
@@ -191,4 +194,9 @@ def convention_notes(scene: Scene) -> list[str]:
         f"wall torque: {torque}",
         "spring: LAMMPS rotates it onto the new tangent plane keeping its length, then adds "
         "v_t dt; dem adds v_t dt, then projects it (a difference of order (dt |omega|)^2 a step)",
+        "reset: where spring and dashpot exceed mu |F_n| LAMMPS sets the spring to the capped "
+        "force less the dashpot's, also where that stores force along the slip; dem never leaves "
+        "the spring more force along the slip than it held (they part after F_n turns into the "
+        "dashpot's pull: d eps_t 1.4e-2 to 2.3e-2 at e = 0.5 in validation/lammps-two-grain; "
+        "none with contact.limit_force = true)",
     ]
