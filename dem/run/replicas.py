@@ -307,8 +307,8 @@ def _run_fills(case, out_dir: Path, ks, summaries: dict[int, dict], cores: int, 
                 from dem.errors import one_line_warning
 
                 one_line = warnings.formatwarning is one_line_warning
-                futures = [pool.submit(_run_one, *job, one_line) for job in jobs]
-                try:
+                try:  # the submissions too: a signal while they start must not wait for them
+                    futures = [pool.submit(_run_one, *job, one_line) for job in jobs]
                     for future in as_completed(futures):
                         finished(future.result())
                 except BaseException:  # a replica failed, or the caller's signal handler raised
