@@ -131,6 +131,10 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
     prepare_output(out_dir, overwrite=overwrite, resume=resume)
     if not resume and warn:
         warn_plan(estimate)
+        if case.output.contacts and not frames:  # the frames carry the contacts
+            warnings.warn(f"{case.name}: output.contacts = true writes nothing without frames "
+                          "(--no-frames, or a sweep or atlas point): run with frames to get "
+                          "them", stacklevel=3)  # fmt: skip
     settle = case.run.settle_cycles  # None: until the transient has ended ("auto")
     per_frame = case.output.frames_per_cycle if frames else 1
     checkpoint = out_dir / CHECKPOINT

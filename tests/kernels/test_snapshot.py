@@ -59,3 +59,13 @@ def test_contacts_are_refused_where_they_are_not_listed():
         load_case(CASES / "u-trough", {"output.contacts": True})
     with pytest.raises(InputError, match=r"output\.contacts.*the GPU engine"):
         load_case(CASES / "sphere-bed", {"output.contacts": True, "run.device": "cuda"})
+
+
+def test_contacts_without_frames_say_that_nothing_is_written(tmp_path):
+    from dem.run.runner import run_case
+
+    text = SMALL_CASE.replace("count = 120", "count = 20").replace("cycles = 6", "cycles = 1")
+    case = load_case(write_case(tmp_path / "case", text), {"output.contacts": True})
+    with pytest.warns(UserWarning, match=r"output\.contacts = true writes nothing without frames"):
+        run_case(case, tmp_path / "out", progress=False, frames=False, threads=1)
+    assert not list((tmp_path / "out").glob("frames/contacts_*"))
