@@ -44,11 +44,6 @@ def _summary(test: int) -> tuple:
     return tuple(bench.summarise(rows)), tuple(rows)
 
 
-_EPS_T = (
-    "the Hertz 'coulomb' law's spring is derived from eps_t for a linear contact "
-    "(dem.physics.tangential): its own continuous-time equations give J +11.7 % of "
-    "(1 - eps_t) m* u1 (validation/contact-benchmarks/README.md, What disagrees)"
-)
 _MINDLIN = (
     "Mindlin's spring in total form (LIGGGHTS's and LAMMPS's) is not passive: its own "
     "equations gain +1.2 % of the slip, with or without the cap (README, What disagrees)"
@@ -62,8 +57,6 @@ _LIGGGHTS = (
 #: quantity) -> why. They must still fail where listed (a fixed one is taken off the list), and
 #: nothing else may: issue 46 keeps them open.
 KNOWN = {
-    **{(t, law, "J vs (1 - eps_t) m* u1"): _EPS_T
-       for t in (4, 5, 6, 7, 8) for law in ("hertz/coulomb", "hertz/coulomb/limit")},
     (7, "hertz/coulomb[mindlin]", "passivity"): _MINDLIN,
     **{(8, law, "psi_2 vs design"): _LIGGGHTS
        for law in ("hertz/liggghts", "hertz/liggghts/limit", "linear/liggghts",

@@ -15,7 +15,7 @@
   ``tangential = "liggghts"`` uses it, or 2 zeta_t sqrt(k_t f_t m*) for ``"coulomb"``.
 
 LIGGGHTS has one tangential convention, the spring capped at mu F_n with the dashpot added while
-sticking: dem's ``tangential = "liggghts"``. A case with ``"coulomb"`` (dem's default) is written
+sticking: dem's ``tangential = "liggghts"``. A case with ``"coulomb"`` is written
 with the same coefficients and a NOTE in the deck; use ``"liggghts"`` on both sides of a
 comparison.
 
