@@ -28,6 +28,20 @@ Layout (format version 2; SI units)::
     /frames/radius          (N,) float64, m (written once)
     /frames/grain_id        (N,) int64 (written once)
 
+With ``output.contacts`` every frame also lists its contacts (:mod:`dem.io.contacts`), stacked::
+
+    /contacts/start         (F + 1,) int64: frame k's contacts are rows start[k] .. start[k + 1]
+    /contacts/kind          (C,) int8: 0 pair, 1 floor, 2 side wall y-, 3 side wall y+, 4 back
+    /contacts/i, /contacts/j (C,) int64: the spheres (their frame rows; j = -1 for a wall)
+    /contacts/point         (C, 3) m, the middle of the overlap; /contacts/normal (C, 3) unit,
+                            from j (or the wall) to i
+    /contacts/normal_force  (C,) N on i (positive pushes); /contacts/tangential_force (C, 3) N
+    /contacts/overlap       (C,) m
+    /contacts/<load>        (F,) or (F, 3), N: the trough's loads summed per frame
+                            (floor_normal_force, side_wall_normal_force, back_wall_normal_force,
+                            floor_force_on_grains, wall_force_on_grains; :func:`dem.io.contacts.
+                            wall_loads`), so the floor's normal force over a cycle is one column
+
 A run whose grain count changes (a finite feeder: grains leave at the discharge and are fed at
 the back) writes format version 3, the frames ragged: one row per sphere and frame, stacked::
 
@@ -70,6 +84,7 @@ import h5py
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.contacts import CONTACT_ROW_NAMES, WALL_LOAD_NAMES, wall_loads
 from dem.io.hdf5_guard import writing
 from dem.io.hdf5_read import FRAME_VECTORS, read_results  # noqa: F401  (re-exported: README)
 from dem.provenance import git_commit, package_versions  # noqa: F401  (re-exported)
@@ -192,8 +207,9 @@ class ResultsWriter:
         orientation: np.ndarray | None = None,
         grain_index: np.ndarray | None = None,
         per_frame: Mapping[str, np.ndarray] | None = None,
+        contacts: Mapping[str, np.ndarray] | None = None,
     ) -> None:
-        """Append one frame to ``/frames``.
+        """Append one frame to ``/frames`` (and its contacts to ``/contacts``).
 
         Args:
             time: Simulated time, s.
@@ -211,12 +227,15 @@ class ResultsWriter:
                 ``orientation``; ``grain_id`` is then the grain's lasting id, given every frame.
             per_frame: Ragged files: more per-frame records, name -> array of a fixed shape,
                 stored as ``/frames/<name>`` (F, ...) (a feeder's grain balance).
+            contacts: The frame's contact rows (:meth:`dem.engine.simulation.Simulation.
+                contact_snapshot`), stored in ``/contacts`` with the trough's loads; the first
+                frame decides whether a file holds contacts (every later frame then gives them).
 
         """
         self._check_open()
         if self.ragged:
             self._append_ragged(time, positions, velocity, radius, grain_id, contact_count,
-                                orientation, grain_index, per_frame or {})  # fmt: skip
+                                orientation, grain_index, per_frame or {}, contacts)  # fmt: skip
             return
         pos = np.asarray(positions, dtype=np.float64)
         if pos.ndim != 2 or pos.shape[1] != 3:
@@ -240,7 +259,9 @@ class ResultsWriter:
             )
         k = self._n_frames
         need = pos.nbytes + vel.nbytes + cc.nbytes + (0 if q is None else q.nbytes)
+        need += _contacts_bytes(contacts)
         with writing(self.path, "a", need) as f:
+            _append_contacts(f, k, contacts)
             g = f["frames"]
             if self._n_spheres is None:
                 if radius is None:
@@ -289,7 +310,7 @@ class ResultsWriter:
         self._n_frames += 1
 
     def _append_ragged(self, time, positions, velocity, radius, grain_id, contact_count,
-                       orientation, grain_index, per_frame) -> None:  # fmt: skip
+                       orientation, grain_index, per_frame, contacts) -> None:  # fmt: skip
         """Append one frame of a ragged file (format version 3)."""
         pos = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         n = pos.shape[0]
@@ -307,7 +328,9 @@ class ResultsWriter:
         k = self._n_frames
         opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
         need = sum(a.nbytes for a in rows.values()) + (0 if q is None else q.nbytes)
+        need += _contacts_bytes(contacts)
         with writing(self.path, "a", need) as f:
+            _append_contacts(f, k, contacts)
             g = f["frames"]
             if "start" not in g:
                 for name, data in rows.items():
@@ -394,6 +417,8 @@ class ResultsWriter:
                 if "orientation" in frames:
                     frames["orientation"].resize(n_frames, axis=0)
                     self._n_bodies = int(frames["orientation"].shape[1])
+            if "contacts" in f:
+                _trim_contacts(f["contacts"], n_frames)
             f.attrs["complete"] = False
         self._cycle_keys = keys or None
         self._n_cycles = n_cycles
@@ -419,6 +444,65 @@ class ResultsWriter:
     def _check_open(self) -> None:
         if self._closed:
             raise ValueError(f"{self.path} is closed")
+
+
+#: The rows of a contact snapshot that ``/contacts`` stores, with their dtypes.
+CONTACT_ROWS = dict(
+    zip(
+        CONTACT_ROW_NAMES,
+        (np.int8, np.int64, np.int64, np.float64, np.float64, np.float64, np.float64, np.float64),
+        strict=True,
+    )
+)
+
+
+def _contacts_bytes(contacts) -> int:
+    return 0 if contacts is None else sum(np.asarray(contacts[n]).nbytes for n in CONTACT_ROWS)
+
+
+def _append_contacts(f: h5py.File, k: int, contacts) -> None:
+    """Append frame k's contact rows and loads to ``/contacts`` (module docstring)."""
+    if ("contacts" in f) != (contacts is not None) and (k > 0 or "contacts" in f):
+        raise ValueError("every frame of a run gives its contacts, or none does")
+    if contacts is None:
+        return
+    rows = {n: np.asarray(contacts[n], dtype=t) for n, t in CONTACT_ROWS.items()}
+    loads = wall_loads(contacts)
+    if "contacts" not in f:
+        g = f.create_group("contacts")
+        opts = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+        for name, data in rows.items():
+            shape = data.shape[1:]
+            g.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape), dtype=data.dtype,
+                             chunks=(4096, *shape), **opts)  # fmt: skip
+        for name, value in loads.items():
+            shape = np.shape(value)
+            g.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape), dtype=np.float64,
+                             chunks=(CYCLE_CHUNK, *shape))  # fmt: skip
+        g.create_dataset("start", data=np.zeros(1, np.int64), maxshape=(None,),
+                         chunks=(CYCLE_CHUNK,))  # fmt: skip
+    g = f["contacts"]
+    c0 = int(g["start"][k])
+    n = rows["kind"].shape[0]
+    for name, data in rows.items():
+        g[name].resize(c0 + n, axis=0)
+        g[name][c0:] = data
+    for name, value in loads.items():
+        g[name].resize(k + 1, axis=0)
+        g[name][k] = value
+    g["start"].resize((k + 2,))
+    g["start"][k + 1] = c0 + n
+
+
+def _trim_contacts(g: h5py.Group, n_frames: int) -> None:
+    """Cut ``/contacts`` back to its first n_frames frames (a resumed run)."""
+    n_frames = min(n_frames, g["start"].shape[0] - 1)
+    rows = int(g["start"][n_frames])
+    for name in CONTACT_ROWS:
+        g[name].resize(rows, axis=0)
+    for name in WALL_LOAD_NAMES:
+        g[name].resize(n_frames, axis=0)
+    g["start"].resize((n_frames + 1,))
 
 
 def check_resumable(path: Path, n_cycles: int, n_frames: int, *, ragged: bool) -> None:

@@ -16,6 +16,7 @@ import h5py
 import numpy as np
 
 from dem.errors import InputError
+from dem.io.contacts import CONTACT_ROW_NAMES, WALL_LOAD_NAMES
 from dem.provenance import package_versions
 
 #: Layout versions :func:`read_results` understands.
@@ -32,7 +33,10 @@ class Frames:
     (N,), ``radius`` (N,) m, ``grain_id`` (N,), ``grain_index`` (N,) and ``orientation`` (B, 4)
     (unit quaternions w, x, y, z of the clumps, indexed by ``grain_index``; None for plain
     spheres and version 1). N and B may change from frame to frame in a ragged file (version
-    3), where ``grain_id`` is the grain's lasting id; elsewhere the two are the same.
+    3), where ``grain_id`` is the grain's lasting id; elsewhere the two are the same. A run
+    with ``output.contacts`` adds ``contacts``: the frame's contact rows (``kind``, ``i``, ``j``,
+    ``point``, ``normal``, ``normal_force``, ``tangential_force``, ``overlap``;
+    :mod:`dem.io.contacts`).
     """
 
     def __init__(self, path: Path, count: int, time: np.ndarray):
@@ -50,35 +54,44 @@ class Frames:
         if not 0 <= i < self.count:
             raise IndexError(f"frame {i} out of range ({self.count} frames)")
         with h5py.File(self.path, "r", locking=False) as f:
-            g = f["frames"]
-            if "start" in g:  # ragged (format version 3)
-                a, b = int(g["start"][i]), int(g["start"][i + 1])
-                orientation = None
-                if "orientation" in g:
-                    c, d = int(g["body_start"][i]), int(g["body_start"][i + 1])
-                    orientation = g["orientation"][c:d]
-                extra = {k: g[k][i] for k in json.loads(g.attrs.get("per_frame", "[]"))}
-                return {
-                    **extra,
-                    "time": float(g["time"][i]),
-                    "positions": g["positions"][a:b],
-                    "velocity": g["velocity"][a:b],
-                    "contact_count": g["contact_count"][a:b],
-                    "radius": g["radius"][a:b],
-                    "grain_id": g["grain_id"][a:b],
-                    "grain_index": g["grain_index"][a:b],
-                    "orientation": orientation,
-                }
+            frame = self._frame(f["frames"], i)
+            if "contacts" in f:
+                c = f["contacts"]
+                a, b = int(c["start"][i]), int(c["start"][i + 1])
+                frame["contacts"] = {k: c[k][a:b] for k in CONTACT_ROW_NAMES}
+            return frame
+
+    @staticmethod
+    def _frame(g: h5py.Group, i: int) -> dict:
+        """Frame i of ``/frames`` (ragged or not), without its contacts."""
+        if "start" in g:  # ragged (format version 3)
+            a, b = int(g["start"][i]), int(g["start"][i + 1])
+            orientation = None
+            if "orientation" in g:
+                c, d = int(g["body_start"][i]), int(g["body_start"][i + 1])
+                orientation = g["orientation"][c:d]
+            extra = {k: g[k][i] for k in json.loads(g.attrs.get("per_frame", "[]"))}
             return {
+                **extra,
                 "time": float(g["time"][i]),
-                "positions": g["positions"][i],
-                "velocity": g["velocity"][i],
-                "contact_count": g["contact_count"][i],
-                "radius": g["radius"][()],
-                "grain_id": g["grain_id"][()],
-                "grain_index": g["grain_id"][()],
-                "orientation": g["orientation"][i] if "orientation" in g else None,
+                "positions": g["positions"][a:b],
+                "velocity": g["velocity"][a:b],
+                "contact_count": g["contact_count"][a:b],
+                "radius": g["radius"][a:b],
+                "grain_id": g["grain_id"][a:b],
+                "grain_index": g["grain_index"][a:b],
+                "orientation": orientation,
             }
+        return {
+            "time": float(g["time"][i]),
+            "positions": g["positions"][i],
+            "velocity": g["velocity"][i],
+            "contact_count": g["contact_count"][i],
+            "radius": g["radius"][()],
+            "grain_id": g["grain_id"][()],
+            "grain_index": g["grain_id"][()],
+            "orientation": g["orientation"][i] if "orientation" in g else None,
+        }
 
 
 def read_results(path: Path) -> dict:
@@ -88,7 +101,9 @@ def read_results(path: Path) -> dict:
         dict with ``case`` (dict, from ``case_json``), ``versions`` (dict of str), ``seed``,
         ``timestep`` (s), ``format_version``, ``git_commit`` (str, None where not recorded),
         ``complete`` (bool), ``cycles`` (dict key -> (C,) array, truncated to the shortest
-        column), ``frame_count`` and ``frames`` (:class:`Frames`).
+        column), ``frame_count`` and ``frames`` (:class:`Frames`), and ``wall_loads``: with
+        ``output.contacts`` the trough's loads per frame (name -> (F,) or (F, 3) array, N;
+        :func:`dem.io.contacts.wall_loads`), else None.
 
     Raises:
         InputError: The file's ``format_version`` is not one this dem reads (a newer dem wrote
@@ -124,6 +139,12 @@ def read_results(path: Path) -> dict:
             time = g["time"][:count]
         else:
             count, time = 0, np.zeros(0)
+        loads = None
+        if "contacts" in f:  # written before the frame's time: a counted frame has its contacts
+            c = f["contacts"]
+            count = min(count, c["start"].shape[0] - 1)
+            time = time[:count]
+            loads = {k: c[k][:count] for k in WALL_LOAD_NAMES}
         return {
             "case": json.loads(a["case_json"]),
             "versions": {k: str(v) for k, v in f["versions"].attrs.items()},
@@ -135,4 +156,5 @@ def read_results(path: Path) -> dict:
             "cycles": cycles,
             "frame_count": count,
             "frames": Frames(path, count, time),
+            "wall_loads": loads,
         }

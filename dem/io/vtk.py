@@ -77,6 +77,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import pyvista as pv
 
+from dem.io.contacts import CONTACT_KINDS, wall_loads
 from dem.io.files import replace_file, replace_text
 from dem.scene.trough import Trough
 
@@ -108,8 +109,6 @@ CONTACTS_FILE_RE = re.compile(r"contacts_\d{6}\.vtp")
 CONTACT_ARRAYS = ("kind", "sphere_i", "sphere_j", "normal", "normal_force",
                   "normal_force_vector", "tangential_force", "tangential_force_magnitude",
                   "overlap")  # fmt: skip
-#: ``kind`` of a contact: a pair, or a sphere on the floor, a side wall (y < 0, y > 0), the back.
-CONTACT_KINDS = ("pair", "floor", "side wall y-", "side wall y+", "back wall")
 
 
 def trough_polydata(
@@ -565,12 +564,8 @@ def _contacts_polydata(contacts: dict, section, shift: np.ndarray) -> pv.PolyDat
     mesh.point_data["tangential_force_magnitude"] = np.linalg.norm(ft, axis=1).astype(np.float32)
     mesh.point_data["overlap"] = np.asarray(contacts["overlap"]).astype(np.float32)
     mesh.set_active_scalars("normal_force")
-    wall = kind > 0
-    total = fn[wall, None] * normal[wall] + ft[wall]
-    mesh.field_data["floor_normal_force"] = np.array([fn[kind == 1].sum()])
-    mesh.field_data["side_wall_normal_force"] = np.array([fn[(kind == 2) | (kind == 3)].sum()])
-    mesh.field_data["back_wall_normal_force"] = np.array([fn[kind == 4].sum()])
-    mesh.field_data["wall_force_on_grains"] = total.sum(axis=0) if wall.any() else np.zeros(3)
+    for name, value in wall_loads(contacts).items():
+        mesh.field_data[name] = np.atleast_1d(value)
     mesh.field_data["contact_kinds"] = np.array(CONTACT_KINDS)
     return mesh
 

@@ -17,6 +17,7 @@ picks up where the files end. A new output is one class here and one entry in th
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -45,6 +46,14 @@ class Frame:
     contact_count: np.ndarray
     grain_id: np.ndarray
     orientation: np.ndarray | None
+
+    @functools.cached_property
+    def contacts(self) -> dict:
+        """Every contact of the frame (:meth:`Simulation.contact_snapshot`).
+
+        Evaluated once for all the writers that ask (``output.contacts``).
+        """
+        return self.sim.contact_snapshot()
 
     @classmethod
     def of(cls, sim: Simulation) -> Frame:
@@ -92,7 +101,7 @@ class VTKFrames:
         self.series.write_frame(
             t, s.x, s.radius, s.v, frame.grain_id, s.body, frame.contact_count,
             frame.orientation, drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
-            contacts=sim.contact_snapshot() if self.contacts else None,
+            contacts=frame.contacts if self.contacts else None,
         )  # fmt: skip
         progress.vtk_entries = self.series.entries
 
@@ -107,8 +116,9 @@ class VTKFrames:
 class HDF5Results:
     """results.h5 (:class:`ResultsWriter`): one row per cycle, and the frames if asked for.
 
-    It carries the case, the package versions, the seed and the time step; ``resume``: the file
-    is trimmed back to the rows and frames ``progress`` has counted.
+    With ``output.contacts`` each frame's contacts and the trough's loads go with it. It carries the
+    case, the package versions, the seed and the time step; ``resume``: the file is trimmed back to
+    the rows and frames ``progress`` has counted.
     """
 
     def __init__(self, path: Path, sim: Simulation, case, progress: Progress, *, resume: bool):
@@ -121,6 +131,7 @@ class HDF5Results:
             resume_at=(progress.h5_cycles, progress.h5_frames) if resume else None,
             ragged=sim.feeder is not None,
         )
+        self.contacts = case.output.contacts
 
     def frame(self, frame: Frame, progress: Progress) -> None:
         """Append the frame's spheres, and a finite feeder's grain and mass balance."""
@@ -141,6 +152,7 @@ class HDF5Results:
             frame.time, s.x, s.v, radius=s.radius, grain_id=frame.grain_id,
             contact_count=frame.contact_count, orientation=frame.orientation,
             grain_index=s.body, per_frame=balance,
+            contacts=frame.contacts if self.contacts else None,
         )  # fmt: skip
         progress.h5_frames += 1
 
