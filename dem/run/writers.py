@@ -93,6 +93,7 @@ class VTKFrames:
             t, s.x, s.radius, s.v, frame.grain_id, s.body, frame.contact_count,
             frame.orientation, drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
             contacts=sim.contact_snapshot() if self.contacts else None,
+            grain_type=sim.grain_type,
         )  # fmt: skip
         progress.vtk_entries = self.series.entries
 
