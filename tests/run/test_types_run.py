@@ -55,3 +55,28 @@ def test_a_two_type_run_reports_each_types_velocity(tmp_path):
     np.testing.assert_array_equal(
         np.asarray(frame.point_data["radius"])[kind == 1], np.float32(0.002)
     )
+
+
+def test_replicas_pool_each_types_velocity_as_the_bulks():
+    """Two fills' per-type rows: velocities pooled as the bulk's, counts and sizes over both."""
+    from dem.physics import measure
+    from dem.run.replicas import pool_summaries
+
+    def fill(seed, v, count, lo):
+        row = {"name": "glass", "fraction": 0.5, "density": 2500.0, "distribution": "uniform",
+               "count": count, "radius_mean": 0.0015, "radius_min": lo, "radius_max": 0.0018,
+               "mass_fraction": 0.1, "mean_velocity": v, "mean_velocity_stderr": 0.001,
+               "mean_velocity_norm": v / 0.17,
+               "mean_velocity_norm_stderr": 0.001 / 0.17}  # fmt: skip
+        return {"seed": seed, "mean_velocity": v, "mean_velocity_stderr": 0.001,
+                "mean_velocity_norm": v / 0.17, "mean_velocity_norm_stderr": 0.001 / 0.17,
+                "mass_flow_rate": 1.0, "mass_flow_rate_per_width": 10.0, "settle_cycles": 2,
+                "cycles": 3, "wall_time_s": 1.0, "spheres": 10, "steps": 100,
+                "per_type": [row]}  # fmt: skip
+
+    out = pool_summaries([fill(1, 0.15, 60, 0.0012), fill(2, 0.16, 61, 0.0013)])
+    (glass,) = out["per_type"]
+    p = measure.pooled([0.15, 0.16], [0.001, 0.001])
+    assert (glass["mean_velocity"], glass["mean_velocity_stderr"]) == (p.mean, p.stderr)
+    assert (glass["count"], glass["radius_min"]) == (60.5, 0.0012)
+    assert [r["per_type_velocity"] for r in out["per_replica"]] == [[0.15], [0.16]]
