@@ -107,7 +107,7 @@ def _velocity_lines(case) -> list[str]:
         + ", ".join(f"{k + 1} {t.name}" for k, t in enumerate(types)),
         *(f"group {t.name} type {k + 1}" for k, t in enumerate(types)),
         "# the grains' mass-weighted mean x-velocity (unequal masses), every step",
-        "variable mmean equal mass(all)/count(all)",
+        "variable mmean equal (mass(all)+1e-30)/(count(all)+1e-30)",
         "variable wvx atom mass*vx/v_mmean",
         "compute vxm all reduce ave v_wvx",
     ]

@@ -271,7 +271,8 @@ def _types_block(scene: Scene, seed: int) -> Grains:
     bin fraction), so ``fix pdd`` is ``particledistribution/discrete/numberbased``. Every
     template is atom type 1: the types share the material and the contact law, and LIGGGHTS's
     Hertz law takes each pair's R* and m* from its atoms. With unequal masses the mean
-    x-velocity is weighted by mass: the mean of m vx / m_mean over the atoms.
+    x-velocity is weighted by mass: the mean of m vx / m_mean over the atoms (1e-30 keeps
+    m_mean finite before the insertion; LIGGGHTS 3.8's formulas have no max()).
     """
     from dem.scene.sizes import DECK_BINS, bins, mean_mass, mean_volume
 
@@ -301,8 +302,8 @@ def _types_block(scene: Scene, seed: int) -> Grains:
         f"{p.count} spheres of {len(p.types)} types, r = {min(radii):.4g}-{max(radii):.4g} m",
         template, [f"fix integr all {'nve/sphere' if p.rotation else 'nve'}"],
         ["# the mass-weighted mean x-velocity (unequal masses)",
-         "variable mmean equal mass(all)/count(all)", "variable wvx atom mass*vx/v_mmean",
-         "compute vxm all reduce ave v_wvx"],
+         "variable mmean equal (mass(all)+1e-30)/(count(all)+1e-30)",
+         "variable wvx atom mass*vx/v_mmean", "compute vxm all reduce ave v_wvx"],
         tuple(weights), "particledistribution/discrete/numberbased",
     )  # fmt: skip
 
