@@ -170,6 +170,11 @@ QUANTITIES: dict[str, Quantity] = dict(
         # grains and run
         _q("radius", "m", lambda x: 1.0e-7 <= x <= 10.0, "radius must be in [1e-7, 10] m",
            "radius, m"),
+        _q("radius_log_std", "", lambda x: 0.0 < x <= 3.0,
+           "must be in (0, 3]: the standard deviation of ln(r)",
+           "standard deviation of ln(radius) of a lognormal size distribution"),
+        _q("fraction", "", lambda x: 0.0 < x <= 1.0, "a fraction in (0, 1]",
+           "share of the grains by number"),
         _q("mass", "kg", lambda x: 1.0e-18 <= x <= 1.0e3, "mass must be in [1e-18, 1000] kg",
            "grain mass, kg"),
         _q("max_bumpiness", "", lambda x: 0.0 < x <= 1.0,

@@ -29,13 +29,21 @@ def from_case(case, *, timestep: float | None = None, check_limit: bool = True) 
     ``case`` is a :class:`dem.scene.resolved.Scene`, or a :class:`dem.scene.case.Case` resolved here
     (:func:`dem.scene.resolved.resolve` with ``timestep`` and ``check_limit``).
 
-    Spheres: :func:`dem.scene.fill.random_fill`. Screws and clumps: N copies of the case's grain
+    Spheres: :func:`dem.scene.fill.random_fill`; of several types or sizes
+    (``particles.types``): :func:`dem.scene.fill.fill_types`, each sphere with its radius and
+    density, and ``Simulation.grain_type`` its type. Screws and clumps: N copies of the case's grain
     template at random positions and orientations without member overlap
     (:func:`dem.scene.fill.random_fill_clumps`). The time step is the scene's
     (:func:`dem.scene.timestep.timestep_for`, impact from the top of the fill box; ``check_limit``
     as there); the instability check's speed scale takes the box as it was finally drawn.
     """
     scene = resolve(case, timestep=timestep, check_limit=check_limit)
+    if scene.case.particles.types:  # spheres of several types or sizes
+        positions, radii, densities, kind, height = fill.fill_types(scene.case)
+        sim = _build(scene, positions, None, None, scene.step,
+                     impact_speed_for(scene.case, height), sizes=(radii, densities))  # fmt: skip
+        sim.grain_type = kind
+        return sim
     positions, quats, height = fill.fill(scene.case)
     return _build(scene, positions, quats, None, scene.step, impact_speed_for(scene.case, height))
 

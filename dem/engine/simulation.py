@@ -133,6 +133,8 @@ class Simulation(InstabilityChecks):
         self.stats = np.zeros(3)
         #: Lasting id of each grain (frames and results.h5); fed grains get new ids.
         self.grain_id = np.arange(self.n_grains, dtype=np.int64)
+        #: Type index of each grain (``particles.types``), int64 (n_grains,); None: one type.
+        self.grain_type: np.ndarray | None = None
         self.feeder = feeder
         if feeder is not None:
             feeder.next_id = self.n_grains

@@ -131,6 +131,8 @@ LOOP_OPTIONAL = {
     "frames": (bool,),
     "lab_frame": (bool,),
     "extended_cycles": (int,),
+    "type_mark": (list,),
+    "per_cycle_types": (list,),
 }
 _FRAME_FILE = re.compile(r"[A-Za-z0-9_.-]+\.vtp")
 

@@ -44,8 +44,9 @@ Sphere point data (one value per sphere): ``radius`` (m, float32, the active sca
 field data ``velocity_frame`` says ``lab``), ``velocity_trough`` and ``speed_trough`` (m/s,
 relative to the trough), ``velocity_lab`` and ``speed_lab`` (m/s, in the lab; written when the
 drive velocity is given, as a run gives it), ``grain_id``, ``clump_id``, ``contact_count``
-(int32), and ``orientation`` (unit quaternion w, x, y, z of the sphere's clump, float32, 4
-components) when orientations are given.
+(int32), ``grain_type`` (int32, the index of the sphere's ``[[particles.types]]`` table from
+0; only for a case of several types or sizes), and ``orientation`` (unit quaternion w, x, y,
+z of the sphere's clump, float32, 4 components) when orientations are given.
 
 Grain point data (clumps only, one point per grain at its centre of mass): ``grain_id`` (the
 grain's lasting id), ``clump_id`` (its index in the frame, as the spheres give it), ``mass``
@@ -267,6 +268,7 @@ class VTKSeriesWriter:
         drive_velocity: np.ndarray | None = None,
         bodies=None,
         contacts: dict | None = None,
+        grain_type: np.ndarray | None = None,
     ) -> Path:
         """Write one frame (spheres, trough, and grains for clumps) and rewrite the collection.
 
@@ -294,6 +296,8 @@ class VTKSeriesWriter:
                 contact_snapshot`): a contacts dataset (``contacts_NNNNNN.vtp``, one point a
                 contact, :data:`CONTACT_ARRAYS`, the walls' summed loads as field data). None:
                 none written.
+            grain_type: Type index of each sphere (``particles.types``, in their order), (N,),
+                int; written as ``grain_type``. None: one type, none written.
 
         Returns:
             Path of the sphere ``.vtp`` file.
@@ -335,6 +339,8 @@ class VTKSeriesWriter:
         mesh.point_data["velocity"] = vel.astype(np.float32)
         for key in ("grain_id", "clump_id", "contact_count"):
             mesh.point_data[key] = arrays[key].astype(np.int32)
+        if grain_type is not None:
+            mesh.point_data["grain_type"] = _check(grain_type, (n,), "grain_type").astype(np.int32)
         _velocities(mesh, rel, drive_v)
         if orientation is not None:
             q = np.asarray(orientation, dtype=np.float64)

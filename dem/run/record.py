@@ -17,13 +17,15 @@ import math
 import warnings
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from dem import config
 from dem.physics import drive, measure
 
 #: Keys a checkpoint holds only once they have a value (older checkpoints lack some of them).
 _OPTIONAL = ("compile_wall_time_s", "fill_wall_time_s", "frames", "lab_frame", "settle_detected",
              "discharge_per_cycle", "hold_up_per_cycle", "feeder", "max_overlap",
-             "extended_cycles")  # fmt: skip
+             "extended_cycles", "type_mark", "per_cycle_types")  # fmt: skip
 
 
 @dataclass
@@ -75,6 +77,10 @@ class Progress:
     max_overlap: dict | None = None
     #: Measured cycles added because the measured series was not steady (:func:`close_cycle`).
     extended_cycles: int | None = None
+    #: Grain types (``particles.types``): x of every grain at the last cycle's edge, m, and the
+    #: mass-weighted mean x-velocity of each type in each measured cycle, m/s.
+    type_mark: list | None = None
+    per_cycle_types: list | None = None
     #: Keys of a checkpoint that no field above names, written back unchanged.
     extra: dict = field(default_factory=dict)
 
@@ -112,7 +118,9 @@ class CycleRow:
 
     ``time``: drive time at the cycle's end, s; ``mean_velocity``: mass-weighted mean
     x-velocity over the cycle, m/s; ``kinetic_energy``: J, at the cycle's end, as ``contacts``;
-    ``feeder``: a finite feeder's discharge and balance over the cycle (empty without one).
+    ``feeder``: a finite feeder's discharge and balance over the cycle (empty without one);
+    ``types``: each grain type's mean x-velocity over the cycle, m/s, as
+    ``mean_velocity_<type>`` (empty for one type).
     """
 
     cycle: int
@@ -122,12 +130,38 @@ class CycleRow:
     contacts: int
     measured: bool
     feeder: dict
+    types: dict = field(default_factory=dict)
 
     def stats(self) -> dict:
         """The row as :meth:`dem.io.hdf5.ResultsWriter.append_cycle` takes it, key for key."""
         return {"cycle": self.cycle, "time": self.time, "mean_velocity": self.mean_velocity,
                 "kinetic_energy": self.kinetic_energy, "contacts": self.contacts,
-                "measured": int(self.measured), **self.feeder}  # fmt: skip
+                "measured": int(self.measured), **self.feeder, **self.types}  # fmt: skip
+
+
+def _type_velocities(sim, case, progress: Progress, measured: bool) -> dict:
+    """Each grain type's mean x-velocity over the cycle now closing (``particles.types``).
+
+    From the grains' displacements since the last cycle's edge
+    (:func:`dem.physics.measure.group_velocities`, over the steps the cycle took); the edge is
+    kept in ``progress`` (and so in a checkpoint). Returns results.h5's columns,
+    ``mean_velocity_<type>``; {} for one type.
+    """
+    kind = sim.grain_type
+    if kind is None or progress.type_mark is None:
+        return {}
+    types = case.particles.types
+    x = sim.spheres.x[:, 0]
+    velocities = measure.group_velocities(
+        np.asarray(progress.type_mark), x, sim.spheres.mass, kind, len(types),
+        sim.stats[1] * sim.dt, sim.trough.length,
+    )  # fmt: skip
+    progress.type_mark = x.tolist()
+    if measured:
+        if progress.per_cycle_types is None:
+            progress.per_cycle_types = []
+        progress.per_cycle_types.append(velocities)
+    return {f"mean_velocity_{t.name}": v for t, v in zip(types, velocities, strict=True)}
 
 
 def friction_floor(case) -> int:
@@ -233,6 +267,7 @@ def close_cycle(sim, case, progress: Progress) -> CycleRow:
     velocity = sim.cycle_velocity()
     settle = progress.settle_cycles
     measured = settle is not None and progress.cycle >= settle
+    types = _type_velocities(sim, case, progress, measured)
     if measured:
         progress.per_cycle.append(velocity)
         if progress.cycle + 1 == progress.total_cycles:
@@ -289,6 +324,7 @@ def close_cycle(sim, case, progress: Progress) -> CycleRow:
         contacts=int(sim.contact_counts().sum()),
         measured=measured,
         feeder=feeder,
+        types=types,
     )
     sim.stats[:] = 0.0
     progress.cycle += 1

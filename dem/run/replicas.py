@@ -421,6 +421,8 @@ def pool_summaries(
         p = measure.pooled(rates, errs)
         out["feeder"] = dict(first["feeder"], discharge_rate=p.mean, discharge_rate_stderr=p.stderr,
                              discharge_rate_ci95=p.half_width)  # fmt: skip
+    if first.get("per_type"):
+        out["per_type"] = _pooled_types(summaries)
     out["replicas"] = len(summaries)
     out["error_bar"] = (
         f"pooled over {len(summaries)} fills (random-effects, fill-to-fill spread included; "
@@ -429,6 +431,11 @@ def pool_summaries(
     out["per_replica"] = [
         {
             "seed": s["seed"],
+            **(
+                {"per_type_velocity": [t["mean_velocity"] for t in s["per_type"]]}
+                if s.get("per_type")
+                else {}
+            ),  # fmt: skip
             "mean_velocity": s["mean_velocity"],
             "mean_velocity_stderr": s["mean_velocity_stderr"],
             "mean_velocity_norm": s["mean_velocity_norm"],
@@ -462,4 +469,28 @@ def pool_summaries(
     if wall_time_s is not None:
         out["elapsed_s"] = wall_time_s  # compile, fills and every replica, as the user waited
     out["processes"] = processes
+    return out
+
+
+def _pooled_types(summaries: list[dict]) -> list[dict]:
+    """Each grain type over the fills: its velocity pooled as the bulk's, what the fills placed.
+
+    Per type: the first fill's name, fraction, density and distribution; count and mass_fraction
+    averaged over the fills, the placed radii's mean averaged and their extremes over all fills;
+    mean_velocity and mean_velocity_norm pooled (:func:`dem.physics.measure.pooled`, the
+    fill-to-fill spread included); the per-cycle series are each fill's (``per_replica``).
+    """
+    out = []
+    for k, row in enumerate(summaries[0]["per_type"]):
+        rows = [s["per_type"][k] for s in summaries]
+        merged = {key: row[key] for key in ("name", "fraction", "density", "distribution")}
+        merged["count"] = sum(r["count"] for r in rows) / len(rows)
+        merged["radius_mean"] = sum(r["radius_mean"] for r in rows) / len(rows)
+        merged["radius_min"] = min(r["radius_min"] for r in rows)
+        merged["radius_max"] = max(r["radius_max"] for r in rows)
+        merged["mass_fraction"] = sum(r["mass_fraction"] for r in rows) / len(rows)
+        for key, err in POOLED:
+            p = measure.pooled([r[key] for r in rows], [r[err] for r in rows])
+            merged[key], merged[err], merged[key + "_ci95"] = p.mean, p.stderr, p.half_width
+        out.append(merged)
     return out

@@ -66,6 +66,7 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         **sim.law.tangential_coefficients(),
         "grains": sim.n_grains,
         "bed": bed_summary(case),
+        "per_type": type_summary(case, sim, progress),
         "spheres": sim.spheres.n,
         "total_mass": total_mass,
         "timestep": sim.dt,
@@ -98,6 +99,36 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "git_commit": provenance["git_commit"],
         "provenance": provenance,
     }
+
+
+def type_summary(case, sim: Simulation, progress: Progress) -> list[dict] | None:
+    """Each grain type of a case with several types or sizes (``particles.types``); else None.
+
+    Per type: its name, fraction (by number), density, size distribution, what the fill placed
+    (count, mean, smallest and largest radius, m; :func:`dem.scene.sizes.placed`), its share of
+    the mass, and its conveying velocity over the measured cycles as the bulk's
+    (mass-weighted mean x-velocity per cycle, :func:`dem.run.record.close_cycle`; mean,
+    autocorrelated standard error, normalised by the same velocity scale) with its per-cycle
+    series.
+    """
+    from dem.scene.sizes import placed
+
+    kind = sim.grain_type
+    if kind is None or not progress.per_cycle_types:
+        return None
+    s = sim.spheres
+    series = np.array(progress.per_cycle_types, dtype=np.float64)
+    total = float(np.sum(s.mass))
+    out = []
+    for k, row in enumerate(placed(s.radius, kind, case.particles.types)):
+        stat = measure.conveying_velocity(series[:, k], scale=case.drive.velocity_scale)
+        out.append({
+            **row,
+            "mass_fraction": float(np.sum(s.mass[kind == k])) / total,
+            **stat.summary_fields(),
+            "per_cycle_velocity": [float(u) for u in series[:, k]],
+        })  # fmt: skip
+    return out
 
 
 def bed_summary(case) -> dict | None:

@@ -101,7 +101,7 @@ class VTKFrames:
         self.series.write_frame(
             t, s.x, s.radius, s.v, frame.grain_id, s.body, frame.contact_count,
             frame.orientation, drive_displacement=shift, drive_velocity=lab_v, bodies=sim.bodies,
-            contacts=frame.contacts if self.contacts else None,
+            contacts=frame.contacts if self.contacts else None, grain_type=sim.grain_type,
         )  # fmt: skip
         progress.vtk_entries = self.series.entries
 

@@ -32,21 +32,32 @@ from dem.errors import InputError
 from dem.physics import tangential
 from dem.quantities import FRICTIONLESS_WHY, QUANTITIES
 from dem.scene import depth
-from dem.scene.schema import DEFAULT_TANGENTIAL_STIFFNESS_RATIO, DEPTH_KEYS, SCHEMA
+from dem.scene.schema import (
+    DEFAULT_TANGENTIAL_STIFFNESS_RATIO,
+    DEPTH_KEYS,
+    MAX_DISCRETE_RADII,
+    MAX_GRAIN_TYPES,
+    PARTICLE_TYPE,
+    SCHEMA,
+    SHAPES,
+    SIZE_KEYS,
+)
 from dem.scene.spec import (
     Case,
     ContactSpec,
     DriveSpec,
     FeederSpec,
+    GrainType,
     MaterialSpec,
     OutputSpec,
     ParticlesSpec,
     RunSpec,
+    SizeSpec,
     TroughSpec,
     WallSpec,
     resolve_drive,
 )
-from dem.scene.tomltable import Table, suggest
+from dem.scene.tomltable import REQUIRED, Table, suggest
 
 __all__ = [
     "CASE_FILE",
@@ -222,11 +233,121 @@ def _read_contact(t: Table) -> ContactSpec:
     )
 
 
+#: Largest ratio of the largest to the smallest radius of a case: the neighbour grid's cells are
+#: sized by the largest sphere, so a step's cost grows as the cube of the ratio.
+MAX_SIZE_RATIO = 10.0
+#: How far the fractions of the types (or of a discrete distribution's radii) may sum from 1.
+FRACTION_SUM_TOLERANCE = 1e-6
+
+
+def _foreign_why(shape: str, distribution: str) -> Callable[[str], str]:
+    """The refusal of a [particles] key that the shape or size distribution chosen does not read."""
+
+    def why(owner: str) -> str:
+        if owner in SHAPES:
+            return f"a key of shape = {owner!r}, not of {shape!r}"
+        return f"a key of radius_distribution = {owner!r}, not of {distribution!r}"
+
+    return why
+
+
+def _read_size(t: Table) -> SizeSpec:
+    """The size distribution of [particles] or of one ``[[particles.types]]`` table (spheres)."""
+    dist = t.read("radius_distribution")
+    if dist == "none":
+        return SizeSpec(radius=t.read("radius"))
+    if dist in ("uniform", "discrete") and "radius" in t.data:
+        what = "radius_min and radius_max bound it" if dist == "uniform" else "radii lists them"
+        raise t.error("radius", t.data["radius"], f"not given with radius_distribution = "
+                      f"{dist!r} ({what}): remove it")  # fmt: skip
+    if dist == "discrete":
+        radii = t.read("radii", REQUIRED)
+        fractions = t.read("radius_fractions", REQUIRED)
+        if len(fractions) != len(radii):
+            raise t.error("radius_fractions", list(fractions), f"one fraction per radius of "
+                          f"{t.name}.radii ({len(radii)} radii)")  # fmt: skip
+        if len(radii) > MAX_DISCRETE_RADII or len(set(radii)) != len(radii):
+            raise t.error("radii", list(radii), f"1 to {MAX_DISCRETE_RADII} different radii, m")
+        total = sum(fractions)
+        if abs(total - 1.0) > FRACTION_SUM_TOLERANCE:
+            raise t.error("radius_fractions", list(fractions), f"shares of the grains by number "
+                          f"that sum to 1 (these sum to {total:.9g})")  # fmt: skip
+        _check_ratio(t, "radii", list(radii), min(radii), max(radii))
+        pairs = sorted(zip(radii, fractions, strict=True))
+        return SizeSpec("discrete", radii=tuple(r for r, _ in pairs),
+                        radius_fractions=tuple(f for _, f in pairs))  # fmt: skip
+    lo, hi = t.read("radius_min", REQUIRED), t.read("radius_max", REQUIRED)
+    if hi <= lo:
+        raise t.error("radius_max", hi, f"> {t.name}.radius_min = {lo:g} m")
+    _check_ratio(t, "radius_max", hi, lo, hi)
+    if dist == "uniform":
+        return SizeSpec("uniform", radius_min=lo, radius_max=hi)
+    centre = t.read("radius")
+    if not lo < centre < hi:
+        what = "mean" if dist == "normal" else "median"
+        raise t.error("radius", centre, f"the distribution's {what}, inside ({t.name}.radius_min"
+                      f", radius_max) = ({lo:g}, {hi:g}) m")  # fmt: skip
+    if dist == "normal":
+        return SizeSpec("normal", radius=centre, radius_min=lo, radius_max=hi,
+                        radius_std=t.read("radius_std", REQUIRED))  # fmt: skip
+    return SizeSpec("lognormal", radius=centre, radius_min=lo, radius_max=hi,
+                    radius_log_std=t.read("radius_log_std", REQUIRED))  # fmt: skip
+
+
+def _check_ratio(t: Table, key: str, value, lo: float, hi: float) -> None:
+    if hi > MAX_SIZE_RATIO * lo:
+        raise t.error(key, value, f"radii within a ratio of {MAX_SIZE_RATIO:g} (largest over "
+                      f"smallest: here {hi / lo:.3g}): the neighbour cells are sized by the "
+                      "largest sphere, so a step costs the cube of the ratio")  # fmt: skip
+
+
+def _read_types(t: Table) -> tuple[GrainType, ...]:
+    """``[[particles.types]]``: each table a sphere grain type (:data:`PARTICLE_TYPE`)."""
+    given = t.read("types")
+    for key in SIZE_KEYS:
+        if key in t.data:
+            raise t.error(key, t.data[key], "given per grain type under [[particles.types]]: "
+                          "with types, [particles] gives no size key")  # fmt: skip
+    if len(given) > MAX_GRAIN_TYPES:
+        raise t.error("types", f"{len(given)} tables", f"1 to {MAX_GRAIN_TYPES} grain types")
+    types = []
+    for k, data in enumerate(given):
+        tt = Table(f"particles.types[{k + 1}]", data, t.source, t.directory, PARTICLE_TYPE)
+        tt.check_known()
+        dist = tt.read("radius_distribution")
+        tt.refuse_foreign(("sphere", dist), _foreign_why("sphere", dist))
+        name = tt.read("name") or f"type{k + 1}"
+        if any(name == other.name for other in types):
+            raise tt.error("name", name, "a name no other grain type has")
+        types.append(GrainType(name, tt.read("fraction"), tt.read("density"), _read_size(tt)))
+    total = sum(g.fraction for g in types)
+    if abs(total - 1.0) > FRACTION_SUM_TOLERANCE:
+        raise t.error("types", [g.fraction for g in types], "grain types whose fractions (by "
+                      f"number) sum to 1 (these sum to {total:.9g})")  # fmt: skip
+    lo = min(g.size.smallest for g in types)
+    hi = max(g.size.largest for g in types)
+    _check_ratio(t, "types", f"radii {lo:g} to {hi:g} m", lo, hi)
+    return tuple(types)
+
+
 def _read_particles(t: Table) -> ParticlesSpec:
     t.check_known()
     shape = t.read("shape")
-    # Keys of the other shapes are refused rather than silently ignored.
-    t.refuse_foreign((shape,), lambda owner: f"a key of shape = {owner!r}, not of {shape!r}")
+    distribution = t.read("radius_distribution")
+    # Keys of the other shapes (and size distributions) are refused rather than silently ignored.
+    t.refuse_foreign((shape, distribution), _foreign_why(shape, distribution))
+    types: tuple[GrainType, ...] = ()
+    radius = None
+    if shape == "sphere":
+        if "types" in t.data:
+            types = _read_types(t)
+        else:
+            size = _read_size(t)
+            if size.distribution != "none":
+                types = (GrainType("sphere", 1.0, None, size),)
+            radius = size.radius
+        if types:
+            radius = max(g.size.largest for g in types)
     given = {k: t.read(k) for k in DEPTH_KEYS}
     given = {k: v for k, v in given.items() if v is not None}
     if len(given) != 1:
@@ -241,7 +362,7 @@ def _read_particles(t: Table) -> ParticlesSpec:
         layers=given.get("layers"),
         bed_height=given.get("bed_height"),
         mass_per_area=given.get("mass_per_area"),
-        radius=t.read("radius") if shape == "sphere" else None,
+        radius=radius,
         rotation=t.read("rotation"),
         length=t.read("length") if shape == "screw" else None,
         shank_radius=t.read("shank_radius") if shape == "screw" else None,
@@ -249,6 +370,7 @@ def _read_particles(t: Table) -> ParticlesSpec:
         mass=t.read("mass"),
         template=t.read("template") if shape == "clump" else None,
         max_bumpiness=t.read("max_bumpiness") if shape == "screw" else None,
+        types=types,
     )
     if shape == "clump" and spec.template is None:
         raise t.error("template", None, "a clump template file is required for shape = 'clump'")
@@ -365,6 +487,16 @@ def _material_density(material: MaterialSpec, particles: ParticlesSpec, t: Table
 
     Beside the mass it is refused: one of the two would be read and ignored.
     """
+    if particles.types:
+        missing = [g.name for g in particles.types if g.density is None]
+        if missing and material.density is None:
+            raise t.error("density", None, "a value is required (the key is missing): the "
+                          f"density of grain type {missing[0]!r}, which gives none")  # fmt: skip
+        if not missing and material.density is not None:
+            raise t.error("density", material.density, "not given when every "
+                          "[[particles.types]] table gives its density: it would be read and "
+                          "ignored; remove it")  # fmt: skip
+        return material
     by_mass = particles.shape != "sphere" and particles.mass is not None
     if by_mass and material.density is not None:
         raise t.error(
@@ -488,6 +620,13 @@ def _load_case(path: str | Path, overrides: Mapping[str, Any] | None) -> Case:
     contact = _read_contact(table("contact"))
     particles = _read_particles(table("particles"))
     material = _material_density(material, particles, table("material"))
+    if particles.types:  # each type's density; material.density: the bed's, by volume
+        from dem.scene.sizes import mean_density
+
+        types = tuple(g if g.density is not None else replace(g, density=material.density)
+                      for g in particles.types)  # fmt: skip
+        particles = replace(particles, types=types)
+        material = replace(material, density=mean_density(types))
     particles = _build_grain(particles, material.density, table("particles"))
     if material.density is None:  # the grain's mass set it
         rho = particles.grain.density
@@ -542,8 +681,35 @@ def _load_case(path: str | Path, overrides: Mapping[str, Any] | None) -> Case:
         wall=wall,
     )
     _check_feeder(case, table)
+    _check_types(case, table)
     _check_engine(case, table)
     return case
+
+
+def _check_types(case: Case, table: Callable[[str], Table]) -> None:
+    """Refuse grain types and size distributions where the engine does not take them yet.
+
+    A mesh trough's fill, a finite feeder's feed and the GPU engine place or step grains of one
+    size; rather than run them with one size and report the distribution, they are refused.
+    """
+    pt = case.particles
+    if not pt.types:
+        return
+    key = "types" if "types" in table("particles").data else "radius_distribution"
+    value = table("particles").data[key]
+    where = None
+    if case.trough.mesh is not None:
+        where = "a mesh trough (its fill places grains of one size)"
+    elif case.feeder is not None:
+        where = "a finite feeder (its feed drops grains of one size)"
+    elif case.run.device == "cuda":
+        where = "the GPU engine (run.device = 'cuda'; not yet checked with several sizes)"
+    if where is not None:
+        raise table("particles").error(
+            key, value if key != "types" else f"{len(pt.types)} tables",
+            f"one sphere size (particles.radius) for {where}: grain types and size "
+            "distributions run on a flat periodic section on the CPU engine",
+        )  # fmt: skip
 
 
 #: Keys of which a case gives exactly one: an override of one replaces the file's others

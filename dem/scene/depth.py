@@ -10,6 +10,9 @@ section's floor area L W (trough length times width) at the solid fraction
 - layers n = H / d_v, d_v = (6 V / pi)^(1/3) the volume-equivalent diameter (a sphere's own
   diameter; 8.5 mm for the shipped 2.5 g screw, whose head is 7.2 mm across).
 
+Spheres of several types or sizes take V as the mean grain volume by number (and the bed's
+density by volume), so a depth gives the count of the mean grain.
+
 A depth gives N = round(...) grains, at least one. Height and layers are nominal: a driven bed
 dilates, and elongated grains pack looser than 0.6; the summary reports all three beside the
 count, and which one the case gave. A mesh trough has no flat floor of area L W, and a finite
@@ -28,7 +31,16 @@ DEPTHS = ("layers", "bed_height", "mass_per_area")
 
 
 def grain_volume(particles) -> float:
-    """V of one grain, m^3: a sphere's, or a clump's union volume."""
+    """V of one grain, m^3: a sphere's, a clump's union volume, or the mean over grain types.
+
+    Spheres of several types or sizes (``particles.types``): the mean grain volume by number
+    (:func:`dem.scene.sizes.mean_volume`), with ``material.density`` their density by volume,
+    so that N V rho is the bed's mass.
+    """
+    if particles.types:
+        from dem.scene.sizes import mean_volume
+
+        return mean_volume(particles.types)
     return particles.grain.volume if particles.clumps else sphere_volume(particles.radius)
 
 

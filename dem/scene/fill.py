@@ -48,8 +48,17 @@ def clump_box_height(n: int, template, length: float, width: float) -> float:
 
 
 def box_height(case) -> float:
-    """Starting fill-box height of a :class:`dem.scene.case.Case`'s grains, m (no fill is drawn)."""
+    """Starting fill-box height of a :class:`dem.scene.case.Case`'s grains, m (no fill is drawn).
+
+    Spheres of several types or sizes: the dense bed of their mean volume (from the case, not
+    the draw: :func:`dem.scene.sizes.mean_volume`) plus the largest diameter.
+    """
     pt, t = case.particles, case.trough
+    if pt.types:
+        from dem.scene.sizes import mean_volume
+
+        bed = pt.count * mean_volume(pt.types) / (0.6 * t.length * t.width)
+        return DEM_FILL_HEIGHT_FACTOR * bed + 2.0 * pt.radius
     if not pt.clumps:
         return sphere_box_height(pt.count, pt.radius, t.length, t.width)
     return clump_box_height(pt.count, pt.grain, t.length, t.width)
@@ -87,6 +96,130 @@ def fill(case) -> tuple[np.ndarray, np.ndarray | None, float]:
     positions[:, 0] += start
     order = spatial_order(positions, 2.0 * reach, t.width)
     return positions[order], None if quats is None else quats[order], height
+
+
+def fill_types(case) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """A case of several sphere types or sizes placed at random (seed ``run.seed``).
+
+    Each type gets its whole share of the grains (:func:`dem.scene.sizes.split`) and each grain
+    its radius (:func:`dem.scene.sizes.draw_types`, a stream of its own); the spheres are placed
+    largest first by :func:`random_fill_sized` (the small ones fill the gaps the large ones
+    leave), then numbered along the trough (:func:`spatial_order`).
+
+    Returns:
+        (centres (N, 3) m, radii (N,) m, densities (N,) kg/m^3, type index (N,) int64, final
+        box height m).
+
+    """
+    from dem.scene.sizes import draw_types
+
+    pt, t = case.particles, case.trough
+    radius, density, kind = draw_types(pt.types, pt.count, case.run.seed)
+    first = np.argsort(-radius, kind="stable")
+    radius, density, kind = radius[first], density[first], kind[first]
+    rng = np.random.default_rng(case.run.seed)
+    positions, height = random_fill_sized(radius, t.length, t.width, rng, height=box_height(case))
+    order = spatial_order(positions, 2.0 * pt.radius, t.width)
+    return positions[order], radius[order], density[order], kind[order], height
+
+
+def random_fill_sized(
+    radius: np.ndarray,
+    length: float,
+    width: float,
+    rng: np.random.Generator,
+    *,
+    height: float,
+) -> tuple[np.ndarray, float]:
+    """Random sequential placement of spheres of radii ``radius`` (n,), in that order.
+
+    As :func:`random_fill`, sphere i drawn in y in [-width/2 + r_i, width/2 - r_i], z in
+    [r_i, height - r_i] and kept if it is farther than r_i + r_j from every earlier sphere j
+    (periodic in x); the grid's cells are one largest diameter wide, so a try tests the 27
+    cells around it and the cost stays O(N) for radii within a bounded ratio. Returns
+    (positions (n, 3) m, final box height m).
+    """
+    radius = np.ascontiguousarray(radius, dtype=np.float64)
+    n = radius.size
+    r_max = float(radius.max()) if n else 0.0
+    if width <= 2.0 * r_max:
+        raise ValueError(f"trough width {width} m leaves no room for spheres of radius {r_max} m")
+    pos = np.empty((n, 3))
+    nxt = np.full(n, -1, dtype=np.int64)
+    placed, fails = 0, 0
+    u = np.empty(0)
+    k = 0
+    batch = 3 * max(1024, min(n, 1 << 20))
+    grid = _Grid(length, width, height, 2.0 * r_max)
+    while placed < n:
+        if k >= u.size:
+            u, k = rng.random(batch), 0
+        placed, k, fails, stuck = _place_sized(
+            u, k, pos, radius, placed, n, r_max, length, width, height, fails, DEM_FILL_TRIES,
+            grid.head, nxt, grid.shape, grid.cell,
+        )  # fmt: skip
+        if stuck:
+            height *= 1.25
+            fails = 0
+            grid = _Grid(length, width, height, 2.0 * r_max)
+            nxt[:] = -1
+            _insert_all(pos, placed, grid.head, nxt, grid.shape, grid.cell, width)
+    return pos, height
+
+
+@numba.njit(cache=True)
+def _free_sized(cx, cy, cz, rc, pos, radius, length, width, head, nxt, shape, cell):
+    """True if no sphere in the 27 cells around (cx, cy, cz) overlaps one of radius rc there."""
+    ix, iy, iz = _cell_of(cx, cy, cz, shape, cell, width)
+    nx = shape[0]
+    wide = nx >= 3
+    for a in range(3 if wide else nx):
+        jx = (ix + a - 1) % nx if wide else a
+        for jy in range(max(iy - 1, 0), min(iy + 2, shape[1])):
+            for jz in range(max(iz - 1, 0), min(iz + 2, shape[2])):
+                j = head[(jx * shape[1] + jy) * shape[2] + jz]
+                while j >= 0:
+                    dx = pos[j, 0] - cx
+                    dx -= length * np.round(dx / length)
+                    dy = pos[j, 1] - cy
+                    dz = pos[j, 2] - cz
+                    reach = rc + radius[j]
+                    if dx * dx + dy * dy + dz * dz < reach * reach:
+                        return False
+                    j = nxt[j]
+    return True
+
+
+@numba.njit(cache=True)
+def _place_sized(u, k, pos, radius, placed, n, r_max, length, width, height, fails, tries, head,
+                 nxt, shape, cell):  # fmt: skip
+    """:func:`_place_spheres` for spheres of radii ``radius``; returns (placed, k, fails, stuck)."""
+    while placed < n:
+        if k + 3 > u.size:
+            return placed, u.size, fails, False
+        r = radius[placed]
+        y_lo = -0.5 * width + r
+        y_range = (0.5 * width - r) - y_lo
+        z_range = max(r, height - r) - r
+        cx = 0.0 + length * u[k]
+        cy = y_lo + y_range * u[k + 1]
+        cz = r + z_range * u[k + 2]
+        k += 3
+        if _free_sized(cx, cy, cz, r, pos, radius, length, width, head, nxt, shape, cell):
+            pos[placed, 0] = cx
+            pos[placed, 1] = cy
+            pos[placed, 2] = cz
+            ix, iy, iz = _cell_of(cx, cy, cz, shape, cell, width)
+            c = (ix * shape[1] + iy) * shape[2] + iz
+            nxt[placed] = head[c]
+            head[c] = placed
+            placed += 1
+            fails = 0
+        else:
+            fails += 1
+            if fails == tries:
+                return placed, k, fails, True
+    return placed, k, fails, False
 
 
 def fill_mesh(

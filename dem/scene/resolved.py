@@ -12,6 +12,7 @@ and the simulation each re-index it for their own reach), so every simulation lo
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -37,8 +38,9 @@ class Scene:
     Attributes:
         case: The :class:`dem.scene.case.Case` it was resolved from.
         grain: The grain as a :class:`dem.scene.shapes.Template`: the one-sphere template
-            (:func:`dem.scene.shapes.sphere`) of radius R and density rho for spheres, the case's
-            template for screws and clumps.
+            (:func:`dem.scene.shapes.sphere`) of radius R and density rho for spheres (of
+            several types or sizes: the mean grain, the sphere of their mean volume at their
+            density by volume), the case's template for screws and clumps.
         law: The contact law in kernel form (:meth:`dem.physics.laws.ContactLaw.from_case`).
         step: The time step of the case's fill (:func:`dem.scene.timestep.timestep_for` with
         ``law``):
@@ -62,13 +64,19 @@ class Scene:
         rho V equals it to rounding); a clump: its template's mass.
         """
         pt = self.case.particles
+        if pt.types:
+            from dem.scene.sizes import mean_mass
+
+            return mean_mass(pt.types)
         if not pt.clumps:
             return sphere_mass(self.case.material.density, pt.radius)
         return float(self.grain.mass)
 
     @property
     def max_radius(self) -> float:
-        """Largest member sphere radius of the grain, m (a sphere's own radius)."""
+        """Largest member sphere radius of the grain, m (a sphere's; of several, the largest)."""
+        if self.case.particles.types:
+            return float(self.case.particles.radius)
         return float(np.max(self.grain.radii))
 
 
@@ -95,7 +103,13 @@ def resolve(case, *, timestep: float | None = None, check_limit: bool = True) ->
         return replace(case, step=step)
     check_buildable(case)
     pt = case.particles
-    grain = pt.grain if pt.clumps else shapes.sphere(pt.radius, case.material.density)
+    if pt.types:  # the mean grain: the sphere of the mean volume, at the bed's density
+        from dem.scene.sizes import mean_volume
+
+        radius = (3.0 * mean_volume(pt.types) / (4.0 * math.pi)) ** (1.0 / 3.0)
+        grain = shapes.sphere(radius, case.material.density)
+    else:
+        grain = pt.grain if pt.clumps else shapes.sphere(pt.radius, case.material.density)
     law = ContactLaw.from_case(case)
     step = timestep_for(case, timestep=timestep, check_limit=check_limit, law=law)
     return Scene(case=case, grain=grain, law=law, step=step, trough=Trough.from_case(case))

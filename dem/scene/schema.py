@@ -34,6 +34,15 @@ DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
 #: Engines a run can step on (``run.device``): numba on the CPU, or numba.cuda on a GPU
 #: (:mod:`dem.engine.device` says what the GPU engine refuses).
 DEVICES = ("cpu", "cuda")
+#: Size distributions of a sphere grain (``particles.radius_distribution``, and each
+#: ``[[particles.types]]`` table's): one radius, uniform in [radius_min, radius_max], a normal
+#: or a lognormal truncated to [radius_min, radius_max], or a discrete list of radii
+#: (:mod:`dem.scene.sizes`).
+RADIUS_DISTRIBUTIONS = ("none", "uniform", "normal", "lognormal", "discrete")
+#: Most grain types of one case (``[[particles.types]]``).
+MAX_GRAIN_TYPES = 16
+#: Most radii of a discrete size distribution (``radii``).
+MAX_DISCRETE_RADII = 64
 #: Screw resolution when ``particles.max_bumpiness`` is omitted (:func:`dem.scene.shapes.screw`).
 DEFAULT_MAX_BUMPINESS = 0.25
 
@@ -117,6 +126,25 @@ PARTICLES = (
     _number("bed_height", None),
     _number("mass_per_area", None),
     _number("radius", owners=("sphere",)),
+    *(
+        # a sphere's size distribution (dem.scene.sizes); owned by the distributions that read
+        # them, and refused for screws and clumps through radius_distribution's owner
+        Key(
+            "radius_distribution",
+            "choice",
+            default="none",
+            choices=RADIUS_DISTRIBUTIONS,
+            owners=("sphere",),
+        ),
+        _number("radius_min", None, "radius", owners=("uniform", "normal", "lognormal")),
+        _number("radius_max", None, "radius", owners=("uniform", "normal", "lognormal")),
+        _number("radius_std", None, "radius", owners=("normal",)),
+        _number("radius_log_std", None, owners=("lognormal",)),
+        Key("radii", "numbers", "radius", default=None, owners=("discrete",)),
+        Key("radius_fractions", "numbers", "fraction", default=None, owners=("discrete",)),
+    ),
+    # several sphere grain types, [[particles.types]] (each table's keys: PARTICLE_TYPE)
+    Key("types", "tables", default=None, owners=("sphere",)),
     Key("rotation", "boolean", default=True),
     _number("length", owners=("screw",)),
     _number("shank_radius", quantity="radius", owners=("screw",)),
@@ -124,6 +152,17 @@ PARTICLES = (
     _number("mass", None, owners=("screw", "clump")),  # None: density times the volume
     Key("template", "path", owners=("clump",)),
     _number("max_bumpiness", DEFAULT_MAX_BUMPINESS, owners=("screw",)),
+)
+#: The keys of the size distribution, read from [particles] or from each grain type's table.
+SIZE_KEYS = ("radius", "radius_distribution", "radius_min", "radius_max", "radius_std",
+             "radius_log_std", "radii", "radius_fractions")  # fmt: skip
+#: One ``[[particles.types]]`` table: a sphere grain type with its share of the grains, its
+#: density and its size distribution (the size keys of [particles], same rows).
+PARTICLE_TYPE = (
+    Key("name", "name", default=None),  # None: "type1", "type2", ... in table order
+    _number("fraction"),  # by number of grains; the types' fractions sum to 1
+    _number("density", None),  # None: material.density
+    *(k for k in PARTICLES if k.name in SIZE_KEYS),
 )
 RUN = (
     _whole("settle_cycles", 10, auto=True),

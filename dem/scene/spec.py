@@ -228,6 +228,78 @@ class ContactSpec:
 
 
 @dataclass(frozen=True)
+class SizeSpec:
+    """The radius distribution of one sphere grain type (:mod:`dem.scene.sizes` draws it).
+
+    Attributes:
+        distribution: ``"none"`` (every grain of ``radius``), ``"uniform"`` (uniform in
+            [radius_min, radius_max]), ``"normal"`` (mean ``radius``, standard deviation
+            ``radius_std``), ``"lognormal"`` (median ``radius``: ln r normal with standard
+            deviation ``radius_log_std``), both truncated to [radius_min, radius_max], or
+            ``"discrete"`` (the ``radii`` with their ``radius_fractions``).
+        radius: m: the one radius, the normal's mean or the lognormal's median; else None.
+        radius_min, radius_max: The smallest and largest radius drawn, m (uniform, normal,
+            lognormal), else None.
+        radius_std: Standard deviation of the (untruncated) normal, m, else None.
+        radius_log_std: Standard deviation of ln r of the (untruncated) lognormal, else None.
+        radii: The radii of a discrete distribution, m, increasing; else empty.
+        radius_fractions: Their shares of the type's grains, by number (sum 1); else empty.
+
+    All fractions in dem are by number of grains (a LIGGGHTS deck converts them for its
+    mass-based distribution: :mod:`dem.io.liggghts.deck`).
+
+    """
+
+    distribution: str = "none"
+    radius: float | None = None
+    radius_min: float | None = None
+    radius_max: float | None = None
+    radius_std: float | None = None
+    radius_log_std: float | None = None
+    radii: tuple[float, ...] = ()
+    radius_fractions: tuple[float, ...] = ()
+
+    @property
+    def smallest(self) -> float:
+        """The smallest radius a grain of this distribution can have, m."""
+        if self.distribution == "none":
+            return self.radius
+        if self.distribution == "discrete":
+            return min(self.radii)
+        return self.radius_min
+
+    @property
+    def largest(self) -> float:
+        """The largest radius a grain of this distribution can have, m."""
+        if self.distribution == "none":
+            return self.radius
+        if self.distribution == "discrete":
+            return max(self.radii)
+        return self.radius_max
+
+
+@dataclass(frozen=True)
+class GrainType:
+    """One sphere grain type of a case with several (``[[particles.types]]``) or a distribution.
+
+    Attributes:
+        name: The type's name (``[[particles.types]]`` ``name``; ``"type1"``, ... by default).
+        fraction: Its share of the grains by number, in (0, 1]; the types' sum to 1.
+        density: rho of its grains, kg/m^3 (default ``material.density``).
+        size: Its radius distribution.
+
+    Every type shares the material's friction and restitution and the contact law; the pair
+    law takes R* and m* of each pair's own two spheres.
+
+    """
+
+    name: str
+    fraction: float
+    density: float
+    size: SizeSpec
+
+
+@dataclass(frozen=True)
 class ParticlesSpec:
     """The grains.
 
@@ -250,6 +322,10 @@ class ParticlesSpec:
             layers, m, kg/m^2; :mod:`dem.scene.depth`), else None; ``count`` is derived from it.
         grain: The :class:`dem.scene.shapes.Template` built at load (screw, clump), else None; not
             part of :meth:`Case.as_dict`.
+        types: Spheres of several types or sizes (``[[particles.types]]``, or a
+            ``radius_distribution`` in [particles], then one type): the types, else empty (one
+            size, ``radius``). With types, ``radius`` is the largest radius of any type (the
+            grains' reach: walls, skin, section) and ``count`` the grains of all types.
 
     """
 
@@ -267,6 +343,7 @@ class ParticlesSpec:
     bed_height: float | None = None
     mass_per_area: float | None = None
     grain: Any = field(default=None, repr=False, compare=False)
+    types: tuple[GrainType, ...] = ()
 
     @property
     def clumps(self) -> bool:

@@ -37,11 +37,14 @@ def timestep_limits(
     youngs_modulus: float = 0.0,
     poisson_ratio: float = 0.3,
     mass: float | None = None,
+    other: tuple[float, float] | None = None,
 ) -> tuple[float, float]:
     """Automatic time step and stability limit, s, for equal spheres.
 
     ``mass`` replaces the sphere's own mass (a clump member: the clump's effective mass at the
-    member, see :func:`timestep_for`).
+    member, see :func:`timestep_for`). ``other``: (mass kg, radius m) of the pair's other
+    sphere where it differs (spheres of several sizes): the pair contact takes m* = m m_2 /
+    (m + m_2) and R* = r r_2 / (r + r_2), as the pair kernel does.
 
     Stability: ``DEM_DT_STABILITY_FRACTION`` of the critical step 2/w0 (sqrt(1 + z^2) - z) of
     the stiffest single contact, normal (k_n) and tangential (k_t, times 7/2 with rotation on:
@@ -60,8 +63,11 @@ def timestep_limits(
     row = law.row
     wall = wall_params(law.params)  # the grain-wall law ([wall]); grain-grain is law.params
     contacts_list = [(mass, radius, wall)]
-    if pairs:
+    if pairs and other is None:
         contacts_list.append((0.5 * mass, 0.5 * radius, law.params))
+    elif pairs:
+        m2, r2 = other
+        contacts_list.append((mass * m2 / (mass + m2), radius * r2 / (radius + r2), law.params))
     limit = math.inf
     auto = math.inf
     for m_eff, r_eff, p in contacts_list:
@@ -91,6 +97,29 @@ def timestep_limits(
             * contact.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
         )
     return min(auto, limit), limit
+
+
+def _typed_limits(case, law: ContactLaw, impact_speed: float, grains: int) -> tuple[float, float]:
+    """Automatic step and stability limit of spheres of several types or sizes, s.
+
+    The hardest contacts are those of the smallest spheres: within one type both m* and R* of a
+    pair grow with either radius, and the critical step with them (linear: sqrt(m* / k_n);
+    Hertz at an impact: m*^(2/5) R*^(-1/5), which grows as r for m proportional to r^3). So each
+    type's smallest sphere (its density) is taken against a wall and against every type's
+    smallest sphere, each pair with its own m* and R*; the Rayleigh time of each is taken too.
+    """
+    pt = case.particles
+    small = sorted({(g.size.smallest, g.density) for g in pt.types})
+    auto, limit = math.inf, math.inf
+    for i, (radius, density) in enumerate(small):
+        for r2, rho2 in small[i:]:
+            a, b = timestep_limits(
+                law, radius, density, impact_speed, rotation=pt.rotation, pairs=grains > 1,
+                youngs_modulus=case.contact.youngs_modulus or 0.0,
+                poisson_ratio=case.contact.poisson_ratio, other=(sphere_mass(rho2, r2), r2),
+            )  # fmt: skip
+            auto, limit = min(auto, a), min(limit, b)
+    return auto, limit
 
 
 class Timestep(NamedTuple):
@@ -179,7 +208,9 @@ def timestep_for(
         hardest = _hardest_impact_text(case, impact_speed)
     if grains is None:
         grains = pt.count
-    if not pt.clumps:
+    if pt.types:
+        auto, limit = _typed_limits(case, law, impact_speed, grains)
+    elif not pt.clumps:
         sizes = [(pt.radius, None)]
         density = mat.density
     else:
@@ -188,15 +219,16 @@ def timestep_for(
         m_eff = pt.grain.contact_mass() if pt.rotation else pt.grain.mass
         sizes = [(float(r), m_eff) for r in np.unique(pt.grain.radii)]
         density = pt.grain.density
-    auto, limit = math.inf, math.inf
-    for radius, mass in sizes:
-        a, b = timestep_limits(
-            law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
-            pairs=grains > 1,
-            youngs_modulus=case.contact.youngs_modulus or 0.0,
-            poisson_ratio=case.contact.poisson_ratio, mass=mass,
-        )  # fmt: skip
-        auto, limit = min(auto, a), min(limit, b)
+    if not pt.types:
+        auto, limit = math.inf, math.inf
+        for radius, mass in sizes:
+            a, b = timestep_limits(
+                law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
+                pairs=grains > 1,
+                youngs_modulus=case.contact.youngs_modulus or 0.0,
+                poisson_ratio=case.contact.poisson_ratio, mass=mass,
+            )  # fmt: skip
+            auto, limit = min(auto, a), min(limit, b)
     period = 2.0 * math.pi / case.drive.omega
     auto = period / math.ceil(period / auto)
     user = timestep if timestep is not None else case.run.timestep

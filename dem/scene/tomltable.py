@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +26,7 @@ REQUIRED = object()
 #: Owner of a key that every shape and law reads.
 ALL = "all"
 _ROW = object()  # Table.read's default: the row's
+_NAME = re.compile(r"[A-Za-z0-9_-]{1,32}")
 
 
 @dataclass(frozen=True)
@@ -41,8 +43,11 @@ class Key:
     Attributes:
         name: Key name within its table (``angle``).
         kind: ``"number"`` (a float; an int is accepted), ``"whole"`` (an int), ``"boolean"``,
-            ``"choice"`` (a string of ``choices``) or ``"path"`` (a file relative to the case
-            directory, read as optional: a reader that needs one says why it is missing).
+            ``"choice"`` (a string of ``choices``), ``"path"`` (a file relative to the case
+            directory, read as optional: a reader that needs one says why it is missing),
+            ``"numbers"`` (a non-empty array of numbers, each in ``quantity``'s range),
+            ``"tables"`` (a non-empty array of tables, ``[[table.key]]``, read by the table's
+            reader) or ``"name"`` (a short name: letters, digits, ``_`` and ``-``).
         quantity: Row of :data:`dem.quantities.QUANTITIES` giving the range of a number or
             whole number (None for the other kinds).
         default: The value when the key is absent: :data:`REQUIRED`, a value (None: unset), or
@@ -169,6 +174,39 @@ class Table:
             raise self.error(key, value, allowed)
         return value
 
+    def numbers(self, key: str, quantity: str, default: Any = REQUIRED) -> tuple[float, ...]:
+        """Read a non-empty array of numbers, each checked against ``QUANTITIES[quantity]``."""
+        present, value = self._get(key, default)
+        if not present:
+            return value
+        q = QUANTITIES[quantity]
+        if not isinstance(value, list) or not value:
+            raise self.error(key, value, f"a non-empty array of numbers, each {q.allowed}")
+        for item in value:
+            if isinstance(item, bool) or not isinstance(item, int | float):
+                raise self.error(key, value, f"an array of numbers ({item!r} is not one)")
+            item = float(item)
+            if not math.isfinite(item) or not q.accepts(item):
+                raise self.error(key, value, f"an array of numbers, each {q.allowed} "
+                                 f"({item!r} is not)")  # fmt: skip
+        return tuple(float(v) for v in value)
+
+    def tables(self, key: str, default: Any = REQUIRED) -> tuple[dict, ...]:
+        """Read a non-empty array of tables (``[[name.key]]`` in TOML), each a dict."""
+        present, value = self._get(key, default)
+        if not present:
+            return value
+        if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
+            raise self.error(key, value, f"an array of tables, written [[{self.name}.{key}]]")
+        return tuple(value)
+
+    def name_text(self, key: str, default: Any = REQUIRED) -> str:
+        """Read a short name: 1 to 32 letters, digits, ``_`` or ``-``."""
+        present, value = self._get(key, default)
+        if present and (not isinstance(value, str) or not _NAME.fullmatch(value)):
+            raise self.error(key, value, "a name of 1 to 32 letters, digits, '_' or '-'")
+        return value
+
     def boolean(self, key: str, default: Any = REQUIRED) -> bool:
         """Read a TOML boolean (true/false)."""
         present, value = self._get(key, default)
@@ -227,6 +265,12 @@ class Table:
             return self.boolean(name, default)
         if key.kind == "choice":
             return self.choice(name, key.choices, default)
+        if key.kind == "numbers":
+            return self.numbers(name, key.quantity, default)
+        if key.kind == "tables":
+            return self.tables(name, default)
+        if key.kind == "name":
+            return self.name_text(name, default)
         return self.path(name)
 
     def refuse_foreign(self, chosen: tuple[str, ...], why: Callable[[str], str]) -> None:

@@ -251,14 +251,23 @@ def test_the_schema_is_consistent_with_the_quantities_and_the_law_registry():
     owners are shapes or laws, and the contact owners refuse exactly the registry's foreign keys."""
     from dem.physics import laws
     from dem.quantities import QUANTITIES
-    from dem.scene.schema import CONTACT, CONTACT_MODELS, SCHEMA, SHAPES, TANGENTIAL_CONVENTIONS
+    from dem.scene.schema import (
+        CONTACT,
+        CONTACT_MODELS,
+        PARTICLE_TYPE,
+        RADIUS_DISTRIBUTIONS,
+        SCHEMA,
+        SHAPES,
+        TANGENTIAL_CONVENTIONS,
+    )
     from dem.scene.tomltable import ALL
 
-    selectors = {ALL, *SHAPES, *CONTACT_MODELS, *TANGENTIAL_CONVENTIONS}
-    for table, keys in SCHEMA.items():
+    selectors = {ALL, *SHAPES, *CONTACT_MODELS, *TANGENTIAL_CONVENTIONS, *RADIUS_DISTRIBUTIONS}
+    for table, keys in {**SCHEMA, "particles.types": PARTICLE_TYPE}.items():
         assert len({k.name for k in keys}) == len(keys), table
         for k in keys:
-            assert (k.quantity in QUANTITIES) == k.numeric, f"{table}.{k.name}"
+            ranged = k.numeric or k.kind == "numbers"
+            assert (k.quantity in QUANTITIES) == ranged, f"{table}.{k.name}"
             if k.kind == "choice":
                 assert k.default in k.choices, f"{table}.{k.name}"
             if k.numeric and isinstance(k.default, int | float):

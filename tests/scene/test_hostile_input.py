@@ -43,6 +43,17 @@ TEMPLATE = "0.0 0.0 0.0 0.002\n0.002 0.0 0.0 0.002\n"
 LINEAR_CASE = SMALL_CASE.replace(
     'model = "hertz_mindlin"\nyoungs_modulus = 5.0e7', 'model = "linear"\nstiffness = 2000.0'
 )
+#: Spheres of a size distribution (the owners of its keys).
+_SIZES = {
+    "uniform": "radius_min = 0.0018\nradius_max = 0.0022",
+    "normal": "radius = 0.002\nradius_std = 0.0002\nradius_min = 0.0016\nradius_max = 0.0024",
+    "lognormal": "radius = 0.002\nradius_log_std = 0.1\nradius_min = 0.0016\nradius_max = 0.0024",
+    "discrete": "radii = [0.0018, 0.0022]\nradius_fractions = [0.5, 0.5]",
+}
+SIZE_CASES = {
+    name: SMALL_CASE.replace("radius = 0.002", f'radius_distribution = "{name}"\n{keys}')
+    for name, keys in _SIZES.items()
+}
 #: A valid case in which each owner's keys are read ("all": every case).
 BASES = {
     ALL: SMALL_CASE,
@@ -53,6 +64,7 @@ BASES = {
     "linear": LINEAR_CASE,
     "coulomb": SMALL_CASE.replace("[contact]", '[contact]\ntangential = "coulomb"'),
     "liggghts+linear": LINEAR_CASE.replace("[contact]", '[contact]\ntangential = "liggghts"'),
+    **SIZE_CASES,
 }
 #: Keys read only beside others: the keys set with them (drive.amplitude removed: exactly one
 #: of it and throw_number; the second component's angle and phase need its amplitude).
@@ -122,6 +134,7 @@ def test_every_owner_has_a_base_case_that_loads_and_reads_its_keys(tmp_path):
     for owner in BASES:
         case = load_case(_case(tmp_path / owner, "run.seed", "3", owner))
         chosen = {case.particles.shape, case.contact.model, case.contact.tangential}
+        chosen |= {t.size.distribution for t in case.particles.types}
         assert owner == ALL or set(owner.split("+")) <= chosen, owner
     drive = load_case(_case(tmp_path / "second", "drive.second_phase", "30.0", ALL)).drive
     assert (drive.second_amplitude, drive.second_angle, drive.second_phase) == (2e-4, 60.0, 30.0)

@@ -89,9 +89,37 @@ def trough_pan(scene: Scene) -> Pan | None:
     return pan_planes(load_mesh(mesh, length=scene.case.trough.length).tri, str(mesh))
 
 
+def _velocity_lines(case) -> list[str]:
+    """The spheres' mean x-velocity ``c_vxm``, mass-weighted, and one group per grain type.
+
+    Spheres of several types or sizes (``particles.types``) have unequal masses: the mean of
+    m vx / m_mean over the atoms is the mass-weighted mean (m_mean = mass(all) / count(all));
+    each grain type is its atom type (:func:`write_data`) and gets a group named after it.
+    """
+    types = case.particles.types
+    if not types:
+        return [
+            "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
+            "compute vxm all reduce ave vx",
+        ]
+    return [
+        "# grain types as atom types (dem's particles.types, in order): "
+        + ", ".join(f"{k + 1} {t.name}" for k, t in enumerate(types)),
+        *(f"group {t.name} type {k + 1}" for k, t in enumerate(types)),
+        "# the grains' mass-weighted mean x-velocity (unequal masses), every step",
+        "variable mmean equal (mass(all)+1e-30)/(count(all)+1e-30)",
+        "variable wvx atom mass*vx/v_mmean",
+        "compute vxm all reduce ave v_wvx",
+    ]
+
+
 def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np.ndarray,
-               radius: np.ndarray, mass: np.ndarray, body=None) -> Path:  # fmt: skip
+               radius: np.ndarray, mass: np.ndarray, body=None, kind=None) -> Path:  # fmt: skip
     """Write the spheres as a LAMMPS data file (atom_style sphere): the box and every atom.
+
+    Each atom carries its own diameter and density, so a fill of several sizes is written as
+    it is; ``kind`` (n,) the grain type of each sphere from 0 (``particles.types``) makes it
+    atom type ``kind + 1`` (None: all type 1).
 
     ``body`` (n,) numbers each clump member's body from 0 (a ``Molecules`` section, read by
     ``fix property/atom mol``); a member's x is its body's wrapped centre plus its offset, so
@@ -109,7 +137,7 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
         f"dem {__version__}: the settled fill of case {scene.case.name} (SI units, trough frame)",
         "",
         f"{n} atoms",
-        "1 atom types",
+        f"{1 if kind is None else len(scene.case.particles.types)} atom types",
         "",
         f"0.0 {float(t.length)!r} xlo xhi",
         f"{float(y_lo) - r_max!r} {float(y_hi) + r_max!r} ylo yhi",
@@ -124,7 +152,8 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
         return " ".join(repr(float(u)) for u in values)
 
     for i in range(n):
-        lines.append(f"{i + 1} 1 {row(2.0 * radius[i], density[i], xw[i], x[i, 1], x[i, 2])}")
+        t = 1 if kind is None else int(kind[i]) + 1
+        lines.append(f"{i + 1} {t} {row(2.0 * radius[i], density[i], xw[i], x[i, 1], x[i, 2])}")
     lines += ["", "Velocities", ""]
     for i in range(n):
         lines.append(f"{i + 1} {row(*v[i], *omega[i])}")
@@ -265,8 +294,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
             else "fix integrate all nve  # particles.rotation = false: the spins stay zero",
             *([] if own else gravity_block(gx0, gz0)),
             "",
-            "# the grains' mean x-velocity (equal masses: the mass-weighted mean), every step",
-            "compute vxm all reduce ave vx",
+            *_velocity_lines(case),
         ]
     if own:
         lines += ["", *pour.fill_lines(scene, timestep, group, gx0, gz0, geometry), ""]

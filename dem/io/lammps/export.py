@@ -84,7 +84,8 @@ def export_lammps(plan: ExportPlan, out_dir, *, overwrite: bool = False, progres
     out.mkdir(parents=True, exist_ok=True)
     b = sim.bodies
     if b is None:
-        write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, s.mass)
+        write_data(out / DATA_NAME, plan.scene, s.x, s.v, s.omega, s.radius, s.mass,
+                   kind=sim.grain_type)  # fmt: skip
     else:
         # the member spheres' own masses only set their density: fix rigid/small takes each
         # body's mass, centre and inertia from the bodies file

@@ -122,6 +122,13 @@ def refuse_unpourable(scene: Scene) -> None:
     fix pour keeps a grain's centre ``molecule_radius`` (a sphere's radius) from each side wall.
     """
     case = scene.case
+    if case.particles.types:
+        key = "types" if len(case.particles.types) > 1 else "radius_distribution"
+        raise InputError(
+            f"particles.{key}", f"{len(case.particles.types)} grain types",
+            "one sphere size for --fill lammps (fix pour takes one diameter here; --fill dem "
+            "exports dem's own fill, every sphere with its diameter and density)",
+        )  # fmt: skip
     if case.trough.mesh is not None:
         raise InputError(
             "trough.mesh", Path(case.trough.mesh).name,

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 
+from dem.errors import InputError
 from dem.io.liggghts.text import fmt
 from dem.kernels.contact import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
 from dem.physics.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
@@ -104,6 +105,13 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
         model = NORMAL_LAWS[contact.model].liggghts
         settings = f"limitForce {limit} tangential_damping on"
     else:
+        if case.particles.types:
+            raise InputError(
+                "contact.model", contact.model, "'hertz_mindlin' for a LIGGGHTS deck of grain "
+                "types or sizes (particles.types): the linear deck's damping is one absolute "
+                "gamma for every pair, dem's 2 zeta sqrt(k m*) takes each pair's m*",
+                source=str(case.source),
+            )  # fmt: skip
         # the scene's law, or the law of the case switched to "liggghts" above (its own)
         law = scene.law if case is scene.case else ContactLaw.from_case(case)
         kn = contact.stiffness

@@ -73,6 +73,9 @@ class Grains(NamedTuple):
         template: The ``particletemplate`` lines (and their comments).
         integrator: The integrator fix.
         velocity: The computes whose ``c_vxm`` is the grains' mean x-velocity, m/s.
+        distribution: The templates of ``fix pdd`` with their weights (one: ``pts``, 1).
+        style: The ``fix pdd`` style: ``particledistribution/discrete`` (mass-based, one
+            template) or ``particledistribution/discrete/numberbased`` (dem's number fractions).
 
     """
 
@@ -85,6 +88,8 @@ class Grains(NamedTuple):
     template: list[str]
     integrator: list[str]
     velocity: list[str]
+    distribution: tuple = (("pts", 1.0),)
+    style: str = "particledistribution/discrete"
 
 
 class Schedule(NamedTuple):
@@ -222,6 +227,8 @@ def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
     case = scene.case
     p = case.particles
     n = p.count
+    if p.types:
+        return _types_block(scene, seed)
     if not p.clumps:
         grain_volume = 4.0 / 3.0 * math.pi * p.radius**3
         return Grains(
@@ -252,6 +259,66 @@ def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
         ["fix integr all multisphere"],
         ["compute vcm all multisphere property vcm", "compute vxm all reduce ave c_vcm[1]"],
     )  # fmt: skip
+
+
+def _types_block(scene: Scene, seed: int) -> Grains:
+    """Spheres of several types or sizes: one ``particletemplate/sphere`` per type and radius.
+
+    LIGGGHTS 3.8's template takes one radius, so a continuous size distribution is cut into
+    :data:`dem.scene.sizes.DECK_BINS` bins of equal number, each at the radius of its mean
+    volume (:func:`dem.scene.sizes.bins`: the bed's mean volume and mass are kept); a discrete
+    one is written as it is. The weights are dem's fractions by number (type fraction times
+    bin fraction), so ``fix pdd`` is ``particledistribution/discrete/numberbased``. Every
+    template is atom type 1: the types share the material and the contact law, and LIGGGHTS's
+    Hertz law takes each pair's R* and m* from its atoms. With unequal masses the mean
+    x-velocity is weighted by mass: the mean of m vx / m_mean over the atoms (1e-30 keeps
+    m_mean finite before the insertion; LIGGGHTS 3.8's formulas have no max()).
+    """
+    from dem.scene.sizes import DECK_BINS, bins, mean_mass, mean_volume
+
+    case = scene.case
+    p = case.particles
+    template = [
+        f"# grain types (dem's particles.types; fractions by number; a continuous size "
+        f"distribution as {DECK_BINS} equal-number bins, each at the radius of its mean volume)"
+    ]
+    weights, radii, s = [], [], seed
+    for k, t in enumerate(p.types):
+        size = t.size
+        what = _size_words(size)
+        template.append(f"# type {k + 1} {t.name}: {t.fraction:.6g} of the grains by number, "
+                        f"density {t.density:g} kg/m^3, {what}")  # fmt: skip
+        for b, (r, f) in enumerate(zip(*bins(size), strict=True)):
+            name = f"pts{k + 1}_{b + 1}"
+            template.append(
+                f"fix {name} all particletemplate/sphere {s} atom_type 1 "
+                f"density constant {fmt(t.density)} radius constant {fmt(r)}"
+            )
+            weights.append((name, t.fraction * f))
+            radii.append(r)
+            s = prime_at_least(s + 1)
+    return Grains(
+        max(radii), min(radii), mean_volume(p.types), mean_mass(p.types), 1,
+        f"{p.count} spheres of {len(p.types)} types, r = {min(radii):.4g}-{max(radii):.4g} m",
+        template, [f"fix integr all {'nve/sphere' if p.rotation else 'nve'}"],
+        ["# the mass-weighted mean x-velocity (unequal masses)",
+         "variable mmean equal (mass(all)+1e-30)/(count(all)+1e-30)",
+         "variable wvx atom mass*vx/v_mmean", "compute vxm all reduce ave v_wvx"],
+        tuple(weights), "particledistribution/discrete/numberbased",
+    )  # fmt: skip
+
+
+def _size_words(size) -> str:
+    """A size distribution in words, for the deck's comments."""
+    bounds = f"in [{size.radius_min}, {size.radius_max}] m"
+    return {
+        "none": f"radius {size.radius} m",
+        "uniform": f"uniform radius {bounds}",
+        "normal": f"normal radius, mean {size.radius} m, sd {size.radius_std} m, {bounds}",
+        "lognormal": f"lognormal radius, median {size.radius} m, sd of ln r "
+        f"{size.radius_log_std}, {bounds}",
+        "discrete": "discrete radii",
+    }[size.distribution]
 
 
 def _schedule(
@@ -357,7 +424,8 @@ def _insertion_block(
     fill_x, fill_y, fill_z0 = space.fill_x, space.fill_y, space.fill_z0
     return [
         *grains.template,
-        f"fix pdd all particledistribution/discrete {s_dist} 1 pts 1.0",
+        f"fix pdd all {grains.style} {s_dist} {len(grains.distribution)} "
+        + " ".join(f"{name} {fmt(w)}" for name, w in grains.distribution),
         f"region fill block {fmt(fill_x[0])} {fmt(fill_x[1])} "
         f"{fmt(fill_y[0])} {fmt(fill_y[1])} "
         f"{fmt(fill_z0)} {fmt(fill_z0 + space.fill_height)} units box",
