@@ -135,6 +135,9 @@ class Simulation(InstabilityChecks):
         self.grain_id = np.arange(self.n_grains, dtype=np.int64)
         #: Type index of each grain (``particles.types``), int64 (n_grains,); None: one type.
         self.grain_type: np.ndarray | None = None
+        #: With grain types: each sphere's x at the last cycle's edge, m (its type's velocity over
+        #: the cycle is the displacement since); None before the drive starts or for one type.
+        self.type_mark: np.ndarray | None = None
         self.feeder = feeder
         if feeder is not None:
             feeder.next_id = self.n_grains

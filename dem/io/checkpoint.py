@@ -131,7 +131,6 @@ LOOP_OPTIONAL = {
     "frames": (bool,),
     "lab_frame": (bool,),
     "extended_cycles": (int,),
-    "type_mark": (list,),
     "per_cycle_types": (list,),
 }
 _FRAME_FILE = re.compile(r"[A-Za-z0-9_.-]+\.vtp")
@@ -155,6 +154,8 @@ def state_dict(sim) -> dict[str, np.ndarray]:
     state["sim.stats"] = sim.stats
     state["sim.dt"] = np.array(sim.dt)
     state["sim.grain_id"] = sim.grain_id
+    if getattr(sim, "type_mark", None) is not None:
+        state["sim.type_mark"] = sim.type_mark
     return state
 
 
@@ -194,6 +195,8 @@ def load_state(sim, state: dict[str, np.ndarray]) -> None:
     sim.drive_on, sim.forces_valid = bool(drive_on), bool(forces_valid)
     sim.stats[:] = state["sim.stats"]
     sim.grain_id = np.ascontiguousarray(state["sim.grain_id"]).copy()
+    if "sim.type_mark" in state:
+        sim.type_mark = np.ascontiguousarray(state["sim.type_mark"], dtype=np.float64).copy()
 
 
 def _against(sim, state: dict[str, np.ndarray], n: int) -> None:
@@ -325,6 +328,10 @@ def validate(state: dict[str, np.ndarray]) -> None:
         if values == "no-nan" and np.isnan(array).any():
             raise CheckpointError(f"{key} holds NaN: numbers (inf before the first build)")
     _check_indices(state, n, bodies, clumps)
+    if "sim.type_mark" in state:  # grain types: x at the last cycle's edge
+        mark = _dtype_shape("sim.type_mark", state["sim.type_mark"], _F, (n,))
+        if not np.isfinite(mark).all():
+            raise CheckpointError("sim.type_mark holds non-finite values: finite numbers")
     if LOOP_KEY in state:
         try:
             loop = json.loads(str(state[LOOP_KEY]))

@@ -17,15 +17,13 @@ import math
 import warnings
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from dem import config
 from dem.physics import drive, measure
 
 #: Keys a checkpoint holds only once they have a value (older checkpoints lack some of them).
 _OPTIONAL = ("compile_wall_time_s", "fill_wall_time_s", "frames", "lab_frame", "settle_detected",
              "discharge_per_cycle", "hold_up_per_cycle", "feeder", "max_overlap",
-             "extended_cycles", "type_mark", "per_cycle_types")  # fmt: skip
+             "extended_cycles", "per_cycle_types")  # fmt: skip
 
 
 @dataclass
@@ -77,9 +75,8 @@ class Progress:
     max_overlap: dict | None = None
     #: Measured cycles added because the measured series was not steady (:func:`close_cycle`).
     extended_cycles: int | None = None
-    #: Grain types (``particles.types``): x of every grain at the last cycle's edge, m, and the
-    #: mass-weighted mean x-velocity of each type in each measured cycle, m/s.
-    type_mark: list | None = None
+    #: Grain types (``particles.types``): the mass-weighted mean x-velocity of each type in each
+    #: measured cycle, m/s (the cycle edge's positions are ``Simulation.type_mark``).
     per_cycle_types: list | None = None
     #: Keys of a checkpoint that no field above names, written back unchanged.
     extra: dict = field(default_factory=dict)
@@ -144,19 +141,20 @@ def _type_velocities(sim, case, progress: Progress, measured: bool) -> dict:
 
     From the grains' displacements since the last cycle's edge
     (:func:`dem.physics.measure.group_velocities`, over the steps the cycle took); the edge is
-    kept in ``progress`` (and so in a checkpoint). Returns results.h5's columns,
-    ``mean_velocity_<type>``; {} for one type.
+    ``sim.type_mark``, an array of the simulation (so a checkpoint's arrays, not its JSON
+    record, carry it: O(n) binary). Returns results.h5's columns, ``mean_velocity_<type>``; {}
+    for one type.
     """
     kind = sim.grain_type
-    if kind is None or progress.type_mark is None:
+    if kind is None or sim.type_mark is None:
         return {}
     types = case.particles.types
     x = sim.spheres.x[:, 0]
     velocities = measure.group_velocities(
-        np.asarray(progress.type_mark), x, sim.spheres.mass, kind, len(types),
+        sim.type_mark, x, sim.spheres.mass, kind, len(types),
         sim.stats[1] * sim.dt, sim.trough.length,
     )  # fmt: skip
-    progress.type_mark = x.tolist()
+    sim.type_mark = x.copy()
     if measured:
         if progress.per_cycle_types is None:
             progress.per_cycle_types = []

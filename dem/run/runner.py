@@ -196,7 +196,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
             lab_frame=bool(lab_frame),
         )
         if sim.grain_type is not None:  # each type's velocity: from the drive's start on
-            progress.type_mark = sim.spheres.x[:, 0].tolist()
+            sim.type_mark = sim.spheres.x[:, 0].copy()
     # the writers, called in this order on each trigger; the checkpoint last, after the others
     # have recorded their positions in the progress record
     writers: list[Writer] = []

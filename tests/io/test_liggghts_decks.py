@@ -48,7 +48,11 @@ def test_shipped_case_deck_runs_in_liggghts_with_dems_grains_and_mass(tmp_path, 
     assert run.loop_times[-1].atoms == case.particles.count * members
     [(count, mass)] = TOTAL_RE.findall(run.stdout)[:1]
     assert int(count) == case.particles.count
-    assert float(mass) == pytest.approx(case.particles.count * grain_mass(case), rel=1e-6)
+    # grain types: LIGGGHTS splits the count over the deck's size bins (a continuous
+    # distribution in 8 bins of its mean volume) by whole grains, so the mass is the expected
+    # one to the rounding of each bin's share (measured 1.8e-4 for sphere-mix)
+    rel = 1e-3 if case.particles.types else 1e-6
+    assert float(mass) == pytest.approx(case.particles.count * grain_mass(case), rel=rel)
 
 
 @pytest.mark.integration
