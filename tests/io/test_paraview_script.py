@@ -72,3 +72,44 @@ def test_pvpython_draws_each_sphere_with_its_diameter(tmp_path):
                          for i in range(3)])  # fmt: skip
     assert np.allclose(bounds, expected, atol=0.02 * radius.max())  # a faceted sphere
     assert lines["NAMES"] == ["spheres", "trough"]
+
+
+CONTACTS = """
+import sys
+sys.path.insert(0, {folder!r})
+import open_run
+p = open_run.pipeline({out!r})
+p["forces"].UpdatePipeline(p["times"][p["frame"]])
+print("CONTACTS", p["contacts"].GetDataInformation().GetNumberOfPoints())
+print("BOUNDS", *p["forces"].GetDataInformation().GetBounds())
+print("NAMES", *sorted(p["names"].values()))
+"""
+
+
+@pytest.mark.integration
+@pytest.mark.skipif(shutil.which("pvpython") is None, reason="ParaView's pvpython not on PATH")
+def test_pvpython_draws_each_contact_force_as_an_arrow_of_its_size(tmp_path):
+    """A frame with contacts (output.contacts): one arrow per contact, along its normal force,
+    the largest 3 r long: here a floor contact pushing up with 2 N and a pair with 1 N."""
+    pos = np.array([[0.05, 0.0, 0.002], [0.05, 0.0, 0.006]])
+    radius = np.full(2, 0.002)
+    snap = {"kind": np.array([1, 0]), "i": np.array([0, 1]), "j": np.array([-1, 0]),
+            "point": np.array([[0.05, 0.0, 0.0], [0.05, 0.0, 0.004]]),
+            "normal": np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]),
+            "normal_force": np.array([2.0, 1.0]), "tangential_force": np.zeros((2, 3)),
+            "overlap": np.array([1e-6, 1e-6])}  # fmt: skip
+    w = VTKSeriesWriter(tmp_path / "out", 0.1, 0.04, 0.0)
+    w.write_frame(0.0, pos, radius, np.zeros((2, 3)), np.arange(2), np.arange(2),
+                  np.array([2, 1]), contacts=snap)  # fmt: skip
+    w.close()
+    script = tmp_path / "check.py"
+    script.write_text(
+        CONTACTS.format(folder=str(paraview_script().parent), out=str(tmp_path / "out"))
+    )
+    done = subprocess.run(["pvpython", str(script)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = {line.split()[0]: line.split()[1:] for line in done.stdout.splitlines() if line}
+    assert lines["CONTACTS"] == ["2"] and lines["NAMES"] == ["contacts", "spheres", "trough"]
+    bounds = np.array([float(v) for v in lines["BOUNDS"]])
+    # the floor's arrow from z = 0 up 3 r = 6 mm, the pair's from 4 mm up 3 mm
+    assert bounds[4] == pytest.approx(0.0, abs=1e-4) and bounds[5] == pytest.approx(0.007, abs=2e-4)

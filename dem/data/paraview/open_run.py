@@ -2,6 +2,7 @@
 
     pvpython open_run.py OUT_DIR                       # a window (ParaView's own Python)
     pvpython open_run.py OUT_DIR --screenshot run.png  # and a picture of the last frame
+    pvpython open_run.py OUT_DIR --contacts            # the contact forces (output.contacts)
     paraview --script=open_run.py                      # the GUI (asks nothing: set DEM_OUT)
 
 In ParaView's GUI (View > Python Shell): ``Run Script`` with the environment variable DEM_OUT
@@ -21,6 +22,10 @@ What it does, on OUT_DIR/particles.pvd (the time series ``dem run`` writes; dem.
 - the ``trough`` block as semi-transparent grey walls;
 - for clumps (screws) the ``grains`` block as arrows along each grain's long axis from its
   centre of mass (hidden at first: tick its eye in the Pipeline Browser);
+- with ``[output] contacts = true`` the ``contacts`` block as arrows at each contact, along its
+  normal force on sphere i and as long as that force (the longest 3 r), coloured by the normal
+  force in N: the force chains, and the floor's load under the bed. Hidden at first; with
+  ``--contacts`` shown, the spheres made translucent;
 - the animation set to the run's time steps, at the last frame; the colour range that of the
   frame shown (Rescale over all time steps in the GUI for a fixed one).
 
@@ -95,7 +100,27 @@ def pipeline(out_dir: str, frame: int = -1) -> dict:
     glyph.GlyphType.PhiResolution = 14
     out = {"pvd": pvd, "names": names, "reader": reader, "times": times, "frame": k,
            "spheres": spheres, "trough": trough, "glyph": glyph, "arrows": None}  # fmt: skip
-    if 2 in names:  # clumps: the grains' long axes
+    parts = {name: q for q, name in names.items()}
+    if "contacts" in parts:  # output.contacts: one arrow per contact, its normal force
+        q = parts["contacts"]
+        contacts = ps.ExtractBlock(registrationName="contacts", Input=reader,
+                                   Selectors=["/Root/contacts"])  # fmt: skip
+        contacts.UpdatePipeline(times[k])
+        forces = ps.Glyph(registrationName="contact forces", Input=contacts, GlyphType="Arrow")
+        forces.OrientationArray = ["POINTS", "normal_force_vector"]
+        forces.ScaleArray = ["POINTS", "normal_force"]
+        r = (
+            spheres.PointData["radius"].GetRange()[1]
+            if "radius" in spheres.PointData.keys()
+            else 0.002
+        )
+        largest = max(abs(v) for v in contacts.PointData["normal_force"].GetRange()) or 1.0
+        forces.ScaleFactor = 3.0 * r / largest
+        forces.GlyphMode = "All Points"
+        forces.GlyphType.TipRadius = 0.18
+        forces.GlyphType.ShaftRadius = 0.07
+        out["contacts"], out["forces"], out["contacts_part"] = contacts, forces, q
+    if 2 in names and names[2] == "grains":  # clumps: the grains' long axes
         grains = ps.ExtractBlock(registrationName=names[2], Input=reader,
                                  Selectors=[f"/Root/{names[2]}"])  # fmt: skip
         arrows = ps.Glyph(registrationName="grain axes", Input=grains, GlyphType="Arrow")
@@ -110,11 +135,12 @@ def pipeline(out_dir: str, frame: int = -1) -> dict:
 
 
 def open_run(out_dir: str, *, screenshot: str | None = None, frame: int = -1,
-             size: tuple[int, int] = (1400, 800)):  # fmt: skip
+             size: tuple[int, int] = (1400, 800), contacts: bool = False):  # fmt: skip
     """Build the pipeline for ``out_dir`` and show it in the active view; returns the view.
 
     ``frame``: the time step shown (negative counts from the end). ``screenshot``: a PNG of
-    ``size`` pixels written of that frame.
+    ``size`` pixels written of that frame. ``contacts``: show the contact forces (a run with
+    ``output.contacts``) and make the spheres translucent.
     """
     from paraview import simple as ps
 
@@ -148,6 +174,29 @@ def open_run(out_dir: str, *, screenshot: str | None = None, frame: int = -1,
     walls.Opacity = 0.3
     if p["arrows"] is not None:
         ps.Hide(p["arrows"], view)  # in the Pipeline Browser, shown with a click
+    if contacts and "forces" not in p:
+        raise ValueError(f"open_run: {out_dir} has no contacts block: run the case with "
+                         "[output] contacts = true (and frames)")  # fmt: skip
+    if "forces" in p:
+        arrows = ps.Show(p["forces"], view)
+        ps.ColorBy(arrows, ("POINTS", "normal_force"))
+        force_lut = ps.GetColorTransferFunction("normal_force")
+        force_lut.ApplyPreset("Inferno (matplotlib)", True)
+        arrows.RescaleTransferFunctionToDataRange(False, True)
+        if contacts:
+            arrows.SetScalarBarVisibility(view, True)
+            force_bar = ps.GetScalarBar(force_lut, view)
+            force_bar.Title = "normal force (N)"
+            force_bar.ComponentTitle = ""
+            force_bar.WindowLocation = "Any Location"
+            force_bar.Position = [0.89, 0.55]
+            force_bar.ScalarBarLength = 0.33
+            ps.ColorBy(shown, None)  # the spheres as grey ghosts, so the forces show
+            bar.Visibility = 0
+            shown.AmbientColor = shown.DiffuseColor = [0.75, 0.75, 0.78]
+            shown.Opacity = 0.12
+        else:
+            ps.Hide(p["forces"], view)  # in the Pipeline Browser, shown with a click
     ps.SetActiveSource(p["glyph"])
 
     view.OrientationAxesVisibility = 1
@@ -183,6 +232,8 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--screenshot", metavar="PNG", help="write a picture of the frame shown")
     ap.add_argument("--frame", type=int, default=-1, help="time step shown (default -1: last)")
     ap.add_argument("--size", type=int, nargs=2, default=(1400, 800), metavar=("W", "H"))
+    ap.add_argument("--contacts", action="store_true",
+                    help="show the contact forces (output.contacts = true)")  # fmt: skip
     ap.add_argument("--no-window", action="store_true",
                     help="do not keep a window open (pvpython): with --screenshot")  # fmt: skip
     args = ap.parse_args(argv)
@@ -191,7 +242,7 @@ def main(argv: list[str]) -> int:
               " or in the Python shell open_run('OUT_DIR')", file=sys.stderr)  # fmt: skip
         return 2
     view = open_run(args.out_dir, screenshot=args.screenshot, frame=args.frame,
-                    size=tuple(args.size))  # fmt: skip
+                    size=tuple(args.size), contacts=args.contacts)  # fmt: skip
     if not args.no_window and not args.screenshot:
         from paraview import simple as ps
 
