@@ -243,6 +243,13 @@ def bulk_optimum(
         raise InputError("--set", over, f"a key other than the one searched (--over {over})")
     origins = dict.fromkeys(base, "--set")
     case = load_case(case_dir, base, origins)
+    measured = cycles if cycles is not None else case.run.cycles
+    if measured < 2 and case.run.target_error is None:
+        key, value = ("--cycles", cycles) if cycles is not None else ("run.cycles", measured)
+        raise InputError(
+            key, value, "at least 2 measured cycles: the search weighs each run's velocity by "
+            "its error bar, which one cycle does not give",
+        )  # fmt: skip
     held = base | _held(case, over, hold)
     for x in (lo, hi):  # the bounds themselves must make valid cases
         try:

@@ -9,7 +9,7 @@ from small_case import SMALL_CASE, write_case
 
 from dem.cli import main
 from dem.errors import InputError
-from dem.studies.optimum import maximize_noisy, replot
+from dem.studies.optimum import bulk_optimum, maximize_noisy, replot
 
 
 def noisy(peak: float, width: float, noise: float, seed: int):
@@ -69,6 +69,19 @@ def test_bad_bounds_are_refused():
     evaluate, _ = noisy(30.0, 10.0, 0.0, 0)
     with pytest.raises(InputError):
         maximize_noisy(evaluate, 60.0, 10.0, tolerance=1.0)
+
+
+def test_an_optimum_of_one_measured_cycle_is_refused_before_any_run(tmp_path):
+    """One measured cycle gives no error bar to weigh the runs by: the search ended in a
+    ValueError from an empty array; now the key is named, before any run or folder."""
+    case = write_case(tmp_path / "case", SMALL_CASE.replace("cycles = 6", "cycles = 1"))
+    with pytest.raises(InputError, match=r"run\.cycles = 1.*at least 2 measured cycles"):
+        bulk_optimum(case, "drive.angle", "amplitude", tmp_path / "opt", progress=False)
+    case = write_case(tmp_path / "case2", SMALL_CASE)
+    with pytest.raises(InputError, match=r"--cycles = 1.*at least 2 measured cycles"):
+        bulk_optimum(case, "drive.angle", "amplitude", tmp_path / "opt", cycles=1,
+                     progress=False)  # fmt: skip
+    assert not (tmp_path / "opt").exists()
 
 
 @pytest.mark.integration
