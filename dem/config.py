@@ -127,6 +127,15 @@ DEM_MAX_SPEED_FACTOR = 20.0
 DEM_SETTLE_SPEED_FRACTION = 0.01
 #: Settling gives up after this many seconds of simulated time.
 DEM_SETTLE_MAX_TIME = 5.0
+#: Simulation.settle: a fill whose rms speed, after DEM_SETTLE_STEADY_AFTER s, has stayed within
+#: the relative spread DEM_SETTLE_STEADY_SPREAD over the last DEM_SETTLE_STEADY_WINDOW s, below
+#: DEM_SETTLE_STEADY_FACTOR times the rest threshold, is settled: grains rolling on the floor of
+#: a sparse bed, which nothing stops (measured: 20 screws of screw-trough, one rolling at 8 mm/s,
+#: rms 0.0018 m/s against the threshold 0.0014 for 2.8 s; 12 screws never reached rest in 5 s).
+DEM_SETTLE_STEADY_AFTER = 1.0
+DEM_SETTLE_STEADY_WINDOW = 0.25
+DEM_SETTLE_STEADY_SPREAD = 0.05
+DEM_SETTLE_STEADY_FACTOR = 10.0
 #: Random sequential placement: tries per sphere before the fill box is made taller.
 DEM_FILL_TRIES = 200
 #: Fill box: initial height as a multiple of the height of a dense bed (packing fraction 0.6).

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numba
 import numpy as np
@@ -477,6 +478,13 @@ class Simulation(InstabilityChecks):
                progress=None) -> float:  # fmt: skip
         """Run with the drive off until the rms speed < DEM_SETTLE_SPEED_FRACTION sqrt(g r).
 
+        A sparse bed may never get there: a grain rolling on the floor (a sphere, or a screw
+        rolling round its head) keeps its speed, with nothing to stop it. After
+        ``DEM_SETTLE_STEADY_AFTER`` s a fill whose rms speed has stayed within
+        ``DEM_SETTLE_STEADY_SPREAD`` over the last ``DEM_SETTLE_STEADY_WINDOW`` s, below
+        ``DEM_SETTLE_STEADY_FACTOR`` times the threshold, is taken as settled too, with a
+        warning that says so (a bed that comes to rest before is untouched, bit for bit).
+
         Returns the simulated settling time, s; raises SimulationError after ``max_time``.
         ``progress(elapsed_s, rms_speed, threshold, done)`` is called after every chunk.
         """
@@ -485,13 +493,34 @@ class Simulation(InstabilityChecks):
         threshold = rest_speed(self.spheres.radius)
         chunk = max(1, int(round(chunk_time / self.dt)))
         start = self.time
+        recent: list[tuple[float, float]] = []
         while self.time - start < max_time:
             self.run(chunk)
             rms = self.rms_speed()
+            elapsed = self.time - start
+            recent = [(t, v) for t, v in recent if t >= elapsed - config.DEM_SETTLE_STEADY_WINDOW]
+            recent.append((elapsed, rms))
+            speeds = [v for _, v in recent]
+            steady = (
+                elapsed >= config.DEM_SETTLE_STEADY_AFTER
+                and elapsed - recent[0][0] >= config.DEM_SETTLE_STEADY_WINDOW - 1.5 * chunk_time
+                and max(speeds) < config.DEM_SETTLE_STEADY_FACTOR * threshold
+                and max(speeds) <= (1.0 + config.DEM_SETTLE_STEADY_SPREAD) * min(speeds)
+            )
             if progress is not None:
-                progress(self.time - start, rms, threshold, rms < threshold)
+                progress(elapsed, rms, threshold, rms < threshold or steady)
             if rms < threshold:
-                return self.time - start
+                return elapsed
+            if steady:
+                warnings.warn(
+                    f"the fill came to a steady state, not to rest: after {elapsed:.2g} s its "
+                    f"rms speed has stayed at {rms:.2g} m/s ({rms / threshold:.2g} times the "
+                    f"rest threshold) for {config.DEM_SETTLE_STEADY_WINDOW:g} s, grains rolling "
+                    "on the floor with nothing to stop them (a sparse bed); the drive starts "
+                    "from it (material.rolling_friction brings such grains to rest)",
+                    stacklevel=2,
+                )
+                return elapsed
         causes = []
         incline = math.degrees(math.atan2(-self.gravity[0], -self.gravity[2]))
         if abs(incline) > 0.05:
