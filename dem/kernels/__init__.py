@@ -5,10 +5,15 @@ Importing this package
 - selects the threading layer ``dem.config.DEM_THREADING_LAYER`` for numba's parallel loops,
   unless NUMBA_THREADING_LAYER is set or the layer is not installed, and OpenMP's wait policy
   ``dem.config.DEM_OMP_WAIT_POLICY`` (if not None) unless OMP_WAIT_POLICY is set;
-- drops numba's on-disk cache of these kernels when any kernel source (or dem/config.py) changed
-  since it was written. numba checks only the file that defines a function, not the files of the
-  functions it inlines, so a kernel cached before an edit of a law it calls would otherwise run the
-  old law (or crash on a changed signature).
+- points numba's on-disk cache at a folder of its own for these sources: ``__pycache__`` (or
+  NUMBA_CACHE_DIR) ``/dem-<digest>``, the digest of every kernel source and dem/config.py. numba
+  checks only the file that defines a function, not the files of the functions it inlines, so a
+  kernel cached before an edit of a law it calls would otherwise run the old law (or crash on a
+  changed signature). A folder per digest keeps processes of two versions apart: dem used to drop
+  the shared cache when the sources changed, and a process still running the old code (a sweep's
+  or an atlas's worker) could then write its kernels back under the new stamp, which the next
+  process loaded and crashed on (a segfault in the neighbour build, seen once here). Folders of
+  other digests unused for ``DEM_CACHE_KEEP_S`` are removed.
 """
 
 import hashlib
@@ -31,29 +36,66 @@ if "NUMBA_THREADING_LAYER" not in os.environ:
         numba.config.THREADING_LAYER = DEM_THREADING_LAYER
 
 
-def _drop_stale_cache() -> None:
+def source_digest() -> str:
+    """The sha256 of every kernel source and dem/config.py, in a fixed order.
+
+    cuda/ aside: the GPU kernels are compiled at run time, never cached.
+    """
     here = Path(__file__).resolve().parent
-    # the GPU kernels (cuda/) are compiled at run time, never cached: they stamp nothing here
     sources = sorted(p for p in here.rglob("*.py") if "cuda" not in p.relative_to(here).parts)
     sources.append(here.parent / "config.py")
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
-    cache = here / "__pycache__"
-    stamp = cache / "dem-kernels-source.sha256"
+    return hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
+
+
+def cache_folder(base: Path, digest: str) -> Path:
+    """The cache folder of the sources with ``digest`` under ``base``."""
+    return Path(base) / f"dem-{digest[:16]}"
+
+
+def prune_cache_folders(base: Path, keep: Path, older_than_s: float) -> list[Path]:
+    """Remove the ``dem-*`` folders under ``base`` but ``keep`` unused for ``older_than_s``.
+
+    "Unused": the newest modification time of the folder and its index files. Returns those
+    removed. A process of that version still running recompiles what it no longer finds.
+    """
+    import shutil
+    import time
+
+    removed = []
+    now = time.time()
+    for folder in Path(base).glob("dem-*"):
+        if folder == keep or not folder.is_dir():
+            continue
+        try:
+            newest = max([folder.stat().st_mtime] + [p.stat().st_mtime
+                                                     for p in folder.rglob("*.nbi")])  # fmt: skip
+        except OSError:
+            continue
+        if now - newest > older_than_s:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
+
+
+def _use_own_cache() -> None:
+    from dem.config import DEM_CACHE_KEEP_S
+
+    base = Path(numba.config.CACHE_DIR or Path(__file__).resolve().parent / "__pycache__")
+    folder = cache_folder(base, source_digest())
     try:
-        if stamp.read_text() == digest:
-            return
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".writable"
+        probe.touch()
+    except OSError:  # a read-only install: numba then caches where it can, or not at all
+        return
+    numba.config.CACHE_DIR = str(folder)
+    try:
+        prune_cache_folders(base, folder, DEM_CACHE_KEEP_S)
     except OSError:
         pass
-    try:
-        cache.mkdir(exist_ok=True)
-        for path in list(here.rglob("*.nbi")) + list(here.rglob("*.nbc")):
-            path.unlink(missing_ok=True)
-        stamp.write_text(digest)
-    except OSError:  # read-only install: numba then caches elsewhere or not at all
-        pass
 
 
-_drop_stale_cache()
+_use_own_cache()
 
 
 def compiled(clumps: bool = False, mesh: bool = False) -> bool:
