@@ -513,7 +513,7 @@ class Simulation(InstabilityChecks):
                 return elapsed
             if steady:
                 warnings.warn(
-                    f"the fill came to a steady state, not to rest: after {elapsed:.2g} s its "
+                    f"the fill came to a steady state, not to rest: after {elapsed:.3g} s its "
                     f"rms speed has stayed at {rms:.2g} m/s ({rms / threshold:.2g} times the "
                     f"rest threshold) for {config.DEM_SETTLE_STEADY_WINDOW:g} s, grains rolling "
                     "on the floor with nothing to stop them (a sparse bed); the drive starts "

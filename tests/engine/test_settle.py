@@ -26,13 +26,13 @@ def _rolling_sphere(speed: float):
 @pytest.mark.integration
 def test_a_sphere_rolling_on_the_floor_settles_as_steady_with_a_warning():
     """Rolling without slip on a level periodic floor it keeps its speed (no rolling friction):
-    it never comes to rest (before: SimulationError after 5 s). After 1 s with its speed steady
-    within 5 % over 0.25 s, below 10 times the rest threshold, the fill is taken as settled,
+    it never comes to rest (before: SimulationError after 5 s). After 2 s with its speed steady
+    within 2 % over 0.5 s, below 10 times the rest threshold, the fill is taken as settled,
     with a warning; the sphere still rolls at its speed."""
     sim = _rolling_sphere(0.005)  # the rest threshold is 0.01 sqrt(g r) = 0.0014 m/s
     with pytest.warns(UserWarning, match="steady state, not to rest.*rolling"):
         t = sim.settle()
-    assert 1.0 <= t < 1.3
+    assert 2.0 <= t < 2.6
     assert sim.spheres.v[0, 0] == pytest.approx(0.005, rel=0.02)
 
 
@@ -44,9 +44,9 @@ def test_a_fast_roller_or_a_bed_that_rests_is_untouched():
 
     sim = _rolling_sphere(0.05)
     old = config.DEM_SETTLE_MAX_TIME
-    config.DEM_SETTLE_MAX_TIME = 1.5
+    config.DEM_SETTLE_MAX_TIME = 3.0
     try:
-        with pytest.raises(SimulationError, match="did not come to rest within 1.5 s"):
+        with pytest.raises(SimulationError, match="did not come to rest within 3.0 s"):
             sim.settle()
     finally:
         config.DEM_SETTLE_MAX_TIME = old
