@@ -343,7 +343,7 @@ def cmd_report(args) -> int:
         if not (Path(out) / "summary.json").is_file():
             raise InputError("OUT", out, "a run output folder holding summary.json")
     dest = writable_path("--out", args.dest, folder=True) if args.dest else None
-    paths = make_report([Path(p) for p in args.out_dirs], dest)
+    paths = make_report([Path(p) for p in args.out_dirs], dest, atlas=args.atlas)
     if args.json:
         print_json({"written": [str(p) for p in paths]})
         return 0

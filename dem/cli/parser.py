@@ -288,6 +288,9 @@ def build_parser() -> argparse.ArgumentParser:
         dest="dest",
         help="where to write the report (default OUT/report); --dest is an alias",
     )
+    p.add_argument("--atlas", metavar="CSV",
+                   help="an atlas.csv of dem atlas to draw the run's drive on (default: the "
+                   "shipped atlas, where there is one)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print the files written as JSON")
     p.set_defaults(func=c.cmd_report)
 

@@ -82,9 +82,14 @@ def read_table(path: str | Path, key: str = "--atlas") -> list[dict]:
         if r["status"] != "done":
             continue
         try:
-            out.append({"shape": r["shape"]} | {c: float(r[c]) for c in need[2:]})
+            row = {"shape": r["shape"]} | {c: float(r[c]) for c in need[2:]}
         except ValueError:
             continue
+        try:  # the report's map draws the ratio where the table has it
+            row["pointmass_bounded_velocity_norm"] = float(r["pointmass_bounded_velocity_norm"])
+        except (KeyError, TypeError, ValueError):
+            row["pointmass_bounded_velocity_norm"] = math.nan
+        out.append(row)
     return out
 
 

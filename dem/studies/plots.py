@@ -440,3 +440,42 @@ def calibration_figure(cal, friction: float, path: str | Path) -> Path:
         f"residual {cal.residual:+.3f}",
     )  # fmt: skip
     return save(fig, path)
+
+
+def atlas_point_figure(points, case_point, path: str | Path, *, title: str = "") -> Path:
+    """A run's drive on the atlas's map: bulk / bounded point mass over (phi, Gamma).
+
+    Args:
+        points: The atlas's points of the run's shape, depth and friction: (phi deg, Gamma,
+            ratio, ratio standard error) each.
+        case_point: The run's (phi deg, Gamma, ratio, ratio standard error); ratio may be nan.
+        path: PNG to write.
+        title: The panel's title (what the points hold: shape, depth, friction).
+
+    """
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(6.0, 4.4), dpi=120)
+    lo, hi = 0.4, 1.6
+    sc = None
+    if points:
+        phi, gamma, ratio, err = (np.array(c, dtype=float) for c in zip(*points, strict=True))
+        sc = ax.scatter(phi, gamma, c=ratio, cmap="coolwarm", vmin=lo, vmax=hi, s=260,
+                        edgecolors="k", linewidths=0.6, label="atlas points")  # fmt: skip
+        for x, y, r, e in zip(phi, gamma, ratio, err, strict=True):
+            ax.annotate(f"{r:.2f}\n+-{e:.2f}", (x, y), fontsize=6, ha="center", va="center")
+    x, y, r, e = case_point
+    colour = "none" if not np.isfinite(r) else plt.get_cmap("coolwarm")((r - lo) / (hi - lo))
+    ax.scatter([x], [y], marker="*", s=520, c=[colour], edgecolors="k", linewidths=1.2,
+               zorder=5, label="this run")  # fmt: skip
+    text = "this run" if not np.isfinite(r) else f"this run: {r:.3f} +- {e:.3f}"
+    ax.annotate(text, (x, y), xytext=(8, 10), textcoords="offset points", fontsize=8)
+    if sc is not None:
+        fig.colorbar(sc, ax=ax, label="bulk v / Coulomb-bounded point mass v")
+    ax.margins(0.15)
+    ax.set_xlabel("vibration angle phi (deg)")
+    ax.set_ylabel("throw number Gamma")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=7, markerscale=0.5)
+    ax.set_title(title, fontsize=9)
+    return save(fig, path)

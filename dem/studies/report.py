@@ -65,7 +65,8 @@ COMPARISON_COLUMNS = (
 
 
 #: The files a report writes for each run (in its folder, or in its sub-folder of many runs).
-RUN_FILES = ("velocity_per_cycle.png", "pointmass_comparison.png", "discharge.png",
+RUN_FILES = ("velocity_per_cycle.png", "pointmass_comparison.png", "atlas_point.png",
+             "discharge.png",
              "bed_snapshot.png", "report.txt")  # fmt: skip
 #: The files a report of many runs writes beside the runs' sub-folders.
 COMPARISON_FILES = ("comparison.csv", "comparison.json", "comparison.txt", "comparison.png")
@@ -87,7 +88,8 @@ def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return measure.running_mean_and_stderr(values)
 
 
-def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
+def make_report(out_dirs: list[Path], dest: Path | None = None,
+                atlas: Path | None = None) -> list[Path]:  # fmt: skip
     """Write the figures and texts of one or several runs (see the module docstring).
 
     Every ``summary.json`` and ``results.h5`` is read and checked before the first report file
@@ -97,6 +99,8 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
         out_dirs: Run output folders, each with ``summary.json`` (``results.h5`` optional).
         dest: Report folder; default ``OUT/report`` for one run, ``<common parent>/report`` for
             several.
+        atlas: An atlas.csv of ``dem atlas`` to draw each run's drive on (``atlas_point.png``);
+            default the shipped one (``dem/data/atlas``), none where it is not there.
 
     Returns:
         The files written.
@@ -114,6 +118,10 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
         if not (d / SUMMARY).is_file():
             raise FileNotFoundError(f"{d / SUMMARY} not found: is {d} a dem run folder?")
     inputs = [(read_summary(d / SUMMARY), _load_results(d)) for d in out_dirs]
+    from dem.run import bulk
+
+    table = bulk.default_table() if atlas is None else Path(atlas)
+    atlas_rows = bulk.read_table(table) if table is not None else None
     given = dest
     if dest is None:
         if len(out_dirs) == 1:
@@ -136,7 +144,7 @@ def make_report(out_dirs: list[Path], dest: Path | None = None) -> list[Path]:
     rows = []
     for label, d, (summary, results) in zip(labels, out_dirs, inputs, strict=True):
         run_dest = dest if len(out_dirs) == 1 else own_folder(dest / label)
-        files, row = _report_run(d, run_dest, label, summary, results)
+        files, row = _report_run(d, run_dest, label, summary, results, atlas_rows)
         written += files
         rows.append(row)
     if len(out_dirs) > 1:
@@ -312,8 +320,8 @@ def _num(summary: dict, key: str) -> float:
     return float(v) if isinstance(v, int | float) else math.nan
 
 
-def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | None
-                ) -> tuple[list[Path], dict]:  # fmt: skip
+def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | None,
+                atlas_rows: list[dict] | None = None) -> tuple[list[Path], dict]:  # fmt: skip
     files: list[Path] = []
     notes: list[str] = []
     case = summary.get("case", label)
@@ -358,6 +366,12 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
             title=f"DEM and point mass, {title}",
         )  # fmt: skip
     )
+
+    drawn = _atlas_point(dest, summary, results, atlas_rows, dem_norm, dem_err, bounded)
+    if isinstance(drawn, Path):
+        files.append(drawn)
+    else:
+        notes.append(f"atlas_point.png skipped: {drawn}")
 
     feeder = summary.get("feeder")
     cycles = results["cycles"] if results is not None else {}
@@ -413,6 +427,51 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
     replace_text(dest / "report.txt", shown_text(text), encoding="ascii", errors="replace")
     files.append(dest / "report.txt")
     return files, row
+
+
+def _atlas_point(dest, summary, results, rows, dem_norm, dem_err, bounded) -> Path | str:
+    """``atlas_point.png``, the run's drive on the atlas's map; else why not, in words.
+
+    The map: bulk / bounded point mass over phi and Gamma, for the run's shape at the atlas's
+    nearest depth and friction; the run's own ratio as a star.
+    """
+    if rows is None:
+        return "no atlas (dem/data/atlas/atlas.csv is computed by validation/atlas; --atlas CSV)"
+    case = results["case"] if results is not None and isinstance(results.get("case"), dict) else {}
+    shape = (case.get("particles") or {}).get("shape")
+    if shape is None:
+        shape = "sphere" if summary.get("spheres") == summary.get("grains") else "screw"
+    layers = (summary.get("bed") or {}).get("layers")
+    friction, gamma, phi = (summary.get(k) for k in ("friction", "throw_number", "angle"))
+    if not all(_is_number(v) for v in (layers, friction, gamma, phi)):
+        return "the summary lacks the bed's layers, friction, throw number or angle"
+    mine = [r for r in rows if r["shape"] == shape]
+    if not mine:
+        return f"the atlas has no {shape}s"
+    near_layers = min({r["particles.layers"] for r in mine}, key=lambda v: abs(v - layers))
+    mine = [r for r in mine if r["particles.layers"] == near_layers]
+    near_mu = min({r["material.friction"] for r in mine}, key=lambda v: abs(v - friction))
+    mine = [r for r in mine if r["material.friction"] == near_mu]
+    points = []
+    for r in mine:
+        pm = r.get("pointmass_bounded_velocity_norm")
+        if _is_number(pm) and abs(pm) > 1e-3:
+            points.append(
+                (
+                    r["drive.angle_deg"],
+                    r["drive.throw_number"],
+                    r["mean_velocity_norm"] / pm,
+                    r["mean_velocity_norm_stderr"] / abs(pm),
+                )
+            )
+    ratio = dem_norm / bounded if _is_number(bounded) and abs(bounded) > 1e-3 else math.nan
+    err = dem_err / abs(bounded) if _is_number(bounded) and abs(bounded) > 1e-3 else math.nan
+    title = (
+        f"atlas: {shape}s, {near_layers:g} layers (this bed {layers:.2g}), mu "
+        f"{near_mu:g} (this run {friction:g})"
+    )
+    return plots.atlas_point_figure(points, (phi, gamma, ratio, err), dest / "atlas_point.png",
+                                    title=title)  # fmt: skip
 
 
 def _fmt(v, spec: str = ".4g") -> str:

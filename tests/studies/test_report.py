@@ -192,3 +192,59 @@ def test_a_pooled_runs_per_cycle_figure_draws_every_fill_and_the_pooled_band(tmp
                                                                    (3, [0.06] * 6)]  # fmt: skip
     assert seen["pooled"] == (s["mean_velocity"], 0.002)
     assert _is_png(tmp_path / "report" / "velocity_per_cycle.png")
+
+
+def _atlas_csv(path):
+    cols = ["shape", "status", "drive.angle_deg", "drive.throw_number", "material.friction",
+            "particles.layers", "mean_velocity_norm", "mean_velocity_norm_stderr",
+            "pointmass_bounded_velocity_norm"]  # fmt: skip
+    rows = [["sphere", "done", 10, 1.8, 0.35, 2, 0.9, 0.02, 0.8],
+            ["sphere", "done", 40, 1.8, 0.35, 2, 0.5, 0.01, 0.6],
+            ["sphere", "done", 25, 1.0, 0.35, 1, 0.4, 0.01, 0.5],
+            ["screw", "done", 25, 1.8, 0.35, 2, 0.7, 0.01, 0.6],
+            ["sphere", "running", 25, 2.6, 0.35, 2, "", "", ""]]  # fmt: skip
+    with path.open("w", newline="") as fh:
+        csv.writer(fh).writerows([cols, *rows])
+    return path
+
+
+def test_a_report_draws_the_run_on_the_atlas_map(tmp_path, monkeypatch):
+    """dem report puts the run's drive (phi, Gamma) on the atlas's map of its shape at the
+    atlas's nearest depth and friction, beside the points there (bulk / bounded point mass);
+    without an atlas it says why in report.txt; an unreadable one is refused naming --atlas
+    before anything is written."""
+    import matplotlib
+
+    from dem.errors import InputError
+    from dem.studies import plots
+
+    out = tmp_path / "run"
+    _run_folder(out)
+    summary = json.loads((out / "summary.json").read_text())
+    summary |= {"bed": {"layers": 1.8}, "pointmass_bounded_velocity_norm": 0.4}
+    (out / "summary.json").write_text(json.dumps(summary))
+    drawn = {}
+    original = plots.atlas_point_figure
+
+    def spy(points, case_point, path, *, title=""):
+        drawn.update(points=points, case_point=case_point, title=title)
+        return original(points, case_point, path, title=title)
+
+    monkeypatch.setattr(plots, "atlas_point_figure", spy)
+    files = make_report([out], dest=tmp_path / "rep", atlas=_atlas_csv(tmp_path / "atlas.csv"))
+    assert _is_png(tmp_path / "rep" / "atlas_point.png") and len(files) == 5
+    # the two sphere points at 2 layers (the bed's 1.8 is nearest 2), ratios 0.9/0.8 and 0.5/0.6
+    assert sorted(p[:3] for p in drawn["points"]) == [
+        (10.0, 1.8, 0.9 / 0.8),
+        (40.0, 1.8, 0.5 / 0.6),
+    ]
+    assert drawn["case_point"][:3] == (25.0, 1.8, 0.31 / 0.4)
+    assert "spheres, 2 layers" in drawn["title"]
+    assert matplotlib.get_backend().lower() == "agg"
+    monkeypatch.undo()
+    make_report([out], dest=tmp_path / "bare")
+    assert "atlas_point.png skipped: no atlas" in (tmp_path / "bare" / "report.txt").read_text()
+    (tmp_path / "bad.csv").write_text("not,an\natlas,csv\n")
+    with pytest.raises(InputError, match="--atlas"):
+        make_report([out], dest=tmp_path / "none", atlas=tmp_path / "bad.csv")
+    assert not (tmp_path / "none").exists()
