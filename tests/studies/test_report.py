@@ -208,6 +208,7 @@ def _atlas_csv(path):
     return path
 
 
+@pytest.mark.integration
 def test_a_report_draws_the_run_on_the_atlas_map(tmp_path, monkeypatch):
     """dem report puts the run's drive (phi, Gamma) on the atlas's map of its shape at the
     atlas's nearest depth and friction, beside the points there (bulk / bounded point mass);
