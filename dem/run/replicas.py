@@ -42,6 +42,8 @@ from dem.run.batch import batchable, run_batch
 #: Folder of the replicas' own outputs, inside the run's output folder.
 REPLICAS_DIR = "replicas"
 SUMMARY = "summary.json"
+#: Seconds a replica worker has to end after SIGTERM (its checkpoint written) before it is killed.
+STOP_GRACE_S = 30.0
 #: Pooled value keys: (value, its standard error) of the single runs' summaries.
 POOLED = (
     ("mean_velocity", "mean_velocity_stderr"),
@@ -351,12 +353,23 @@ def _check_outputs(out_dir: Path, n: int, overwrite: bool) -> None:
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
     """One replica failed (or a signal stopped the caller): stop the others now.
 
-    The worker processes are taken before the shutdown, which forgets them.
+    The worker processes are taken before the shutdown, which forgets them. Each gets SIGTERM (a
+    running replica writes its checkpoint and stops, an idle worker ends) and
+    :data:`STOP_GRACE_S` to end; one still alive then is killed, so that neither this process's
+    exit nor the pool's shutdown waits on it.
     """
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         process.terminate()
+    deadline = time.monotonic() + STOP_GRACE_S
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            say(f"dem: replica worker {process.pid} did not stop within {STOP_GRACE_S:g} s of "
+                "SIGTERM: killed")  # fmt: skip
+            process.kill()
+            process.join()
 
 
 def _has_checkpoint(run_dir: Path) -> bool:

@@ -354,6 +354,7 @@ ADDED_KEYS = {
     "run.max_replicas": 12,
     "output.flight_phases": 0,
     "output.contacts": False,
+    "particles.types": [],
 }
 
 

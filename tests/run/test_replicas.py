@@ -195,3 +195,28 @@ def test_a_done_line_clears_a_progress_bars_open_line_on_a_terminal(monkeypatch)
     replicas.say("dem: replica 2 done")
     assert term.getvalue() == "\r\x1b[Kdem: replica 1 done\n"
     assert pipe.getvalue() == "dem: replica 2 done\n"
+
+
+@pytest.mark.integration
+def test_a_worker_that_ignores_sigterm_is_killed_after_the_grace(monkeypatch):
+    """Stopping the replicas never waits on a worker for ever (an atlas's stop hung on one)."""
+    import multiprocessing
+    import signal
+    import time
+    from concurrent.futures import ProcessPoolExecutor
+
+    from dem.run import replicas
+
+    monkeypatch.setattr(replicas, "STOP_GRACE_S", 0.5)
+    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+    busy = "import signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(60)"
+    pool.submit(exec, busy)
+    while not pool._processes:
+        time.sleep(0.05)
+    time.sleep(2.0)  # the worker has started the job and ignores SIGTERM
+    processes = list(pool._processes.values())
+    t0 = time.monotonic()
+    replicas._stop_workers(pool)
+    assert time.monotonic() - t0 < 10.0
+    assert not any(p.is_alive() for p in processes)
+    assert processes[0].exitcode == -signal.SIGKILL
