@@ -619,7 +619,7 @@ def _ratio(value, reference, error: bool = False):
 
 def write_table(rows: list[dict], out: Path, grid: Grid) -> Path:
     """``atlas.csv``, its sidecar ``atlas.json`` (provenance, the grid) and ``atlas.h5``."""
-    from dem.studies.sweep import write_table as write_sweep_table
+    from dem.studies.sweep_table import write_table as write_sweep_table
 
     context = {"grid": str(grid.path), "target_error": grid.target_error,
                "stiffness": grid.stiffness,
