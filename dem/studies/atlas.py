@@ -555,7 +555,7 @@ def gather(
     ``cases``: each point's case by index, for the point mass's regime (none: no regime).
     """
     from dem import pointmass
-    from dem.studies.report import read_summary
+    from dem.studies.report_inputs import read_summary
 
     cases = cases or {}
     rows = []

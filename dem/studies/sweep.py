@@ -194,7 +194,7 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
     """
     from dem.run.output import SUMMARY
     from dem.run.summary import fingerprint_changes
-    from dem.studies.report import read_summary
+    from dem.studies.report_inputs import read_summary
 
     differ: list[tuple[SweepPoint, str]] = []
     for p in points:

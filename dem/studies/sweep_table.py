@@ -44,7 +44,7 @@ TABLE = "sweep"
 def gather(points: list[SweepPoint], failed: dict[str, str]) -> list[dict]:
     """One row per point: its overrides, its summary's values, and its status."""
     from dem.run.output import SUMMARY
-    from dem.studies.report import read_summary
+    from dem.studies.report_inputs import read_summary
 
     rows = []
     for p in points:
