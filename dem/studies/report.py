@@ -5,10 +5,16 @@
 writes into the report folder:
 
 - ``velocity_per_cycle.png``: the mass-weighted mean x-velocity of every cycle (settling cycles
-  grey), the running mean over the measured cycles and its +-1 standard-error band
-  (std(ddof=1) / sqrt(k) of the first k measured cycles, as :mod:`dem.physics.measure`);
-- ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error beside
-  the point-mass prediction for the same drive and material;
+  grey). One fill: the running mean over the measured cycles and its +-1 standard-error band,
+  the standard error of the first k measured cycles with their correlation accounted for,
+  std(ddof=1) sqrt(2 tau_int / k), tau_int their integrated autocorrelation time
+  (:func:`dem.physics.measure.correlated_stderr`; its last point is summary.json's). A pooled run
+  (``run.replicas`` > 1): the other fills' measured cycles beside the first's, and the pooled
+  mean with its +-1 pooled standard error, summary.json's (the fills pooled by a random-effects
+  model, the fill-to-fill spread included: :func:`dem.physics.measure.pooled`);
+- ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error
+  (summary.json's ``mean_velocity_norm_stderr``: the pooled one, or one run's correlated one)
+  beside the point-mass prediction for the same drive and material;
 - ``bed_snapshot.png``: the last frame of ``results.h5``, side view x-z and top view x-y,
   spheres to scale, coloured by the x-velocity relative to the trough;
 - ``discharge.png`` (a finite feeder): the discharge rate of every cycle with its steady value
@@ -64,7 +70,9 @@ def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         values: (C,) samples (per-cycle means, m/s).
 
     Returns:
-        (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) / sqrt(k), nan for k = 1.
+        (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) sqrt(2 tau_k / k), tau_k the
+        integrated autocorrelation time of the first k values
+        (:func:`dem.physics.measure.correlated_stderr`); nan for k = 1.
 
     """
     return measure.running_mean_and_stderr(values)
