@@ -5,11 +5,12 @@ Race-free by construction, no atomics. On several threads:
 1. :func:`pair_forces` runs in parallel over the pair list; pair k writes what each of its two
    ends receives (force and torque, six floats) into that end's slot of ``inbox``:
    ``part_slot[2 k]`` for i, ``part_slot[2 k + 1]`` for j (:mod:`dem.kernels.neighbours`), and
-   row k of the tangential history. No two pairs share a slot.
+   row k of the contact history ``hist``. No two pairs share a slot.
 2. :func:`sphere_force` is called by a parallel loop over spheres
    (:func:`dem.kernels.integrate.forces_kick`); sphere i sums its own slots, which lie together
-   in increasing pair index (a sequential read), adds its wall contacts (history rows 3 i + w,
-   its own) and the body force m a_body. Each pair is computed once.
+   in increasing pair index (a sequential read), adds its wall contacts (history rows
+   N_WALLS i + w of ``wall_hist``, its own) and the body force m a_body. Each pair is computed
+   once.
 
 On one thread, :func:`pair_forces_serial` adds each pair's force and torques to its two spheres
 directly (no per-pair rows, no gather: the rows' memory is never touched) and the sphere loop
@@ -17,10 +18,19 @@ adds only the walls (:func:`wall_forces`). Every sphere's sum has the same terms
 order both ways, so one thread and several give the same bits (tested).
 
 Walls (trough frame, README, Symbols): w = 0 the floor z = 0 with normal +z, w = 1 the side
-wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y. A wall has
-infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm c_i = r_i - f_w delta
-(``[contact] wall_lever_arm``: f_w = 1, 1/2 or 0, :data:`dem.kernels.contact.WALL_LEVER_ARMS`;
-the slip velocity's arm is r_i with ``slip_lever_arm = "radius"``).
+wall y = -width/2 with normal +y, w = 2 the side wall y = +width/2 with normal -y, w = 3 a finite
+feeder's back wall x = ``back`` with normal +x (none where ``back`` = -inf). Each sphere owns
+:data:`N_WALLS` = 4 rows of ``wall_hist``, row N_WALLS i + w for wall w, keyed by the sphere's
+index (they move with it when grains are dropped or added, :meth:`dem.engine.state.Spheres.take`
+and ``concat``); a row holds the contact's history (the tangential spring, m, and, for the
+"impact" law, its phase and last normal velocity: :data:`dem.kernels.contact.HISTORY_WIDTH`
+floats) and is set to zeros in every step in which the sphere does not touch that wall, so a
+contact that re-forms starts at rest. A mesh trough's triangles take the floor and side walls'
+place (their history in the mesh slots, :mod:`dem.kernels.mesh`) and rows 0-2 stay at zero.
+A wall has infinite mass and radius (m* = m_i, R* = r_i), no spin, lever arm
+c_i = r_i - f_w delta (``[contact] wall_lever_arm``: f_w = 1, 1/2 or 0,
+:data:`dem.kernels.contact.WALL_LEVER_ARMS`; the slip velocity's arm is r_i with
+``slip_lever_arm = "radius"``).
 
 Every contact law goes through :func:`dem.kernels.contact.contact_core` (by
 :func:`dem.kernels.contact.contact_force`, its CPU wrapper).
@@ -109,7 +119,8 @@ def pair_forces(
         x, v, omega: Positions (m), velocities (m/s), spins (rad/s), shape (n, 3).
         radius, mass: Shape (n,), m and kg.
         pair_i, pair_j: Pairs i < j, shape (cap,); the first ``n_pairs`` are valid.
-        hist: Tangential elongation per pair, shape (cap, 3), m; updated (reset if apart).
+        hist: Contact history per pair, shape (cap, width) (the tangential spring, m, first;
+            :data:`dem.kernels.contact.HISTORY_WIDTH`); updated (reset if apart).
         length: Period in x, m (minimum image).
         dt: Time step, s.
         part_slot: Slot of pair k's end i (2 k) and end j (2 k + 1), shape (2 cap,).

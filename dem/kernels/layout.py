@@ -3,7 +3,9 @@
 Each layout is a :class:`typing.NamedTuple`, which numba compiles as a tuple whose fields are read
 by name (``sph.inv_mass``, ``nb.part_slot``). :mod:`dem.engine.state` builds them from its
 dataclasses (``as_layout``); shapes and units are documented there. n spheres, B bodies, ``cap``
-pair capacity.
+pair capacity, ``width`` the contact law's history width
+(:data:`dem.kernels.contact.HISTORY_WIDTH`), N_WALLS = 4 walls per sphere
+(:mod:`dem.kernels.forces`).
 """
 
 import math
@@ -24,7 +26,7 @@ class SphereArrays(NamedTuple):
     mass: np.ndarray  # (n,) kg (a clump member carries its clump's mass)
     inv_mass: np.ndarray  # (n,) 1/kg
     inv_inertia: np.ndarray  # (n,) 1/(kg m^2)
-    wall_hist: np.ndarray  # (n, N_WALLS, 3) tangential springs of the wall contacts, m
+    wall_hist: np.ndarray  # (N_WALLS n, width) wall contacts' history, row N_WALLS i + w
 
 
 class BodyArrays(NamedTuple):
@@ -52,7 +54,7 @@ class PairArrays(NamedTuple):
     x_ref: np.ndarray  # (n, 3) positions at the last build, m
     pair_i: np.ndarray  # (cap,) int64 first sphere of each pair
     pair_j: np.ndarray  # (cap,) int64 second sphere
-    hist: np.ndarray  # (cap, 3) tangential elongation per pair, m
+    hist: np.ndarray  # (cap, width) contact history per pair (tangential spring first, m)
     scratch_j: np.ndarray  # build scratch: partners, int32 (n slots,)
     scratch_hist: np.ndarray  # build scratch: carried history
     counts: np.ndarray  # per-sphere pair counts
@@ -73,7 +75,7 @@ class MeshArrays(NamedTuple):
     dims: np.ndarray  # (3,) int64 cells along x, y, z
     cell_start: np.ndarray  # CSR start of each cell's triangles
     cell_tris: np.ndarray  # triangles, cell by cell
-    slot_hist: np.ndarray  # (MESH_SLOTS n, 3) tangential springs of the mesh contacts, m
+    slot_hist: np.ndarray  # (MESH_SLOTS n, width) mesh contacts' history (spring first, m)
     slot_normal: np.ndarray  # (MESH_SLOTS n, 3) normal of each slot's last contact
 
 

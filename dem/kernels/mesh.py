@@ -24,10 +24,12 @@ same edge point. So a contact is counted only if
 Two faces that meet at an angle (the bottom of a V, a floor and a wall) each give their own face
 contact, as two flat walls would.
 
-History across triangles. Each sphere has ``MESH_SLOTS`` contact slots, each holding a
-tangential spring (3 floats) and the normal of its last contact. A contact takes the slot whose
-last normal is closest to its own (within ``MATCH_COS``), so a sphere sliding from one triangle
-to the next in a flat or gently curved region keeps its spring; slots nothing claimed are reset.
+History across triangles. Each sphere has ``MESH_SLOTS`` contact slots, each holding the contact's
+history (the tangential spring, m, and, for the "impact" law, its phase and last normal velocity:
+:data:`dem.kernels.contact.HISTORY_WIDTH` floats) and the normal of its last contact. A contact
+takes the slot whose last normal is closest to its own (within ``MATCH_COS``), so a sphere sliding
+from one triangle to the next in a flat or gently curved region keeps its spring; slots nothing
+claimed are reset.
 
 Index. Triangles are binned once into a uniform grid over the mesh's bounding box padded by the
 reach (largest radius plus skin): each cell lists every triangle whose padded bounding box meets

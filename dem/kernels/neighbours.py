@@ -181,10 +181,10 @@ def rebuild(
         length, width: Periodic length and wall distance, m.
         x_ref: Out: positions at this build, shape (n, 3).
         pair_i, pair_j: In/out pair list (i < j, sorted by the key i n + j), shape (cap,).
-        hist: In/out tangential history per pair, shape (cap, 3).
+        hist: In/out contact history per pair, shape (cap, width) (the law's history width).
         n_pairs_old: Number of valid pairs on entry.
         scratch_j: Neighbour slots, shape (n slots,), int64.
-        scratch_hist: Work array of the pair capacity, shape (cap, 3).
+        scratch_hist: Work array of the pair capacity, shape (cap, width).
         counts, offsets: Work arrays, shapes (n,) and (n + 1,).
         cell_of, cell_particles: Work arrays, shape (n,); cell_start: shape (cell_cap + 1,).
         part_start, part_slot: Out CSR index, shapes (n + 1,) and (2 cap,) (module docstring).

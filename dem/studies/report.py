@@ -1,13 +1,20 @@
 """Reports of finished (or killed) runs: figures, a text summary, and a comparison across runs.
 
 ``make_report([OUT])`` reads ``OUT/summary.json`` (README, A DEM run) and, when present,
-``OUT/results.h5`` (:mod:`dem.io.hdf5`), and writes into the report folder:
+``OUT/results.h5`` (:mod:`dem.io.hdf5`), both checked (:mod:`dem.studies.report_inputs`), and
+writes into the report folder:
 
 - ``velocity_per_cycle.png``: the mass-weighted mean x-velocity of every cycle (settling cycles
-  grey), the running mean over the measured cycles and its +-1 standard-error band
-  (std(ddof=1) / sqrt(k) of the first k measured cycles, as :mod:`dem.physics.measure`);
-- ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error beside
-  the point-mass prediction for the same drive and material;
+  grey). One fill: the running mean over the measured cycles and its +-1 standard-error band,
+  the standard error of the first k measured cycles with their correlation accounted for,
+  std(ddof=1) sqrt(2 tau_int / k), tau_int their integrated autocorrelation time
+  (:func:`dem.physics.measure.correlated_stderr`; its last point is summary.json's). A pooled run
+  (``run.replicas`` > 1): the other fills' measured cycles beside the first's, and the pooled
+  mean with its +-1 pooled standard error, summary.json's (the fills pooled by a random-effects
+  model, the fill-to-fill spread included: :func:`dem.physics.measure.pooled`);
+- ``pointmass_comparison.png``: v / (A omega cos phi) of the DEM with +-1 standard error
+  (summary.json's ``mean_velocity_norm_stderr``: the pooled one, or one run's correlated one)
+  beside the point-mass prediction for the same drive and material;
 - ``bed_snapshot.png``: the last frame of ``results.h5``, side view x-z and top view x-y,
   spheres to scale, coloured by the x-velocity relative to the trough;
 - ``discharge.png`` (a finite feeder): the discharge rate of every cycle with its steady value
@@ -23,45 +30,26 @@ Figures that lack their data (no ``results.h5``, no frames) are skipped and repo
 from __future__ import annotations
 
 import io
-import json
 import math
 import os
 from pathlib import Path
 
 import numpy as np
 
-from dem.errors import InputError
 from dem.io.files import link_refused, own_folder, refuse_links, replace_text
 from dem.io.freetext import shown_text
 from dem.physics import measure
 from dem.studies import plots
+from dem.studies.report_inputs import (
+    COMPARISON_COLUMNS,
+    cycle_series,
+    is_number,
+    load_results,
+    read_summary,
+    replica_series,
+)
 
 SUMMARY = "summary.json"
-RESULTS = "results.h5"
-
-COMPARISON_COLUMNS = (
-    "run",
-    "case",
-    "angle",
-    "throw_number",
-    "frequency",
-    "amplitude",
-    "inclination",
-    "friction",
-    "grains",
-    "spheres",
-    "cycles",
-    "replicas",
-    "mean_velocity",
-    "mean_velocity_stderr",
-    "mean_velocity_norm",
-    "mean_velocity_norm_stderr",
-    "pointmass_velocity_norm",
-    "pointmass_bounded_velocity_norm",
-    "dem_over_pointmass",
-    "mass_flow_rate",
-    "particle_steps_per_s",
-)
 
 
 #: The files a report writes for each run (in its folder, or in its sub-folder of many runs).
@@ -82,7 +70,9 @@ def running_statistics(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         values: (C,) samples (per-cycle means, m/s).
 
     Returns:
-        (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) / sqrt(k), nan for k = 1.
+        (mean (C,), stderr (C,)); stderr_k = std(first k, ddof=1) sqrt(2 tau_k / k), tau_k the
+        integrated autocorrelation time of the first k values
+        (:func:`dem.physics.measure.correlated_stderr`); nan for k = 1.
 
     """
     return measure.running_mean_and_stderr(values)
@@ -117,7 +107,7 @@ def make_report(out_dirs: list[Path], dest: Path | None = None,
     for d in out_dirs:
         if not (d / SUMMARY).is_file():
             raise FileNotFoundError(f"{d / SUMMARY} not found: is {d} a dem run folder?")
-    inputs = [(read_summary(d / SUMMARY), _load_results(d)) for d in out_dirs]
+    inputs = [(read_summary(d / SUMMARY), load_results(d)) for d in out_dirs]
     from dem.run import bulk
 
     table = bulk.default_table() if atlas is None else Path(atlas)
@@ -152,76 +142,6 @@ def make_report(out_dirs: list[Path], dest: Path | None = None,
     return written
 
 
-#: summary.json keys a report reads, by what each must be (null is allowed for every one).
-_NUMBERS = tuple(
-    dict.fromkeys(
-        [c for c in COMPARISON_COLUMNS if c not in ("run", "case")]
-        + ["mass_flow_rate_per_width", "total_mass", "timestep", "timestep_limit", "steps",
-           "wall_time_s", "threads", "settle_cycles"]
-    )
-)  # fmt: skip
-_WHOLE = ("grains", "spheres", "cycles", "steps", "threads", "settle_cycles")
-_TEXTS = ("case", "contact_model")
-_FEEDER_NUMBERS = ("discharge_rate", "discharge_rate_stderr", "feed_rate", "length",
-                   "grains_inserted", "grains_in_trough", "grains_discharged",
-                   "feed_backlog")  # fmt: skip
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
-
-
-def read_summary(path: Path, key: str = "OUT") -> dict:
-    """``summary.json`` as a dict, every value a report or a sweep reads checked for its type.
-
-    Raises :class:`InputError` naming ``key`` (the option or argument that led to the file),
-    the file and what is wrong: not readable as JSON (a run killed while writing it), not an
-    object, or a value of the wrong type (a number as text, a list where a number belongs).
-    """
-    path = Path(path)
-
-    def refuse(what: str) -> InputError:
-        return InputError(key, str(path), f"a summary.json as dem run writes it: {what}")
-
-    try:
-        summary = json.loads(path.read_bytes())
-    except (ValueError, RecursionError) as err:  # JSONDecodeError, UnicodeDecodeError
-        cause = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise refuse(f"it is not valid JSON ({cause}): cut short or damaged; run the case "
-                     "again") from None  # fmt: skip
-    if not isinstance(summary, dict):
-        raise refuse(f"it holds a JSON {type(summary).__name__}, not a JSON object")
-
-    def bad(name: str, value, wanted: str) -> InputError:
-        shown = repr(value)
-        shown = shown if len(shown) <= 40 else shown[:37] + "..."
-        return refuse(f"{name} is {shown}, not {wanted}")
-
-    for name in _NUMBERS:
-        v = summary.get(name)
-        if v is not None and not _is_number(v):
-            raise bad(name, v, "a number")
-        if name in _WHOLE and v is not None and not (math.isfinite(v) and v == int(v) and v >= 0):
-            raise bad(name, v, "a whole number >= 0")
-    for name in _TEXTS:
-        v = summary.get(name)
-        if v is not None and not isinstance(v, str):
-            raise bad(name, v, "a text")
-    per = summary.get("per_cycle_velocity")
-    if per is not None and not (isinstance(per, list) and all(
-            v is None or _is_number(v) for v in per)):  # fmt: skip
-        raise bad("per_cycle_velocity", per, "a list of numbers")
-    feeder = summary.get("feeder")
-    if feeder is not None:
-        if not isinstance(feeder, dict):
-            raise bad("feeder", feeder, "an object (or null)")
-        for name in _FEEDER_NUMBERS:
-            v = feeder.get(name)
-            if v is not None and not _is_number(v):
-                raise bad(f"feeder.{name}", v, "a number")
-    return summary
-
-
 def _labels(out_dirs: list[Path]) -> list[str]:
     names = [d.resolve().name or "run" for d in out_dirs]
     if len(set(names)) < len(names):  # e.g. several cases/*/output: use the parent's name too
@@ -231,87 +151,6 @@ def _labels(out_dirs: list[Path]) -> list[str]:
     for n in names:
         seen[n] = seen.get(n, 0) + 1
         out.append(n if seen[n] == 1 else f"{n}_{seen[n]}")
-    return out
-
-
-def _load_results(d: Path) -> dict | None:
-    """``results.h5`` read and checked, with its last frame read now; None where there is none.
-
-    A file HDF5 cannot open, that lacks a group dem writes, or whose columns or last frame are
-    not numbers of the shapes dem writes is an :class:`InputError` naming the file.
-    """
-    path = d / RESULTS
-    if not path.is_file():
-        return None
-    from dem.io.hdf5_read import read_results
-
-    def refuse(what: str) -> InputError:
-        return InputError("OUT", str(path), f"a results.h5 as dem run writes it: {what}; move "
-                          "it away to report from summary.json alone")  # fmt: skip
-
-    try:
-        results = read_results(path)
-        if not isinstance(results["case"], dict):
-            raise refuse("its case_json is not a JSON object")
-        for name, column in results["cycles"].items():
-            column = np.asarray(column)
-            if column.ndim != 1 or column.dtype.kind not in "biuf":
-                raise refuse(f"/cycles/{name} is not a column of numbers")
-        last = results["frames"][-1] if results["frame_count"] > 0 else None
-        if last is not None:
-            n = np.shape(last["radius"])
-            for name, shape in (("positions", n + (3,)), ("velocity", n + (3,))):
-                value = np.asarray(last[name])
-                if value.shape != shape or value.dtype.kind not in "iuf":
-                    raise refuse(f"its last frame's {name} is {value.shape}, not {shape} numbers")
-            if len(n) != 1 or np.asarray(last["radius"]).dtype.kind not in "iuf":
-                raise refuse("its last frame's radius is not a column of numbers")
-    except InputError as err:
-        if err.key == "OUT":
-            raise
-        raise refuse(f"{err.key} = {err.value!r}: {err.allowed}") from None
-    except (OSError, KeyError, ValueError, TypeError, IndexError, RuntimeError) as err:
-        cause = (str(err).splitlines() or [""])[0] or type(err).__name__
-        raise refuse(f"it cannot be read ({type(err).__name__}: {cause})") from None
-    results["last_frame"] = last
-    return results
-
-
-def _cycle_series(summary: dict, results: dict | None):
-    """(cycle, velocity, measured mask) from results.h5 /cycles, else summary per_cycle_velocity."""
-    cycles = results["cycles"] if results else {}
-    if "mean_velocity" in cycles and len(cycles["mean_velocity"]):
-        v = np.asarray(cycles["mean_velocity"], dtype=np.float64)
-        c = np.asarray(cycles.get("cycle", np.arange(v.size)))
-        if "measured" in cycles:
-            measured = np.asarray(cycles["measured"]).astype(bool)
-        else:
-            settle = int(summary.get("settle_cycles") or 0)
-            measured = np.arange(v.size) >= min(settle, v.size - 1)
-        return c, v, measured, "results.h5 /cycles"
-    per = summary.get("per_cycle_velocity") or []
-    if per:
-        v = np.asarray(per, dtype=np.float64)
-        settle = int(summary.get("settle_cycles") or 0)
-        return np.arange(settle, settle + v.size), v, np.ones(v.size, bool), "summary.json"
-    return None
-
-
-def _replica_series(d: Path, summary: dict) -> list[tuple[int, np.ndarray, np.ndarray]]:
-    """The measured cycles of a pooled run's fills 2..N: (seed, cycles, velocities) each.
-
-    From ``replicas/k/summary.json`` (:mod:`dem.run.replicas`); a fill whose summary is missing
-    or unreadable is left out.
-    """
-    out = []
-    for k in range(1, int(summary.get("replicas") or 1)):
-        try:
-            own = json.loads((d / "replicas" / str(k) / "summary.json").read_text())
-            v = np.asarray(own["per_cycle_velocity"], dtype=np.float64)
-            settle = int(own.get("settle_cycles") or 0)
-        except (OSError, ValueError, KeyError, TypeError):
-            continue
-        out.append((own.get("seed"), np.arange(settle, settle + v.size), v))
     return out
 
 
@@ -327,13 +166,13 @@ def _report_run(d: Path, dest: Path, label: str, summary: dict, results: dict | 
     case = summary.get("case", label)
     title = f"{case}: " + plots.held_text(_drive_values(summary))
 
-    series = _cycle_series(summary, results)
+    series = cycle_series(summary, results)
     if series is not None:
         c, v, measured, source = series
         mean = np.full(v.size, np.nan)
         err = np.full(v.size, np.nan)
         mean[measured], err[measured] = running_statistics(v[measured])
-        others = _replica_series(d, summary)
+        others = replica_series(d, summary)
         pooled = None
         if others:
             pooled = (_num(summary, "mean_velocity"), _num(summary, "mean_velocity_stderr"))
@@ -443,7 +282,7 @@ def _atlas_point(dest, summary, results, rows, dem_norm, dem_err, bounded) -> Pa
         shape = "sphere" if summary.get("spheres") == summary.get("grains") else "screw"
     layers = (summary.get("bed") or {}).get("layers")
     friction, gamma, phi = (summary.get(k) for k in ("friction", "throw_number", "angle"))
-    if not all(_is_number(v) for v in (layers, friction, gamma, phi)):
+    if not all(is_number(v) for v in (layers, friction, gamma, phi)):
         return "the summary lacks the bed's layers, friction, throw number or angle"
     mine = [r for r in rows if r["shape"] == shape]
     if not mine:
@@ -455,7 +294,7 @@ def _atlas_point(dest, summary, results, rows, dem_norm, dem_err, bounded) -> Pa
     points = []
     for r in mine:
         pm = r.get("pointmass_bounded_velocity_norm")
-        if _is_number(pm) and abs(pm) > 1e-3:
+        if is_number(pm) and abs(pm) > 1e-3:
             points.append(
                 (
                     r["drive.angle_deg"],
@@ -464,8 +303,8 @@ def _atlas_point(dest, summary, results, rows, dem_norm, dem_err, bounded) -> Pa
                     r["mean_velocity_norm_stderr"] / abs(pm),
                 )
             )
-    ratio = dem_norm / bounded if _is_number(bounded) and abs(bounded) > 1e-3 else math.nan
-    err = dem_err / abs(bounded) if _is_number(bounded) and abs(bounded) > 1e-3 else math.nan
+    ratio = dem_norm / bounded if is_number(bounded) and abs(bounded) > 1e-3 else math.nan
+    err = dem_err / abs(bounded) if is_number(bounded) and abs(bounded) > 1e-3 else math.nan
     title = (
         f"atlas: {shape}s, {near_layers:g} layers (this bed {layers:.2g}), mu "
         f"{near_mu:g} (this run {friction:g})"
@@ -588,7 +427,7 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
                 labels, xlabel = [float(v) for v in vals], plots.axis_label(key)
                 break
     same = [k for k in _DRIVE_KEYS if len({repr(r.get(k)) for r in rows}) == 1]
-    shared = {k: rows[0][k] for k in same if _is_number(rows[0].get(k))}
+    shared = {k: rows[0][k] for k in same if is_number(rows[0].get(k))}
     title = "DEM and point mass of the runs" + (
         f" at {plots.held_text(shared)}" if shared else " (no drive value in common)"
     )
@@ -611,7 +450,7 @@ _DRIVE_KEYS = ("angle", "throw_number", "frequency", "friction", "inclination")
 
 def _drive_values(summary: dict) -> dict:
     """The drive and material of a run by key, where summary.json gives them as numbers."""
-    return {k: summary[k] for k in _DRIVE_KEYS if _is_number(summary.get(k))}
+    return {k: summary[k] for k in _DRIVE_KEYS if is_number(summary.get(k))}
 
 
 def _error_label(s: dict) -> str:

@@ -649,8 +649,8 @@ def run_stick():
 # --- the shipped beds ----------------------------------------------------------------------------
 
 
-#: The beds' values in the README's results table (v_norm; their rigid limits 0.785 and 0.882,
-#: validation/bulk-convergence, measured under the law before).
+#: The beds' values as shipped (v_norm, validation/speed_accuracy; their rigid limits 0.785 and
+#: 0.882, validation/bulk-convergence, measured under the law before).
 README_BEDS = {"screw-trough": 0.772, "sphere-bed": 0.873}
 RIGID_LIMITS = {"screw-trough": 0.785, "sphere-bed": 0.882}
 #: The shipped step (4e-6 s, 0.84 of the stability limit at 2e9 Pa) scaled to 2e10 Pa as Hertz's

@@ -20,7 +20,9 @@ A contact between sphere i and sphere j (or a wall, j = wall) is described by
   :data:`SLIP_LEVER_ARMS`),
 - the effective mass m* = m_i m_j / (m_i + m_j) and radius R* = r_i r_j / (r_i + r_j) (a wall has
   infinite mass and radius: m* = m_i, R* = r_i),
-- the tangential spring elongation s (3 floats of contact history, per contact pair).
+- the contact's history, one row per contact (a pair, a sphere and a flat wall, a sphere's mesh
+  slot) of the law's width (:data:`HISTORY_WIDTH`): the tangential spring elongation s, m
+  (3 floats); "impact" adds 2 (below).
 
 A *law* maps (delta, m*, R*) to the four coefficients (k_n, gamma_n, k_t, gamma_t); the
 spring-dashpot routine :func:`contact_core` turns them into forces:
@@ -114,7 +116,11 @@ of the linear law; ln 0 is never evaluated), see :func:`damping_beta`. For equal
 Y* = Y / (2 (1 - nu^2)) and G* = Y / (4 (2 - nu)(1 + nu)). How kappa and zeta_t follow from the
 tangential restitution eps_t is in :mod:`dem.physics.tangential`.
 
-Parameters reach the kernels as one float64 array ``params`` indexed by the ``P_*`` constants.
+Parameters reach the kernels as one float64 array ``params``: a row of :data:`N_PARAMS` floats
+indexed by the ``P_*`` constants (:func:`make_params`) for the grain-grain law, then a second
+row for the grain-wall law (the material with ``[wall]``'s friction and restitutions), as
+:class:`dem.physics.laws.ContactLaw` packs them; the walls read the second row
+(:func:`wall_row`), or the only one of a one-row array.
 """
 
 from dem.kernels.contact.force import (
