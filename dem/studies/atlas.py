@@ -185,7 +185,7 @@ def run_atlas(grid_path: str | Path, out: str | Path, *, workers: int | None = N
         stopped = None
         started = time.perf_counter()
         try:
-            with _stop_on_signals():
+            with _StopOnSignals():
                 if workers and workers > 1 or scheduler:
                     failed = _run_on_dask(todo, grid, scheduler, workers, device, say)
                 else:
@@ -255,11 +255,17 @@ def _point_line(p: AtlasPoint, s: dict, i: int, n: int, took: float, elapsed: fl
             f"ETA {eta / 60:.0f} min")  # fmt: skip
 
 
-class _stop_on_signals:
-    """SIGINT and SIGTERM raise :class:`AtlasStopped` in the main thread (workers are stopped)."""
+class _StopOnSignals:
+    """SIGINT and SIGTERM raise :class:`AtlasStopped` in the main thread (workers are stopped).
+
+    Only the first signal raises: a second one (a signal to the process group reaches this
+    process and, forwarded, again) must not break off the stop itself, which stops the fill
+    workers and writes the table.
+    """
 
     def __enter__(self):
         self.old = {}
+        self.raised = False
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
                 self.old[sig] = signal.signal(sig, self._raise)
@@ -267,9 +273,10 @@ class _stop_on_signals:
                 pass
         return self
 
-    @staticmethod
-    def _raise(signum, frame):
-        raise AtlasStopped(signum)
+    def _raise(self, signum, frame):
+        if not self.raised:
+            self.raised = True
+            raise AtlasStopped(signum)
 
     def __exit__(self, *exc):
         for sig, handler in self.old.items():

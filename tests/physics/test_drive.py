@@ -105,20 +105,20 @@ def test_motion_velocity_and_frame_acceleration_are_derivatives_of_the_displacem
 def test_ramp_rises_smoothly_from_rest_to_full_amplitude():
     from dem.physics.drive import ramp
 
-    T = 0.1
-    assert ramp(0.0, T) == (0.0, 0.0, 0.0)
-    assert ramp(T, T) == (1.0, 0.0, 0.0)
+    ramp_time = 0.1
+    assert ramp(0.0, ramp_time) == (0.0, 0.0, 0.0)
+    assert ramp(ramp_time, ramp_time) == (1.0, 0.0, 0.0)
     assert ramp(0.3, 0.0) == (1.0, 0.0, 0.0)
-    r = np.array([ramp(t, T) for t in np.linspace(0.0, T, 201)])
+    r = np.array([ramp(t, ramp_time) for t in np.linspace(0.0, ramp_time, 201)])
     assert np.all(np.diff(r[:, 0]) >= 0.0)
     assert r[100, 0] == pytest.approx(0.5)
     # r' and r'' vanish at both ends: the frame acceleration has no jump
-    for t in (1e-7, T - 1e-7):
-        _, r1, r2 = ramp(t, T)
-        assert abs(r1) * T < 1e-9 and abs(r2) * T**2 < 1e-4
-    m = _motion((0.1e-3, 90.0, 90.0), T)
-    np.testing.assert_allclose(m.frame_acceleration(T - 1e-9), m.frame_acceleration(T + 1e-9),
-                               atol=1e-4)  # fmt: skip
+    for t in (1e-7, ramp_time - 1e-7):
+        _, r1, r2 = ramp(t, ramp_time)
+        assert abs(r1) * ramp_time < 1e-9 and abs(r2) * ramp_time**2 < 1e-4
+    m = _motion((0.1e-3, 90.0, 90.0), ramp_time)
+    before, after = m.frame_acceleration(ramp_time - 1e-9), m.frame_acceleration(ramp_time + 1e-9)
+    np.testing.assert_allclose(before, after, atol=1e-4)
     np.testing.assert_allclose(m.frame_acceleration(1e-9), 0.0, atol=1e-4)
 
 

@@ -172,8 +172,8 @@ def test_a_grain_rests_in_the_u_trough(tmp_path):
     from dem.scene.mesh import extrude as ext
 
     theta = np.linspace(np.pi, 2 * np.pi, 49)
-    R = 0.5 * WIDTH
-    profile = np.column_stack([R * np.cos(theta), R + R * np.sin(theta)])
+    radius = 0.5 * WIDTH
+    profile = np.column_stack([radius * np.cos(theta), radius + radius * np.sin(theta)])
     path = tmp_path / "u.stl"
     meshio.write(path, ext(profile, LENGTH), binary=False)
     case = _case(tmp_path, mesh=path, rotation="true")
@@ -212,9 +212,9 @@ def test_a_bed_in_the_u_trough_stays_above_the_mesh_in_every_frame(tmp_path):
     from dem.run.runner import run_case
 
     theta = np.linspace(np.pi, 2 * np.pi, 33)
-    R = 0.5 * WIDTH
-    arc = np.column_stack([R * np.cos(theta), R + R * np.sin(theta)])
-    profile = np.vstack([[[-R, R + WALL]], arc, [[R, R + WALL]]])
+    radius = 0.5 * WIDTH
+    arc = np.column_stack([radius * np.cos(theta), radius + radius * np.sin(theta)])
+    profile = np.vstack([[[-radius, radius + WALL]], arc, [[radius, radius + WALL]]])
     path = tmp_path / "u.stl"
     meshio.write(path, extrude(profile, LENGTH), binary=False)
     case = _case(tmp_path, mesh=path, count=40, rotation="true", throw=1.8)

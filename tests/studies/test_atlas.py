@@ -184,3 +184,24 @@ def test_a_second_atlas_into_the_same_folder_is_refused_before_it_moves_anything
     finally:
         held.close()
     assert not (out / "points").exists()
+
+
+def test_a_second_signal_does_not_break_off_the_atlas_stop():
+    """A signal to the process group arrives twice (directly and forwarded): only the first
+    raises, so the stop that follows (the workers, the table) runs to its end."""
+    import os
+    import time
+
+    from dem.studies import atlas
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(atlas.AtlasStopped):
+        with atlas._StopOnSignals():
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(5.0)
+            except atlas.AtlasStopped:
+                os.kill(os.getpid(), signal.SIGTERM)  # the forwarded copy: noted, not raised
+                time.sleep(0.05)
+                raise
+    assert signal.getsignal(signal.SIGTERM) == before
