@@ -20,10 +20,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from dem.kernels import contact
 from dem.physics.contact.law import ContactLaw, wall_params
+
+#: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
+#: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
+DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
 
 
 @dataclass(frozen=True)
@@ -60,6 +64,11 @@ class TangentialLaw:
         calibrates: ``[contact]`` keys ``dem calibrate`` fits (empty: nothing to fit).
         calibration: Why it fits nothing, or why calibration is refused (empty when it fits).
         calibration_refused: True: ``dem calibrate`` refuses the law (InputError).
+        liggghts_keeps: True: a LIGGGHTS deck keeps the law's own tangential coefficients
+            (k_t / k_n, zeta_t) under ``liggghts_as``; False: the case switches to that law.
+        lammps_refusal: Why a LAMMPS deck cannot express it (empty: LAMMPS's ``mindlin`` or
+            ``linear_history`` is the law, term for term).
+        defaults: ``[contact]`` values it takes when the case omits them, by normal law.
 
     """
 
@@ -72,6 +81,9 @@ class TangentialLaw:
     calibrates: tuple[str, ...] = ()
     calibration: str = ""
     calibration_refused: bool = False
+    liggghts_keeps: bool = False
+    lammps_refusal: str = ""
+    defaults: dict[str, dict[str, float]] = field(default_factory=dict)
 
 
 NORMAL_LAWS = {
@@ -130,6 +142,9 @@ TANGENTIAL_LAWS = {
             "contact that never pulls) has no LIGGGHTS equivalent; this deck uses LIGGGHTS's "
             "history law, as dem's tangential = 'liggghts'"
         ),
+        lammps_refusal=(
+            "the impact-aware law (eps_t per impact, then a rigid stick) has no LAMMPS equivalent"
+        ),
         calibration=(
             "contact.tangential = 'impact' delivers eps_t by construction (each impact "
             "takes the impulse eps_t asks for, capped by Coulomb); it has no spring to fit"
@@ -147,6 +162,7 @@ TANGENTIAL_LAWS = {
             "dem's tangential = 'liggghts'"
         ),
         calibrates=("tangential_stiffness_ratio",),
+        liggghts_keeps=True,
     ),
     "liggghts": TangentialLaw(
         "liggghts",
@@ -159,6 +175,11 @@ TANGENTIAL_LAWS = {
             "Mindlin's k_t; linear: the given k_t / k_n); calibrate under 'coulomb'"
         ),
         calibration_refused=True,
+        lammps_refusal=(
+            "LIGGGHTS's law caps the spring alone and adds the dashpot only while sticking; "
+            "LAMMPS's mindlin and linear_history cap spring and dashpot together"
+        ),
+        defaults={"linear": {"tangential_stiffness_ratio": DEFAULT_TANGENTIAL_STIFFNESS_RATIO}},
     ),
 }
 
@@ -180,6 +201,7 @@ def history_width(tangential: str, model: str = "hertz_mindlin") -> int:
 
 
 __all__ = [
+    "DEFAULT_TANGENTIAL_STIFFNESS_RATIO",
     "NORMAL_KEYS",
     "NORMAL_LAWS",
     "TANGENTIAL_KEYS",

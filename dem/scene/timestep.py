@@ -163,7 +163,7 @@ def timestep_for(
         check_limit: False lets a given step exceed the stability limit: for stability studies
             (validation/stability), whose runs the instability guard must then stop.
         law: The case's contact law when it is already built (:func:`dem.scene.resolved.resolve`);
-            default :meth:`ContactLaw.from_case`.
+            default ``case.law`` (:attr:`dem.scene.spec.Case.law`).
 
     The step of a clump takes the smallest effective mass a point of its surface has for a force
     in any direction (:meth:`dem.scene.shapes.Template.contact_mass`; the clump mass M with rotation
@@ -174,7 +174,7 @@ def timestep_for(
     """
     pt, mat = case.particles, case.material
     if law is None:
-        law = ContactLaw.from_case(case)
+        law = case.law
     hardest = ""
     if impact_speed is None:
         impact_speed = impact_speed_for(case)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -149,6 +150,25 @@ class Interaction:
         }
 
 
+class KernelCoefficients(NamedTuple):
+    """The packed coefficients of one row that a deck writes (:mod:`dem.io.lammps`).
+
+    Attributes:
+        beta: The damping parameter (-1: critical).
+        normal_damping: C_dn sqrt(B_n): gamma_n = this sqrt(a m*) (:func:`law_coefficients`).
+        tangential_damping: C_dt sqrt(B_t): gamma_t = this sqrt(a m*).
+        tangential_stiffness: C_kt: k_t = C_kt a.
+        tangential_damping_ratio: zeta_t ("coulomb").
+
+    """
+
+    beta: float
+    normal_damping: float
+    tangential_damping: float
+    tangential_stiffness: float
+    tangential_damping_ratio: float
+
+
 def wall_params(params: np.ndarray) -> np.ndarray:
     """The grain-wall row of a law's parameters: the second row, or the only one."""
     n = contact.N_PARAMS
@@ -239,6 +259,17 @@ class ContactLaw:
     def model_id(self) -> int:
         """Integer id used by the kernels."""
         return contact.MODELS[self.model]
+
+    def kernel_coefficients(self, wall: bool = False) -> KernelCoefficients:
+        """The grain-grain (or grain-wall) row's packed coefficients, by name."""
+        p = self.wall_params if wall else self.params
+        return KernelCoefficients(
+            beta=float(p[contact.P_BETA]),
+            normal_damping=float(p[contact.P_DAMP_N] * math.sqrt(p[contact.P_DAMP_N_SCALE])),
+            tangential_damping=float(p[contact.P_DAMP_T] * math.sqrt(p[contact.P_DAMP_T_SCALE])),
+            tangential_stiffness=float(p[contact.P_KT_COEF]),
+            tangential_damping_ratio=float(p[contact.P_ZETA_T]),
+        )
 
     def stiffer(self, ratio: float) -> tuple[str, float]:
         """The case key and value that make impact overlaps 1 / ``ratio`` of this law's."""

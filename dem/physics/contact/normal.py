@@ -32,6 +32,8 @@ class Hertz:
     #: The case key of its stiffness, and the LIGGGHTS ``pair_style gran`` model it maps to.
     key: ClassVar[str] = "contact.youngs_modulus"
     liggghts: ClassVar[str] = "model hertz tangential history"
+    #: What a LIGGGHTS deck's tangential spring is when it keeps dem's own k_t / k_n.
+    liggghts_spring_note: ClassVar[str] = ", with Mindlin's k_t = 8 G* sqrt(R* d)"
 
     @property
     def y_star(self) -> float:
@@ -81,16 +83,17 @@ class Hertz:
         """E, Pa (the axis of the stiffness studies)."""
         return float(self.youngs_modulus)
 
-    def lammps_words(self, restitution: float) -> tuple[str, str]:
-        """LAMMPS ``hertz/material`` words (with the damping's e) and the note on its E.
+    def lammps_words(self, restitution: float, c_kt: float) -> tuple[str, str, list[str]]:
+        """LAMMPS normal words ``hertz/material E e nu``, tangential model ``mindlin``, notes.
 
-        LAMMPS forms E_eff = E / (2 (1 - nu^2)) from E and nu: the E written is 2 (1 - nu^2) Y*.
+        LAMMPS forms E_eff = E / (2 (1 - nu^2)) from E and nu: the E written is 2 (1 - nu^2) Y*;
+        ``mindlin`` takes k_t = C_kt a.
         """
         nu = self.poisson_ratio
         e_mod = 2.0 * (1.0 - nu * nu) * self.y_star
         note = (f"hertz/material E = 2 (1 - nu^2) Y* = {e_mod:.6g} Pa (LAMMPS's E_eff is dem's "
-                f"Y* = {self.y_star:.6g} Pa)")  # fmt: skip
-        return f"hertz/material {e_mod:.17g} {restitution:.17g} {nu:.17g}", note
+                f"Y* = {self.y_star:.6g} Pa); mindlin k_t = {c_kt:.6g} a (dem's C_kt)")  # fmt: skip
+        return f"hertz/material {e_mod:.17g} {restitution:.17g} {nu:.17g}", "mindlin", [note]
 
     def report(self) -> dict:
         """Its coefficients for summary.json."""
@@ -114,6 +117,7 @@ class Linear:
     name: ClassVar[str] = "linear"
     key: ClassVar[str] = "contact.stiffness"
     liggghts: ClassVar[str] = "model hooke/stiffness tangential history"
+    liggghts_spring_note: ClassVar[str] = ""
 
     @property
     def stiffness_value(self) -> float:
@@ -155,9 +159,9 @@ class Linear:
         y_star = contact.hertz_youngs_star_for_time(t_c, radius, mass, speed)
         return contact.youngs_modulus_from_star(y_star, self.poisson_ratio)
 
-    def lammps_words(self, restitution: float) -> tuple[str, str]:
-        """LAMMPS ``hooke`` words (with the damping's e); no note."""
-        return f"hooke {self.stiffness:.17g} {restitution:.17g}", ""
+    def lammps_words(self, restitution: float, c_kt: float) -> tuple[str, str, list[str]]:
+        """LAMMPS normal words ``hooke k_n e``, tangential model ``linear_history``, no note."""
+        return f"hooke {self.stiffness:.17g} {restitution:.17g}", "linear_history", []
 
     def report(self) -> dict:
         """Its coefficients for summary.json."""
