@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dem.kernels import contact
+from dem.physics.contact import Hertz
 from dem.physics.laws import TANGENTIAL_LAWS
 from dem.scene.resolved import resolve
 
@@ -152,10 +152,8 @@ def linear_equivalent_stiffness(case) -> float:
     scene = resolve(case)
     case = scene.case
     mass, radius = grain_mass_radius(scene)
-    c = case.contact
-    y_star = contact.youngs_star(c.youngs_modulus, c.poisson_ratio)
-    speed = case.drive.peak_speed
-    t_c = contact.hertz_collision_time(y_star, radius, mass, speed)
+    hertz = Hertz(case.contact.youngs_modulus, case.contact.poisson_ratio)
+    t_c = hertz.collision_time(radius, mass, case.drive.peak_speed, beta=0.0)
     return mass * (math.pi / t_c) ** 2
 
 
