@@ -29,8 +29,6 @@ TANGENTIAL_CONVENTIONS = tuple(sorted(laws.TANGENTIAL_LAWS, key=contact.TANGENTI
 WALL_LEVER_ARMS = ("surface", "midpoint", "radius")
 #: The slip velocity's lever arms (:data:`dem.kernels.contact.SLIP_LEVER_ARMS`).
 SLIP_LEVER_ARMS = ("contact", "radius")
-#: Default k_t / k_n of the linear model under ``tangential = "liggghts"`` (the law's row).
-DEFAULT_TANGENTIAL_STIFFNESS_RATIO = laws.DEFAULT_TANGENTIAL_STIFFNESS_RATIO
 #: Engines a run can step on (``run.device``): numba on the CPU, or numba.cuda on a GPU
 #: (:mod:`dem.engine.device` says what the GPU engine refuses).
 DEVICES = ("cpu", "cuda")

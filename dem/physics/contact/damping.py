@@ -23,7 +23,7 @@ class Damping:
 
     Attributes:
         restitution: eps_n, the normal restitution in [0, 1] (0: critical damping).
-        beta: Overrides the damping parameter derived from eps_n (over-critical damping,
+        beta_override: Overrides the damping parameter derived from eps_n (over-critical damping,
             beta < -1, for studies); None derives it.
 
     """

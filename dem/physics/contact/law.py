@@ -89,9 +89,10 @@ class Interaction:
         linear's nu is not in the row (nan), and eps_t only in an "impact" row (else nan).
         """
         if model == Hertz.name:
-            q = p[contact.P_YSTAR] / p[contact.P_GSTAR] if p[contact.P_GSTAR] else 3.0
+            y_star, g_star = float(p[contact.P_YSTAR]), float(p[contact.P_GSTAR])
+            q = y_star / g_star if g_star else math.nan
             nu = (4.0 - q) / (2.0 - q)
-            normal = Hertz(contact.youngs_modulus_from_star(float(p[contact.P_YSTAR]), nu), nu)
+            normal = Hertz(contact.youngs_modulus_from_star(y_star, nu) if g_star else 0.0, nu)
         else:
             normal = Linear(float(p[contact.P_KN]), math.nan)
         beta = float(p[contact.P_BETA])
