@@ -20,7 +20,6 @@ import numpy as np
 
 from dem import config
 from dem.errors import SimulationError
-from dem.kernels.contact import P_GSTAR, P_KN, P_MU_ROLL, P_YSTAR, youngs_modulus_from_star
 from dem.scene.trough import WALLS
 
 
@@ -97,15 +96,7 @@ class InstabilityChecks:
         k^-1 and E^(-2/3): the impact exponent suffices for both.
         """
         ratio = max(fraction / config.DEM_OVERLAP_WARN_FRACTION, 1.0)
-        p = self.law.params
-        if self.law.model == "linear":
-            return "contact.stiffness", float(p[P_KN] * ratio**2)
-        # Y* = E / (2 (1 - nu^2)), G* = E / (4 (2 - nu)(1 + nu)): nu from their ratio
-        q = p[P_YSTAR] / p[P_GSTAR]
-        nu = (4.0 - q) / (2.0 - q)
-        return "contact.youngs_modulus", float(
-            youngs_modulus_from_star(p[P_YSTAR] * ratio**2.5, nu)
-        )
+        return self.law.stiffer(ratio)
 
     @staticmethod
     def _at(x) -> str:
@@ -198,7 +189,7 @@ class InstabilityChecks:
         mean = self.mean_velocity_x()
         incline = math.degrees(math.atan2(-self.gravity[0], -self.gravity[2]))
         if abs(incline) > 1e-9 and mean * self.gravity[0] > 0.0 and abs(mean) > 0.5 * bound:
-            rolling = self.law.params[P_MU_ROLL] == 0.0 and self.rotation and self.bodies is None
+            rolling = self.law.rolling_friction == 0.0 and self.rotation and self.bodies is None
             raise SimulationError(
                 f"the grains run away downhill {when}: mean velocity {mean:.3g} m/s along the "
                 f"trough (grain {self._grain(i)} at {speed:.3g} m/s), more than {bound:.3g} m/s "

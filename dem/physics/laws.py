@@ -6,7 +6,7 @@ rolling_friction``), as LAMMPS's ``pair granular`` composes its sub-models. Each
 :data:`NORMAL_LAWS` and :data:`TANGENTIAL_LAWS` says everything the rest of dem asks of a law:
 
 - the case keys it reads (the keys of another law are refused at load, :mod:`dem.scene.case`);
-- its parameter builder (the keyword arguments of :func:`dem.kernels.contact.make_params`);
+- its sub-model, which builds its coefficients (:mod:`dem.physics.contact`);
 - the floats of contact history it needs (the contact's width is the sum over its sub-models);
 - the stiffness the time step must resolve (:func:`dem.scene.timestep.timestep_limits`);
 - its LIGGGHTS mapping: the deck's law, or the nearest one with the note the deck carries;
@@ -20,12 +20,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-
-import numpy as np
+from dataclasses import dataclass, field
 
 from dem.kernels import contact
-from dem.physics import tangential as tangential_fit
+from dem.physics.contact.law import ContactLaw, wall_params
+
+#: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
+#: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
+DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
 
 
 @dataclass(frozen=True)
@@ -54,8 +56,6 @@ class TangentialLaw:
         name: The ``[contact] tangential`` value.
         keys: ``[contact]`` keys it reads, by normal law.
         history_width: Floats of contact history it needs.
-        coefficients: Its parameter builder: (case) -> keyword arguments of
-            :func:`dem.kernels.contact.make_params` that it decides.
         step_spring: The tangential spring the time step must resolve: (params, normal law,
             tangent normal stiffness S_n, size factor a, normal damping ratio zeta_n, rotation
             factor) -> (effective k_t, N/m, its damping ratio); k_t = 0 when it has none.
@@ -64,19 +64,26 @@ class TangentialLaw:
         calibrates: ``[contact]`` keys ``dem calibrate`` fits (empty: nothing to fit).
         calibration: Why it fits nothing, or why calibration is refused (empty when it fits).
         calibration_refused: True: ``dem calibrate`` refuses the law (InputError).
+        liggghts_keeps: True: a LIGGGHTS deck keeps the law's own tangential coefficients
+            (k_t / k_n, zeta_t) under ``liggghts_as``; False: the case switches to that law.
+        lammps_refusal: Why a LAMMPS deck cannot express it (empty: LAMMPS's ``mindlin`` or
+            ``linear_history`` is the law, term for term).
+        defaults: ``[contact]`` values it takes when the case omits them, by normal law.
 
     """
 
     name: str
     keys: dict[str, tuple[str, ...]]
     history_width: int
-    coefficients: Callable[[object], dict]
     step_spring: Callable[..., tuple[float, float]]
     liggghts_as: str
     liggghts_note: str = ""
     calibrates: tuple[str, ...] = ()
     calibration: str = ""
     calibration_refused: bool = False
+    liggghts_keeps: bool = False
+    lammps_refusal: str = ""
+    defaults: dict[str, dict[str, float]] = field(default_factory=dict)
 
 
 NORMAL_LAWS = {
@@ -87,37 +94,6 @@ NORMAL_LAWS = {
         "linear", ("stiffness", "poisson_ratio"), 0, "model hooke/stiffness tangential history"
     ),
 }
-
-
-def _coulomb_coefficients(case) -> dict:
-    """kappa, zeta_t and f_t from eps_t and the grain (:func:`dem.physics.tangential.resolve`)."""
-    ratio, zeta_t, factor = tangential_fit.resolve(case.contact, case.material, case.particles)
-    return {
-        "tangential_stiffness_ratio": ratio or 0.0,
-        "tangential_damping_ratio": zeta_t,
-        "tangential_mass_factor": factor,
-    }
-
-
-def _liggghts_coefficients(case) -> dict:
-    """The given kappa (linear); LIGGGHTS's own damping (gamma_t = gamma_n, or Mindlin's)."""
-    return {
-        "tangential_stiffness_ratio": case.contact.tangential_stiffness_ratio or 0.0,
-        "tangential_damping_ratio": 0.0,
-        "tangential_mass_factor": 1.0,
-    }
-
-
-def _impact_coefficients(case) -> dict:
-    """f_t and f_n of the grain; the impact ratio and the sticks follow from eps_n, eps_t, dt."""
-    pt = case.particles
-    factor = tangential_fit.tangential_mass_factor(pt.shape, pt.rotation, pt.grain)
-    return {
-        "tangential_stiffness_ratio": 0.0,
-        "tangential_damping_ratio": 0.0,
-        "tangential_mass_factor": factor,
-        "normal_mass_factor": tangential_fit.normal_mass_factor(pt.shape, pt.rotation, pt.grain),
-    }
 
 
 def _spring_step(p, model, s_n, a, zeta_n, rotation_factor) -> tuple[float, float]:
@@ -158,7 +134,6 @@ TANGENTIAL_LAWS = {
         "impact",
         keys={"hertz_mindlin": (), "linear": ()},
         history_width=contact.HISTORY_WIDTH["impact"],
-        coefficients=_impact_coefficients,
         step_spring=_impact_step,
         liggghts_as="liggghts",
         liggghts_note=(
@@ -166,6 +141,9 @@ TANGENTIAL_LAWS = {
             "eps_t per impact, then a rigid stick; with eps_n = 0 a perfectly plastic normal "
             "contact that never pulls) has no LIGGGHTS equivalent; this deck uses LIGGGHTS's "
             "history law, as dem's tangential = 'liggghts'"
+        ),
+        lammps_refusal=(
+            "the impact-aware law (eps_t per impact, then a rigid stick) has no LAMMPS equivalent"
         ),
         calibration=(
             "contact.tangential = 'impact' delivers eps_t by construction (each impact "
@@ -176,7 +154,6 @@ TANGENTIAL_LAWS = {
         "coulomb",
         keys={"hertz_mindlin": _SPRING_KEYS, "linear": _SPRING_KEYS},
         history_width=contact.HISTORY_WIDTH["coulomb"],
-        coefficients=_coulomb_coefficients,
         step_spring=_spring_step,
         liggghts_as="liggghts",
         liggghts_note=(
@@ -185,12 +162,12 @@ TANGENTIAL_LAWS = {
             "dem's tangential = 'liggghts'"
         ),
         calibrates=("tangential_stiffness_ratio",),
+        liggghts_keeps=True,
     ),
     "liggghts": TangentialLaw(
         "liggghts",
         keys={"hertz_mindlin": (), "linear": ("tangential_stiffness_ratio",)},
         history_width=contact.HISTORY_WIDTH["liggghts"],
-        coefficients=_liggghts_coefficients,
         step_spring=_liggghts_step,
         liggghts_as="liggghts",
         calibration=(
@@ -198,6 +175,11 @@ TANGENTIAL_LAWS = {
             "Mindlin's k_t; linear: the given k_t / k_n); calibrate under 'coulomb'"
         ),
         calibration_refused=True,
+        lammps_refusal=(
+            "LIGGGHTS's law caps the spring alone and adds the dashpot only while sticking; "
+            "LAMMPS's mindlin and linear_history cap spring and dashpot together"
+        ),
+        defaults={"linear": {"tangential_stiffness_ratio": DEFAULT_TANGENTIAL_STIFFNESS_RATIO}},
     ),
 }
 
@@ -218,107 +200,16 @@ def history_width(tangential: str, model: str = "hertz_mindlin") -> int:
     return NORMAL_LAWS[model].history_width + TANGENTIAL_LAWS[tangential].history_width
 
 
-def _params(case) -> np.ndarray:
-    """One row of kernel parameters: the case's contact law with ``case.material``."""
-    c, m = case.contact, case.material
-    return contact.make_params(
-        model=c.model,
-        stiffness=c.stiffness or 0.0,
-        youngs_modulus=c.youngs_modulus or 0.0,
-        poisson_ratio=c.poisson_ratio,
-        restitution=m.restitution_normal,
-        friction=m.friction,
-        rolling_friction=m.rolling_friction,
-        limit_force=c.limit_force,
-        tangential=c.tangential,
-        wall_lever_arm=c.wall_lever_arm,
-        slip_lever_arm=c.slip_lever_arm,
-        restitution_tangential=m.restitution_tangential,
-        **TANGENTIAL_LAWS[c.tangential].coefficients(case),
-    )
-
-
-def wall_params(params: np.ndarray) -> np.ndarray:
-    """The grain-wall row of a law's parameters: the second row, or the only one."""
-    n = contact.N_PARAMS
-    return params[n : 2 * n] if params.shape[0] >= 2 * n else params
-
-
-@dataclass(frozen=True)
-class ContactLaw:
-    """A contact law selector with its kernel parameters.
-
-    Attributes:
-        model: ``"linear"`` or ``"hertz_mindlin"`` (:data:`dem.kernels.contact.MODELS`).
-        params: Kernel parameter array (:func:`dem.kernels.contact.make_params`).
-
-    """
-
-    model: str
-    params: np.ndarray
-
-    @classmethod
-    def from_case(cls, case) -> ContactLaw:
-        """Law of a :class:`dem.scene.case.Case`: grain-grain, then grain-wall (``[wall]``).
-
-        ``params`` holds two rows of :data:`dem.kernels.contact.N_PARAMS` floats: the
-        grain-grain law (the material) and the grain-wall law (the material with ``[wall]``'s
-        friction and restitutions, :attr:`dem.scene.case.Case.wall_material`); the pair kernels read
-        the first, the wall kernels the second (:func:`wall_params`). The tangential law's row
-        (:data:`TANGENTIAL_LAWS`) decides its coefficients: with ``"coulomb"`` the tangential
-        mass factor follows the grain (a rolling sphere 2/7, rotation locked 1, a clump its
-        contact mass over its mass) and an omitted ``tangential_stiffness_ratio`` is derived
-        from eps_t (:mod:`dem.physics.tangential`), each row from its own eps_t.
-        """
-        wall_case = case if case.wall is None else replace(case, material=case.wall_material)
-        rows = [_params(case), _params(wall_case)]
-        return cls(model=case.contact.model, params=np.concatenate(rows))
-
-    @property
-    def wall_params(self) -> np.ndarray:
-        """The grain-wall row of ``params`` (:func:`wall_params`)."""
-        return wall_params(self.params)
-
-    @property
-    def tangential(self) -> str:
-        """Tangential law, a key of :data:`TANGENTIAL_LAWS`."""
-        code = self.params[contact.P_TANGENTIAL]
-        return next(k for k, v in contact.TANGENTIAL.items() if v == code)
-
-    @property
-    def row(self) -> TangentialLaw:
-        """The tangential law's registry row."""
-        return TANGENTIAL_LAWS[self.tangential]
-
-    def tangential_coefficients(self) -> dict:
-        """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
-        p = self.params
-        out = {"tangential": self.tangential}
-        if self.tangential == "coulomb" or (self.model == "linear" and self.tangential != "impact"):
-            out["tangential_stiffness_ratio"] = float(p[contact.P_KT_RATIO])
-        if self.tangential == "coulomb":
-            out["tangential_damping_ratio"] = float(p[contact.P_ZETA_T])
-            out["tangential_mass_factor"] = float(p[contact.P_MASS_T])
-        if self.tangential == "impact":
-            out["tangential_mass_factor"] = float(p[contact.P_MASS_T])
-            out["stick_rate"] = float(p[contact.P_STICK_RATE])
-            out["stick_damping_ratio"] = float(p[contact.P_STICK_ZETA])
-            out["normal_law_restitution"] = float(p[contact.P_NORMAL_E])
-            out["plastic"] = bool(p[contact.P_PLASTIC])
-            if out["plastic"]:
-                out["normal_stick_rate"] = float(p[contact.P_NORMAL_STICK_RATE])
-        f_w = float(p[contact.P_WALL_ARM])
-        out["wall_lever_arm"] = next(k for k, v in contact.WALL_LEVER_ARMS.items() if v == f_w)
-        a = float(p[contact.P_SLIP_ARM])
-        out["slip_lever_arm"] = next(k for k, v in contact.SLIP_LEVER_ARMS.items() if v == a)
-        return out
-
-    @property
-    def history_width(self) -> int:
-        """Floats of contact history per contact (:func:`history_width`)."""
-        return history_width(self.tangential, self.model)
-
-    @property
-    def model_id(self) -> int:
-        """Integer id used by the kernels."""
-        return contact.MODELS[self.model]
+__all__ = [
+    "DEFAULT_TANGENTIAL_STIFFNESS_RATIO",
+    "NORMAL_KEYS",
+    "NORMAL_LAWS",
+    "TANGENTIAL_KEYS",
+    "TANGENTIAL_LAWS",
+    "ContactLaw",
+    "NormalLaw",
+    "TangentialLaw",
+    "foreign_keys",
+    "history_width",
+    "wall_params",
+]

@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dem.kernels import contact
+from dem.physics.contact import Hertz
+from dem.physics.laws import TANGENTIAL_LAWS
 from dem.scene.resolved import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
@@ -70,7 +71,7 @@ def calibration_advice(case) -> Advice | None:
     except (OSError, TypeError):
         return None
     found = CALIBRATED_AT.search(text)
-    if found is None or case.contact.tangential != "coulomb":
+    if found is None or not TANGENTIAL_LAWS[case.contact.tangential].calibrates:
         return None
     at = {k: float(v) for k, v in found.groupdict().items()}
     d, mu = case.drive, case.wall_material.friction
@@ -148,15 +149,11 @@ def linear_equivalent_stiffness(case) -> float:
     The impact is a grain on the floor at A omega; k_n = m (pi / t_c)^2. ``case``: a
     :class:`dem.scene.resolved.Scene`, or a case resolved here.
     """
-    from dem.kernels import contact
-
     scene = resolve(case)
     case = scene.case
     mass, radius = grain_mass_radius(scene)
-    c = case.contact
-    y_star = contact.youngs_star(c.youngs_modulus, c.poisson_ratio)
-    speed = case.drive.peak_speed
-    t_c = contact.hertz_collision_time(y_star, radius, mass, speed)
+    hertz = Hertz(case.contact.youngs_modulus, case.contact.poisson_ratio)
+    t_c = hertz.collision_time(radius, mass, case.drive.peak_speed, beta=0.0)
     return mass * (math.pi / t_c) ** 2
 
 
@@ -169,14 +166,8 @@ def equivalent_youngs_modulus(case) -> float:
     """
     scene = resolve(case)
     case = scene.case
-    c = case.contact
     mass, radius = grain_mass_radius(scene)
-    if c.model == "hertz_mindlin":
-        return float(c.youngs_modulus)
-    t_c = math.pi * math.sqrt(mass / c.stiffness)
-    speed = case.drive.peak_speed
-    y_star = contact.hertz_youngs_star_for_time(t_c, radius, mass, speed)
-    return contact.youngs_modulus_from_star(y_star, c.poisson_ratio)
+    return scene.law.normal.equivalent_youngs_modulus(mass, radius, case.drive.peak_speed)
 
 
 def grain_length(case) -> float:
@@ -302,7 +293,7 @@ def expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str]
     # The stiffness series is the error against the reference; the others are what one setting
     # changed against the base settings (0 there).
     e_equiv = equivalent_youngs_modulus(scene)
-    key = "contact.youngs_modulus" if case.contact.model == "hertz_mindlin" else "contact.stiffness"
+    key = scene.law.normal.key
     change("stiffness", data["stiffness"], e_equiv, key)
     fraction = step.dt / step.limit
     change("time step", data["timestep"], fraction, "run.timestep", cheap="high")
@@ -360,7 +351,7 @@ def round_down(x: float) -> float:
 def _advise_settings(case, data, step, fraction, e_equiv, advice) -> None:
     """Stiffer or finer than the answer needs (far more), or past what stayed accurate."""
     cheap = data["cheapest"]
-    if case.contact.model == "hertz_mindlin":
+    if case.contact.youngs_modulus is not None:  # Hertz: the study's axis is E
         e_ok = cheap["youngs_modulus"]
         if e_equiv > FAR * e_ok:
             advice.append(Advice("warn", "contact.youngs_modulus",

@@ -33,7 +33,6 @@ from dataclasses import dataclass
 from importlib import resources
 
 from dem.config import BED_PACKING, GRAVITY
-from dem.kernels import contact
 from dem.physics import measure
 from dem.physics.mass import sphere_volume
 
@@ -59,23 +58,21 @@ class BedMode:
     compliance: float
 
 
-def bed_mode(scene, youngs_modulus: float | None = None, stiffness: float | None = None) -> BedMode:
-    """The :class:`BedMode` of a :class:`dem.scene.resolved.Scene` (another E or k_n if given)."""
+def bed_mode(scene, normal=None) -> BedMode:
+    """The :class:`BedMode` of a :class:`dem.scene.resolved.Scene`.
+
+    ``normal``: another normal sub-model (:class:`dem.physics.contact.Hertz` or ``Linear``)
+    than the scene's law's.
+    """
     case = scene.case
-    c, pt = case.contact, case.particles
+    pt = case.particles
     mass, radius = scene.grain_mass, scene.max_radius
     volume = mass / scene.grain.density if pt.clumps else sphere_volume(radius)
     area = case.trough.length * case.trough.width
     height = pt.count * volume / (PACKING * area)
     layers = max(1.0, height / (2.0 * radius))
     load = layers * mass * GRAVITY * math.cos(math.radians(case.trough.inclination))
-    if c.model == "linear":
-        s = float(stiffness if stiffness is not None else c.stiffness)
-    else:
-        youngs = youngs_modulus if youngs_modulus is not None else c.youngs_modulus
-        y_star = contact.youngs_star(youngs, c.poisson_ratio)
-        delta = (load / (4.0 / 3.0 * y_star * math.sqrt(radius))) ** (2.0 / 3.0)
-        s = 2.0 * y_star * math.sqrt(radius * delta)
+    s = (normal or scene.law.normal).bed_stiffness(load, radius)
     omega_c = math.sqrt(s / mass)
     omega_bed = 2.0 * omega_c * math.sin(math.pi / (2.0 * (2.0 * layers + 1.0)))
     return BedMode(layers, s, omega_bed, (case.drive.omega / omega_bed) ** 2)
@@ -97,10 +94,8 @@ def stiffness_for(scene, compliance: float) -> tuple[str, float]:
     """
     mode = bed_mode(scene)
     factor = mode.compliance / compliance
-    c = scene.case.contact
-    if c.model == "linear":
-        return "contact.stiffness", float(c.stiffness * factor)
-    return "contact.youngs_modulus", float(c.youngs_modulus * factor**1.5)
+    normal = scene.law.normal.scaled(factor)
+    return normal.key, float(normal.stiffness_value)
 
 
 #: A lone grain's error against its rigid reference, per unit compliance: |v_norm(DEM) -

@@ -64,6 +64,7 @@ def summarize(case, sim: Simulation, progress: Progress, cycles: int, n_threads:
         "wall": wall_summary(case),
         "contact_model": case.contact.model,
         **sim.law.tangential_coefficients(),
+        "contact_law": sim.law.report(),
         "grains": sim.n_grains,
         "bed": bed_summary(case),
         "per_type": type_summary(case, sim, progress),

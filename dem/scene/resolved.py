@@ -110,7 +110,7 @@ def resolve(case, *, timestep: float | None = None, check_limit: bool = True) ->
         grain = shapes.sphere(radius, case.material.density)
     else:
         grain = pt.grain if pt.clumps else shapes.sphere(pt.radius, case.material.density)
-    law = ContactLaw.from_case(case)
+    law = case.law  # built at load_case's time-step check
     step = timestep_for(case, timestep=timestep, check_limit=check_limit, law=law)
     return Scene(case=case, grain=grain, law=law, step=step, trough=Trough.from_case(case))
 

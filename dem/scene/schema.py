@@ -13,6 +13,7 @@ which says once which law reads which key.
 
 from __future__ import annotations
 
+from dem.kernels import contact
 from dem.physics import laws
 from dem.scene.tomltable import REQUIRED, Derived, Key
 
@@ -21,16 +22,13 @@ DEPTH_KEYS = ("count", "layers", "bed_height", "mass_per_area")
 #: Grain shapes (``particles.shape``).
 SHAPES = ("sphere", "screw", "clump")
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
-CONTACT_MODELS = ("hertz_mindlin", "linear")
+CONTACT_MODELS = tuple(laws.NORMAL_LAWS)
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
-TANGENTIAL_CONVENTIONS = ("coulomb", "liggghts", "impact")
+TANGENTIAL_CONVENTIONS = tuple(sorted(laws.TANGENTIAL_LAWS, key=contact.TANGENTIAL.get))
 #: Where a wall contact's tangential force acts (:data:`dem.kernels.contact.WALL_LEVER_ARMS`).
 WALL_LEVER_ARMS = ("surface", "midpoint", "radius")
 #: The slip velocity's lever arms (:data:`dem.kernels.contact.SLIP_LEVER_ARMS`).
 SLIP_LEVER_ARMS = ("contact", "radius")
-#: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
-#: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
-DEFAULT_TANGENTIAL_STIFFNESS_RATIO = 2.0 / 7.0
 #: Engines a run can step on (``run.device``): numba on the CPU, or numba.cuda on a GPU
 #: (:mod:`dem.engine.device` says what the GPU engine refuses).
 DEVICES = ("cpu", "cuda")

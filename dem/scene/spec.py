@@ -18,8 +18,9 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from dem.physics import drive
-from dem.scene.schema import DEFAULT_TANGENTIAL_STIFFNESS_RATIO, TANGENTIAL_CONVENTIONS
+from dem.physics import drive, laws
+from dem.physics.contact import ContactLaw
+from dem.scene.schema import TANGENTIAL_CONVENTIONS
 
 
 @dataclass(frozen=True)
@@ -461,6 +462,16 @@ class Case:
     overrides: dict = field(default_factory=dict, compare=False)
     wall: WallSpec | None = None
 
+    @functools.cached_property
+    def law(self) -> ContactLaw:
+        """The case's contact law, built once per case (:meth:`ContactLaw.from_case`).
+
+        :func:`dem.scene.case.load_case` checks the time step against it and
+        :func:`dem.scene.resolved.resolve` takes the same law; a case changed by
+        :func:`dataclasses.replace` is another case and builds its own.
+        """
+        return ContactLaw.from_case(self)
+
     @property
     def wall_material(self) -> MaterialSpec:
         """The material a grain-wall contact uses: the grains' with ``[wall]``'s values."""
@@ -511,15 +522,12 @@ class Case:
         if tangential not in TANGENTIAL_CONVENTIONS:
             raise ValueError(f"tangential must be one of {TANGENTIAL_CONVENTIONS}")
         c = self.contact
-        ratio = c.tangential_stiffness_ratio
-        if tangential == "liggghts":
-            if c.model == "hertz_mindlin":
-                ratio = None
-            elif ratio is None:
-                ratio = DEFAULT_TANGENTIAL_STIFFNESS_RATIO
-        damping = None if tangential == "liggghts" else c.tangential_damping_ratio
-        if tangential == "impact":
-            ratio, damping = None, None
+        row = laws.TANGENTIAL_LAWS[tangential]
+        keys, defaults = row.keys[c.model], row.defaults.get(c.model, {})
+        ratio = c.tangential_stiffness_ratio if "tangential_stiffness_ratio" in keys else None
+        if ratio is None:
+            ratio = defaults.get("tangential_stiffness_ratio")
+        damping = c.tangential_damping_ratio if "tangential_damping_ratio" in keys else None
         contact = replace(
             c,
             tangential=tangential,

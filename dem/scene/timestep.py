@@ -18,8 +18,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import InputError
-from dem.kernels import contact
-from dem.physics.laws import ContactLaw, wall_params
+from dem.physics.laws import ContactLaw
 from dem.physics.mass import sphere_mass
 from dem.scene import fill
 
@@ -34,8 +33,6 @@ def timestep_limits(
     *,
     rotation: bool = True,
     pairs: bool = True,
-    youngs_modulus: float = 0.0,
-    poisson_ratio: float = 0.3,
     mass: float | None = None,
     other: tuple[float, float] | None = None,
 ) -> tuple[float, float]:
@@ -59,43 +56,20 @@ def timestep_limits(
     """
     if mass is None:
         mass = sphere_mass(density, radius)
-    tangential_factor = 3.5 if rotation else 1.0
-    row = law.row
-    wall = wall_params(law.params)  # the grain-wall law ([wall]); grain-grain is law.params
-    contacts_list = [(mass, radius, wall)]
+    rotation_factor = 3.5 if rotation else 1.0
+    contacts_list = [(mass, radius, True)]  # the grain-wall law ([wall])
     if pairs and other is None:
-        contacts_list.append((0.5 * mass, 0.5 * radius, law.params))
+        contacts_list.append((0.5 * mass, 0.5 * radius, False))
     elif pairs:
         m2, r2 = other
-        contacts_list.append((mass * m2 / (mass + m2), radius * r2 / (radius + r2), law.params))
+        contacts_list.append((mass * m2 / (mass + m2), radius * r2 / (radius + r2), False))
     limit = math.inf
     auto = math.inf
-    for m_eff, r_eff, p in contacts_list:
-        beta = p[contact.P_BETA]
-        zeta = contact.damping_ratio(law.model, beta)
-        if law.model == "linear":
-            kn, root = contact.tangent_stiffness(law.model, p, r_eff, 0.0)
-            auto = min(auto, contact.linear_collision_time(kn, m_eff, beta))
-        else:
-            delta = contact.hertz_max_overlap(p[contact.P_YSTAR], r_eff, m_eff, impact_speed)
-            kn, root = contact.tangent_stiffness(law.model, p, r_eff, delta)
-            auto = min(
-                auto,
-                contact.hertz_collision_time(p[contact.P_YSTAR], r_eff, m_eff, impact_speed),
-            )
-        kt_eff, zeta_t = row.step_spring(p, law.model, kn, root, zeta, tangential_factor)
-        limit = min(limit, contact.critical_timestep(kn, m_eff, zeta))
-        if kt_eff > 0:
-            limit = min(limit, contact.critical_timestep(kt_eff, m_eff, zeta_t))
+    for m_eff, r_eff, wall in contacts_list:
+        t_c, critical = law.contact_times(m_eff, r_eff, impact_speed, rotation_factor, wall)
+        auto, limit = min(auto, t_c), min(limit, critical)
     limit *= config.DEM_DT_STABILITY_FRACTION
-    if law.model == "linear":
-        auto *= config.DEM_DT_COLLISION_FRACTION
-    else:
-        auto = min(
-            auto * config.DEM_DT_HERTZ_FRACTION,
-            config.DEM_DT_RAYLEIGH_FRACTION
-            * contact.rayleigh_time(radius, density, youngs_modulus, poisson_ratio),
-        )
+    auto = law.automatic_step(auto, radius, density)
     return min(auto, limit), limit
 
 
@@ -115,8 +89,7 @@ def _typed_limits(case, law: ContactLaw, impact_speed: float, grains: int) -> tu
         for r2, rho2 in small[i:]:
             a, b = timestep_limits(
                 law, radius, density, impact_speed, rotation=pt.rotation, pairs=grains > 1,
-                youngs_modulus=case.contact.youngs_modulus or 0.0,
-                poisson_ratio=case.contact.poisson_ratio, other=(sphere_mass(rho2, r2), r2),
+                other=(sphere_mass(rho2, r2), r2),
             )  # fmt: skip
             auto, limit = min(auto, a), min(limit, b)
     return auto, limit
@@ -190,7 +163,7 @@ def timestep_for(
         check_limit: False lets a given step exceed the stability limit: for stability studies
             (validation/stability), whose runs the instability guard must then stop.
         law: The case's contact law when it is already built (:func:`dem.scene.resolved.resolve`);
-            default :meth:`ContactLaw.from_case`.
+            default ``case.law`` (:attr:`dem.scene.spec.Case.law`).
 
     The step of a clump takes the smallest effective mass a point of its surface has for a force
     in any direction (:meth:`dem.scene.shapes.Template.contact_mass`; the clump mass M with rotation
@@ -201,7 +174,7 @@ def timestep_for(
     """
     pt, mat = case.particles, case.material
     if law is None:
-        law = ContactLaw.from_case(case)
+        law = case.law
     hardest = ""
     if impact_speed is None:
         impact_speed = impact_speed_for(case)
@@ -224,9 +197,7 @@ def timestep_for(
         for radius, mass in sizes:
             a, b = timestep_limits(
                 law, radius, density, impact_speed, rotation=pt.rotation and mass is None,
-                pairs=grains > 1,
-                youngs_modulus=case.contact.youngs_modulus or 0.0,
-                poisson_ratio=case.contact.poisson_ratio, mass=mass,
+                pairs=grains > 1, mass=mass,
             )  # fmt: skip
             auto, limit = min(auto, a), min(limit, b)
     period = 2.0 * math.pi / case.drive.omega

@@ -363,8 +363,6 @@ def calibrate(
             f"one of {allowed} ({row.calibration})",
             source=str(case.source),
         )
-    from dem.kernels import contact
-
     target = case.wall_material.restitution_tangential  # impacts on the floor
     impacts = landings(case)
     if impacts.shape[0]:
@@ -411,7 +409,7 @@ def calibrate(
             fan=fan, fan_before=fan_values, fan_after=fan_values, targets=targets,
             bounded=bounded, fitted=False,
         )  # fmt: skip
-    zeta_t = float(scene.law.params[contact.P_ZETA_T])
+    zeta_t = float(scene.law.grain_grain.tangential.damping_ratio)
     # a landing matters by the tangential momentum at stake: weight (v_t / V)^2 = sin^2(theta)
     weights = np.sin(np.radians(impacts[:, 0])) ** 2
     weights /= weights.sum()
@@ -438,7 +436,8 @@ def calibrate(
     total = len(grid) + 1 + golden_evaluations(2.0 * step, GOLDEN_TOLERANCE)
     for x in grid:
         evaluate(float(x))
-    x = math.log(start if start is not None else float(scene.law.params[contact.P_KT_RATIO]))
+    kappa = scene.law.grain_grain.tangential.stiffness_ratio
+    x = math.log(start if start is not None else float(kappa))
     evaluate(x)
     x = min(cache, key=lambda k: cache[k][0])
     lo, hi = max(x - step, LOG_KAPPA_RANGE[0]), min(x + step, LOG_KAPPA_RANGE[1])

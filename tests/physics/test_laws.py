@@ -107,7 +107,7 @@ def test_the_liggghts_dashpot_damps_the_rolling_tangential_oscillator(model):
         zeta_n = -math.sqrt(5.0 / 6.0) * beta
     m_t = 2.0 / 7.0 * m
     want = gamma_t / (2.0 * math.sqrt(k_t * m_t))
-    kt_eff, zeta_t = law.row.step_spring(p, model, s_n, a, zeta_n, 3.5)
+    kt_eff, zeta_t = laws.TANGENTIAL_LAWS[law.tangential].step_spring(p, model, s_n, a, zeta_n, 3.5)
     assert kt_eff == pytest.approx(3.5 * k_t, rel=1e-12)
     assert zeta_t == pytest.approx(want, rel=1e-12)
     assert zeta_t > 1.0  # eps_n = 0: overdamped, the limit well below 2 / omega_t

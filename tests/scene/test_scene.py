@@ -38,14 +38,22 @@ def law_builds(monkeypatch):
     return calls
 
 
+def test_load_and_resolve_build_the_law_once(tmp_path, law_builds):
+    """load_case checks the time step against the law and keeps it: resolve takes the same."""
+    case = load_case(write_case(tmp_path / "case", SMALL_CASE))
+    assert law_builds["n"] == 1
+    assert resolve(case).law is case.law
+    assert law_builds["n"] == 1
+
+
 def test_resolve_builds_the_law_once_and_a_scene_passes_through(case, law_builds):
     scene = resolve(case)
-    assert law_builds["n"] == 1
+    assert law_builds["n"] == 0  # built at load_case's time-step check, kept on the case
     assert resolve(scene) is scene
     plan.plan(scene, threads=1)
-    assert law_builds["n"] == 1  # the plan takes the scene's law and step
+    assert law_builds["n"] == 0  # the plan takes the scene's law and step
     finer = resolve(scene, timestep=0.5 * scene.step.dt)
-    assert law_builds["n"] == 1 and finer.law is scene.law
+    assert law_builds["n"] == 0 and finer.law is scene.law
     assert finer.step.dt == 0.5 * scene.step.dt and finer.step.limit == scene.step.limit
 
 

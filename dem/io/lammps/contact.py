@@ -43,8 +43,7 @@ import math
 from typing import NamedTuple
 
 from dem.errors import InputError
-from dem.kernels import contact as k
-from dem.physics.laws import TANGENTIAL_LAWS
+from dem.physics.laws import TANGENTIAL_LAWS, ContactLaw
 from dem.scene.resolved import Scene
 
 #: The restitution written for dem's e = 0 (LAMMPS's coeff_restitution takes its logarithm).
@@ -80,21 +79,15 @@ def refusals(scene: Scene) -> None:
     """Raise :class:`InputError` for a key of the case that LAMMPS cannot express exactly."""
     case = scene.case
     law = case.contact.tangential
-    if law != "coulomb":
-        row = TANGENTIAL_LAWS[law]
-        why = {
-            "impact": "the impact-aware law (eps_t per impact, then a rigid stick) has no "
-            "LAMMPS equivalent",
-            "liggghts": "LIGGGHTS's law caps the spring alone and adds the dashpot only while "
-            "sticking; LAMMPS's mindlin and linear_history cap spring and dashpot together",
-        }.get(row.name, f"{row.name!r} has no LAMMPS equivalent")
+    why = TANGENTIAL_LAWS[law].lammps_refusal
+    if why:
         raise InputError(
             "contact.tangential", law,
             f'"coulomb" for a LAMMPS deck ({why}; set contact.tangential = "coulomb" in the '
             "case, which is LAMMPS's convention, and run dem with it too)",
         )  # fmt: skip
-    for name, mu_r in (("material", case.material.rolling_friction),
-                       ("wall", case.wall_material.rolling_friction)):  # fmt: skip
+    for name, mu_r in (("material", scene.law.grain_grain.rolling_friction),
+                       ("wall", scene.law.grain_wall.rolling_friction)):  # fmt: skip
         if mu_r > 0.0:
             raise InputError(
                 f"{name}.rolling_friction", mu_r,
@@ -103,16 +96,17 @@ def refusals(scene: Scene) -> None:
             )  # fmt: skip
 
 
-def granular_model(p, model: str, nu: float) -> GranularModel:
-    """The LAMMPS model words of one row ``p`` of dem's kernel parameters.
+def granular_model(law: ContactLaw, wall: bool = False) -> GranularModel:
+    """The LAMMPS model words of the law's grain-grain (or grain-wall) contacts.
 
     Args:
-        p: A parameter row (:func:`dem.kernels.contact.make_params`), grain-grain or grain-wall.
-        model: ``"hertz_mindlin"`` or ``"linear"``.
-        nu: Poisson's ratio (Hertz: LAMMPS forms E_eff from E and nu).
+        law: The contact law (:class:`dem.physics.contact.ContactLaw`).
+        wall: True: the grain-wall interaction.
 
     """
-    beta = p[k.P_BETA]
+    interaction = law.grain_wall if wall else law.grain_grain
+    k = law.kernel_coefficients(wall)
+    beta = k.beta
     e = restitution_for_beta(beta)
     notes = []
     if e == ZERO_RESTITUTION:
@@ -120,38 +114,28 @@ def granular_model(p, model: str, nu: float) -> GranularModel:
             f"e = 0 (critical damping, beta = -1) is written as e = {e:g}: LAMMPS takes ln e; "
             f"beta = {math.log(e) / math.hypot(math.log(e), math.pi):.6f}"
         )
-    c_dn = p[k.P_DAMP_N] * math.sqrt(p[k.P_DAMP_N_SCALE])
-    c_dt = p[k.P_DAMP_T] * math.sqrt(p[k.P_DAMP_T_SCALE])
+    c_dn, c_dt = k.normal_damping, k.tangential_damping
     if c_dn > 0.0:
         x = c_dt / c_dn
     elif c_dt == 0.0:
         x = 0.0
     else:
         raise InputError(
-            "contact.tangential_damping_ratio", p[k.P_ZETA_T],
+            "contact.tangential_damping_ratio", k.tangential_damping_ratio,
             "0 for a LAMMPS deck when restitution_normal = 1 (LAMMPS scales the tangential "
             "dashpot by the normal one, which is then zero)",
         )  # fmt: skip
-    mu = p[k.P_MU]
-    if model == "hertz_mindlin":
-        # E such that LAMMPS's E_eff = E / (2 (1 - nu^2)) is dem's Y*
-        e_mod = 2.0 * (1.0 - nu * nu) * p[k.P_YSTAR]
-        normal = f"hertz/material {e_mod:.17g} {e:.17g} {nu:.17g}"
-        tangential = f"mindlin {p[k.P_KT_COEF]:.17g} {x:.17g} {mu:.17g}"
-        notes.append(
-            f"hertz/material E = 2 (1 - nu^2) Y* = {e_mod:.6g} Pa (LAMMPS's E_eff is dem's "
-            f"Y* = {p[k.P_YSTAR]:.6g} Pa); mindlin k_t = {p[k.P_KT_COEF]:.6g} a (dem's C_kt)"
-        )
-    else:
-        normal = f"hooke {p[k.P_KN]:.17g} {e:.17g}"
-        tangential = f"linear_history {p[k.P_KT_COEF]:.17g} {x:.17g} {mu:.17g}"
+    mu = interaction.friction
+    normal, model, normal_notes = interaction.normal.lammps_words(e, k.tangential_stiffness)
+    tangential = f"{model} {k.tangential_stiffness:.17g} {x:.17g} {mu:.17g}"
+    notes += normal_notes
     notes.append(
         f"damping coeff_restitution with e = {e:.6g} (beta = {beta:.6g}) is dem's gamma_n; "
         f"tangential dashpot x = {x:.6g} of it, dem's gamma_t; mu = {mu:.6g}, the cap on spring "
         "plus dashpot (dem's coulomb law)"
     )
     words = f"{normal} damping coeff_restitution tangential {tangential}"
-    if p[k.P_LIMIT_FORCE] != 0.0:
+    if interaction.limit_force:
         words += " limit_damping"
         notes.append("limit_damping: a tensile total normal force is set to 0 (dem's limit_force)")
     return GranularModel(words, notes)
@@ -160,10 +144,7 @@ def granular_model(p, model: str, nu: float) -> GranularModel:
 def contact_models(scene: Scene) -> tuple[GranularModel, GranularModel]:
     """(grain-grain, grain-wall) models of ``scene``; refuses what LAMMPS cannot express."""
     refusals(scene)
-    law = scene.law
-    nu = scene.case.contact.poisson_ratio if scene.case.contact.model == "hertz_mindlin" else 0.0
-    model = scene.case.contact.model
-    return granular_model(law.params, model, nu), granular_model(law.wall_params, model, nu)
+    return granular_model(scene.law), granular_model(scene.law, wall=True)
 
 
 def convention_notes(scene: Scene) -> list[str]:

@@ -29,10 +29,10 @@ import math
 
 from dem.errors import InputError
 from dem.io.liggghts.text import fmt
-from dem.kernels.contact import P_KT_RATIO, P_MASS_T, P_ZETA_T, damping_beta
-from dem.physics.laws import NORMAL_LAWS, TANGENTIAL_LAWS, wall_params
+from dem.kernels.contact import damping_beta
+from dem.physics.contact import Hertz, Liggghts
+from dem.physics.laws import TANGENTIAL_LAWS
 from dem.scene.resolved import Scene
-from dem.scene.timestep import ContactLaw
 
 #: LIGGGHTS refuses coefficientRestitution <= 0.05; Hertz decks use at least this value.
 MIN_HERTZ_RESTITUTION = 0.06
@@ -58,11 +58,13 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
     row = TANGENTIAL_LAWS[case.contact.tangential]
     if row.liggghts_as != row.name:
         note = row.liggghts_note
-        if case.contact.model != "linear" and row.name == "coulomb":
-            note += ", with Mindlin's k_t = 8 G* sqrt(R* d)"
+        if row.liggghts_keeps:
+            note += scene.law.normal.liggghts_spring_note
         lines.append("# NOTE: " + note)
-        if row.name != "coulomb":  # "coulomb" keeps its own k_t / k_n and zeta_t (below)
+        if not row.liggghts_keeps:
             case = case.with_tangential(row.liggghts_as)
+    # the scene's law, or the law of the case switched to the deck's tangential law above
+    law = case.law
     contact, material, wall = case.contact, case.material, case.wall_material
     limit = "on" if contact.limit_force else "off"
 
@@ -85,7 +87,7 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
     lines += [
         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {mu}",
     ]
-    if contact.model == "hertz_mindlin":
+    if isinstance(law.normal, Hertz):
         es = []
         for e_case in (material.restitution_normal, wall.restitution_normal):
             e = max(e_case, MIN_HERTZ_RESTITUTION)
@@ -102,7 +104,7 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
             f"fix m_nu all property/global poissonsRatio peratomtype {nu} {nu}",
             f"fix m_e all property/global coefficientRestitution peratomtypepair 2 {pair(*es)}",
         ]
-        model = NORMAL_LAWS[contact.model].liggghts
+        model = law.normal.liggghts
         settings = f"limitForce {limit} tangential_damping on"
     else:
         if case.particles.types:
@@ -112,25 +114,23 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
                 "gamma for every pair, dem's 2 zeta sqrt(k m*) takes each pair's m*",
                 source=str(case.source),
             )  # fmt: skip
-        # the scene's law, or the law of the case switched to "liggghts" above (its own)
-        law = scene.law if case is scene.case else ContactLaw.from_case(case)
-        kn = contact.stiffness
-        rows = (law.params, wall_params(law.params))  # grain-grain, grain-wall
-        kts = [rows[0][P_KT_RATIO] * kn] + [rows[1][P_KT_RATIO] * kn] * 3
+        kn = law.normal.stiffness
+        rows = (law.grain_grain.tangential, law.grain_wall.tangential)
+        kts = [rows[0].stiffness_ratio * kn] + [rows[1].stiffness_ratio * kn] * 3
         zetas = [damping_ratio(material.restitution_normal)]
         zetas += [damping_ratio(wall.restitution_normal)] * 3
         # m* = m/2 grain-grain (1-1), m for grain-wall (1-2 and 2-1); type 2-2 never meets
         meff = (0.5 * sphere_mass, sphere_mass, sphere_mass, sphere_mass)
         gn = [2.0 * z * math.sqrt(kn * m) for z, m in zip(zetas, meff, strict=True)]
-        if contact.tangential == "liggghts":
+        if isinstance(rows[0], Liggghts):
             gt, gt_text = gn, "gamma_t = gamma_n (as dem's liggghts convention)"
         else:
             gt = [
-                2.0 * row[P_ZETA_T] * math.sqrt(kt * row[P_MASS_T] * m)
+                2.0 * row.damping_ratio * math.sqrt(kt * row.mass_factor * m)
                 for row, kt, m in zip((rows[0],) + (rows[1],) * 3, kts, meff, strict=True)
             ]
-            gt_text = (f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {rows[0][P_ZETA_T]:.6g}, "
-                       f"f_t = {rows[0][P_MASS_T]:.6g}")  # fmt: skip
+            zeta_t, f_t = rows[0].damping_ratio, rows[0].mass_factor
+            gt_text = f"gamma_t = 2 zeta_t sqrt(k_t f_t m*), zeta_t = {zeta_t:.6g}, f_t = {f_t:.6g}"
         lines += [
             f"# linear spring-dashpot: zeta = {zetas[0]:.6g} (grain-wall {zetas[1]:.6g}) from e = "
             f"{material.restitution_normal} (wall {wall.restitution_normal}), "
@@ -140,7 +140,7 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
             "fix m_gn all property/global gamman_abs peratomtypepair 2 " + " ".join(map(fmt, gn)),
             "fix m_gt all property/global gammat_abs peratomtypepair 2 " + " ".join(map(fmt, gt)),
         ]
-        model = NORMAL_LAWS[contact.model].liggghts
+        model = law.normal.liggghts
         settings = f"absolute_damping on limitForce {limit} tangential_damping on"
     if material.rolling_friction > 0.0 or wall.rolling_friction > 0.0:
         mr = pair(material.rolling_friction, wall.rolling_friction)

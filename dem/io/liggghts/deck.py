@@ -390,7 +390,7 @@ def _header_block(
 def _units_block(case: Case, boundary: str) -> list[str]:
     """Atom style, boundary, communication and SI units (``hard_particles`` for E > 1e9 Pa)."""
     # LIGGGHTS refuses E > 1e9 Pa in SI units unless told the grains are hard on purpose
-    youngs = case.contact.youngs_modulus if case.contact.model == "hertz_mindlin" else None
+    youngs = case.contact.youngs_modulus  # None under the linear law (no modulus)
     hard = (["hard_particles yes  # E > 1e9 Pa: LIGGGHTS 3.8 refuses it in SI units otherwise"]
             if youngs is not None and youngs > 1.0e9 else [])  # fmt: skip
     return [
