@@ -23,7 +23,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from dem.kernels import contact
-from dem.physics.contact.law import ContactLaw, wall_params
 
 #: Default k_t / k_n of the linear model under ``tangential = "liggghts"``: 2/7 makes the
 #: tangential and normal oscillations of a solid sphere equally fast (Shaefer et al. 1996).
@@ -206,10 +205,8 @@ __all__ = [
     "NORMAL_LAWS",
     "TANGENTIAL_KEYS",
     "TANGENTIAL_LAWS",
-    "ContactLaw",
     "NormalLaw",
     "TangentialLaw",
     "foreign_keys",
     "history_width",
-    "wall_params",
 ]

@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import math
 import re
-from dataclasses import dataclass
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -28,27 +27,13 @@ import numpy as np
 
 from dem.physics.contact import Hertz
 from dem.physics.laws import TANGENTIAL_LAWS
+from dem.run.advice import Advice, round_up
 from dem.scene.resolved import resolve
 
 #: The tolerance the study's acceptable settings meet (relative error of the bulk velocity).
 TOLERANCE = 0.02
 #: Stiffness or step this many times finer than the cheapest acceptable one is "far more".
 FAR = 2.0
-
-
-@dataclass(frozen=True)
-class Advice:
-    """One piece of advice about a case key.
-
-    ``level`` is "warn" (the case asks for far more or less than it needs, or leaves the studied
-    range) or "note"; ``key`` is the case key it concerns; ``value`` the value the advice sets
-    the key to (None where it names none): ``dem plan --suggest`` applies these.
-    """
-
-    level: str
-    key: str
-    text: str
-    value: float | int | str | None = None
 
 
 #: ``dem calibrate``'s comment on the [contact] keys it writes: the drive it fitted them on.
@@ -334,12 +319,6 @@ def expected_error(scene, data, kind, cycles, advice) -> tuple[float, dict, str]
     _advise_cycles(statistical, within, cycles, advice)
     advise_ladder(case, data, kind, advice)
     return math.sqrt(systematic**2 + statistical**2 + reference**2), parts, source
-
-
-def round_up(x: float) -> float:
-    """``x`` rounded up to 3 significant digits (a limit met, not missed by rounding)."""
-    digits = 2 - math.floor(math.log10(abs(x)))
-    return float(math.ceil(x * 10.0**digits) / 10.0**digits)
 
 
 def round_down(x: float) -> float:

@@ -21,7 +21,7 @@ from typing import Any
 from dem import config
 from dem.physics import drive
 from dem.run import accuracy, cost, record, stiffness
-from dem.run.accuracy import Advice
+from dem.run.advice import Advice
 from dem.run.cost import format_duration, format_size, physical_memory
 from dem.scene.resolved import resolve
 

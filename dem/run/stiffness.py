@@ -127,7 +127,7 @@ def single_grain(scene) -> dict | None:
     :data:`SINGLE_GRAIN_TOLERANCE` max(|reference|, :data:`SINGLE_GRAIN_FLOOR`). Where it is
     more, the key and the value that bring it within (c ~ E^(-2/3) for Hertz, 1/k_n linear).
     """
-    from dem.run.accuracy import round_up
+    from dem.run.advice import round_up
     from dem.run.summary import grains_roll, pointmass_bounded, pointmass_rolling
 
     case = scene.case
@@ -195,11 +195,11 @@ def why_expected(one: dict) -> str:
 
 
 def advice(scene):
-    """A "warn" :class:`dem.run.accuracy.Advice` where a study finds the contact too compliant.
+    """A "warn" :class:`dem.run.advice.Advice` where a study finds the contact too compliant.
 
     A bed: validation/bulk-convergence's limit on c; one grain: :func:`single_grain`.
     """
-    from dem.run.accuracy import Advice, round_up
+    from dem.run.advice import Advice, round_up
 
     if scene.case.particles.count < 2:
         one = single_grain(scene)
@@ -248,7 +248,7 @@ def assessment(scene) -> dict | None:
     data = study()
     if data is None:
         return None
-    from dem.run.accuracy import round_up
+    from dem.run.advice import round_up
 
     limit = data["compliance_limit"]
     mode = bed_mode(scene)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from dem.errors import InputError
-from dem.physics.laws import ContactLaw
+from dem.physics.contact import ContactLaw
 from dem.physics.mass import sphere_mass
 from dem.scene import shapes
 from dem.scene.timestep import Timestep, timestep_for
@@ -41,7 +41,7 @@ class Scene:
             (:func:`dem.scene.shapes.sphere`) of radius R and density rho for spheres (of
             several types or sizes: the mean grain, the sphere of their mean volume at their
             density by volume), the case's template for screws and clumps.
-        law: The contact law in kernel form (:meth:`dem.physics.laws.ContactLaw.from_case`).
+        law: The contact law in kernel form (:meth:`dem.physics.contact.ContactLaw.from_case`).
         step: The time step of the case's fill (:func:`dem.scene.timestep.timestep_for` with
         ``law``):
             dt, automatic step and stability limit, s, and the impact speed, m/s.

@@ -1,6 +1,6 @@
 """The time step of a case, from the case alone: contact time scales and stability limits.
 
-:class:`dem.physics.laws.ContactLaw` is a case's contact law in kernel form (re-exported here).
+:class:`dem.physics.contact.ContactLaw` is a case's contact law in kernel form (re-exported here).
 :func:`timestep_limits` gives the automatic step and the stability limit for one contact, and
 :func:`timestep_for` applies them to a case: every member radius of its grain, sphere-sphere
 and sphere-wall contacts, and the hardest impact the case can produce, taken from the drive and
@@ -18,7 +18,7 @@ import numpy as np
 
 from dem import config
 from dem.errors import InputError
-from dem.physics.laws import ContactLaw
+from dem.physics.contact import ContactLaw
 from dem.physics.mass import sphere_mass
 from dem.scene import fill
 

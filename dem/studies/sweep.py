@@ -39,12 +39,11 @@ import logging
 import math
 import re
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 from dem.errors import InputError
 from dem.io.files import refuse_links
-from dem.studies.sweep_table import TABLE, gather, held_values, plot, write_table
+from dem.studies.sweep_table import TABLE, SweepPoint, gather, held_values, plot, write_table
 
 #: Keys that take whole numbers.
 WHOLE = {"count", "cycles", "settle_cycles", "seed", "frames_per_cycle"}
@@ -60,24 +59,6 @@ TABLE_FILES = (f"{TABLE}.csv", f"{TABLE}.json", f"{TABLE}.h5", f"{TABLE}.png")
 BATCH_KEYS = frozenset(
     {"drive.angle", "drive.throw_number", "drive.amplitude", "trough.inclination", "run.seed"}
 )
-
-
-@dataclass(frozen=True)
-class SweepPoint:
-    """One point of a sweep: its index, its overrides, its output folder and its record.
-
-    ``record`` is what :data:`RECORD` holds once the point has finished (:func:`record`).
-    """
-
-    index: int
-    overrides: dict
-    folder: Path
-    record: dict | None = None
-
-    @property
-    def name(self) -> str:
-        """The folder's name, which identifies the point in messages."""
-        return self.folder.name
 
 
 def parse_set(text: str) -> tuple[str, list]:

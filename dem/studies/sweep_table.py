@@ -1,4 +1,4 @@
-"""The table and figure of a ``dem sweep``: its rows gathered, written and drawn.
+"""The points, table and figure of a ``dem sweep``: its rows gathered, written and drawn.
 
 :func:`gather` reads each point's summary.json into one row, :func:`write_table` writes the rows as
 ``sweep.csv`` (units in the column names, its provenance in ``sweep.json``) and ``sweep.h5`` (one
@@ -13,13 +13,30 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from dem.io.files import replace_file
 
-if TYPE_CHECKING:
-    from dem.studies.sweep import SweepPoint
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One point of a sweep: its index, its overrides, its output folder and its record.
+
+    ``record`` is what :data:`dem.studies.sweep.RECORD` holds once the point has finished
+    (:func:`dem.studies.sweep.record`).
+    """
+
+    index: int
+    overrides: dict
+    folder: Path
+    record: dict | None = None
+
+    @property
+    def name(self) -> str:
+        """The folder's name, which identifies the point in messages."""
+        return self.folder.name
+
 
 #: summary.json values gathered into the sweep table, beside the swept keys.
 COLUMNS = (

@@ -9,6 +9,7 @@ import pytest
 from dem.errors import InputError
 from dem.kernels import contact
 from dem.physics import laws
+from dem.physics.contact import ContactLaw
 from dem.scene.case import load_case
 
 SPHERE_BED = Path(__file__).resolve().parents[2] / "cases" / "sphere-bed"
@@ -89,7 +90,7 @@ def test_the_liggghts_dashpot_damps_the_rolling_tangential_oscillator(model):
         keys |= {"contact.model": "linear", "contact.youngs_modulus": None,
                  "contact.stiffness": 1.68e5}  # fmt: skip
     case = load_case(SPHERE_BED, keys)
-    law = laws.ContactLaw.from_case(case)
+    law = ContactLaw.from_case(case)
     p = law.wall_params  # sphere-wall: m* = m, R* = r
     m = case.material.density * 4.0 / 3.0 * math.pi * case.particles.radius**3
     beta = p[contact.P_BETA]

@@ -15,7 +15,7 @@ from dem.config import GRAVITY
 from dem.engine import setup
 from dem.errors import InputError
 from dem.kernels import contact
-from dem.physics.laws import ContactLaw
+from dem.physics.contact import ContactLaw
 from dem.scene.case import load_case
 
 

@@ -95,7 +95,7 @@ def _dashpot_params(**kw):
 
 @contextlib.contextmanager
 def dashpot_law(active=True, beta=None):
-    """Within it, every law built (dem.physics.laws.ContactLaw) is the law before the fix;
+    """Within it, every law built (dem.physics.contact.ContactLaw) is the law before the fix;
     ``beta`` overrides its damping parameter (over-critical damping: beta < -1)."""
     if active:
         contact.make_params = _dashpot_params
@@ -122,9 +122,9 @@ def _dashpot_row(row, model, eps_t, eps_n):
 def plastic_only(where):
     """Within it, laws are plastic only at ``where`` ("walls": grain-wall contacts, "pairs":
     grain-grain) and the law before at the other (the bed's two rows of parameters)."""
-    from dem.physics import laws
+    from dem.physics.contact import ContactLaw
 
-    original = laws.ContactLaw.from_case.__func__
+    original = ContactLaw.from_case.__func__
 
     def from_case(cls, case):
         law = original(cls, case)
@@ -138,11 +138,11 @@ def plastic_only(where):
         p[row] = sub
         return cls(model=law.model, params=p)
 
-    laws.ContactLaw.from_case = classmethod(from_case)
+    ContactLaw.from_case = classmethod(from_case)
     try:
         yield
     finally:
-        laws.ContactLaw.from_case = classmethod(original)
+        ContactLaw.from_case = classmethod(original)
 
 
 def law_context(law):

@@ -43,7 +43,8 @@ import math
 from typing import NamedTuple
 
 from dem.errors import InputError
-from dem.physics.laws import TANGENTIAL_LAWS, ContactLaw
+from dem.physics.contact import ContactLaw
+from dem.physics.laws import TANGENTIAL_LAWS
 from dem.scene.resolved import Scene
 
 #: The restitution written for dem's e = 0 (LAMMPS's coeff_restitution takes its logarithm).

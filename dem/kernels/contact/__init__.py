@@ -119,7 +119,7 @@ tangential restitution eps_t is in :mod:`dem.physics.tangential`.
 Parameters reach the kernels as one float64 array ``params``: a row of :data:`N_PARAMS` floats
 indexed by the ``P_*`` constants (:func:`make_params`) for the grain-grain law, then a second
 row for the grain-wall law (the material with ``[wall]``'s friction and restitutions), as
-:class:`dem.physics.laws.ContactLaw` packs them; the walls read the second row
+:class:`dem.physics.contact.ContactLaw` packs them; the walls read the second row
 (:func:`wall_row`), or the only one of a one-row array.
 """
 

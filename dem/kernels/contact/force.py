@@ -162,7 +162,7 @@ def contact_force(
 def wall_row(p):
     """The grain-wall law's parameters: the second row of ``p``, or ``p`` if it holds one law.
 
-    :class:`dem.physics.laws.ContactLaw` packs the grain-grain row, then the grain-wall row.
+    :class:`dem.physics.contact.ContactLaw` packs the grain-grain row, then the grain-wall row.
     """
     if p.shape[0] >= 2 * N_PARAMS:
         return p[N_PARAMS : 2 * N_PARAMS]
