@@ -60,8 +60,10 @@ class VelocityStatistics:
 def mean_and_stderr(samples: np.ndarray) -> tuple[float, float]:
     """Mean of samples (n,) and its standard error std(samples, ddof=1) / sqrt(n).
 
-    The statistics of per-cycle means: the cycles of a steady run are taken as independent
-    samples. The standard error is nan for a single sample.
+    The value if the samples were independent: a run keeps it beside its error bar
+    (:attr:`VelocityStatistics.stderr_independent`); the error bar itself is
+    :func:`correlated_stderr`, the cycles' correlation accounted for. The standard error is nan
+    for a single sample.
     """
     u = np.asarray(samples, dtype=np.float64)
     if u.ndim != 1 or u.size == 0:

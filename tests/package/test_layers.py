@@ -9,6 +9,7 @@ change it). Private names (one leading underscore) stay inside their module.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -62,13 +63,13 @@ def imports_of(path: Path, root: Path) -> list[tuple[int, str, list[str]]]:
     name = module_name(path, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = []
-    tree = ast.parse(path.read_text(), filename=str(path))
-    for node in ast.walk(tree):
+    imports, attributes = _nodes(path.read_text())
+    for node in imports:
         if isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name.split(".")[0] == "dem":
                     found.append((node.lineno, alias.name, []))
-        elif isinstance(node, ast.ImportFrom):
+        else:
             if node.level:
                 base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
                 target = ".".join(base + ([node.module] if node.module else []))
@@ -84,7 +85,7 @@ def imports_of(path: Path, root: Path) -> list[tuple[int, str, list[str]]]:
                 else:
                     found.append((node.lineno, target, [n]))
     bound = {}  # local name -> dem module it stands for
-    for node in ast.walk(tree):
+    for node in imports:
         if isinstance(node, ast.ImportFrom) and node.module and not node.level:
             for alias in node.names:
                 full = f"{node.module}.{alias.name}"
@@ -94,15 +95,23 @@ def imports_of(path: Path, root: Path) -> list[tuple[int, str, list[str]]]:
             for alias in node.names:
                 if alias.asname and alias.name.startswith("dem."):
                     bound[alias.asname] = alias.name
-    for node in ast.walk(tree):
-        if (
-            isinstance(node, ast.Attribute)
-            and isinstance(node.value, ast.Name)
-            and node.value.id in bound
-            and node.attr.startswith("_")
-        ):
+    for node in attributes:
+        if node.value.id in bound and node.attr.startswith("_"):
             found.append((node.lineno, bound[node.value.id], [node.attr]))
     return found
+
+
+@functools.cache
+def _nodes(text: str) -> tuple[list, list]:
+    """The import nodes and the ``name.attribute`` nodes of a source, in one walk of its tree
+    (parsed once per text: a planted copy of the package reuses the others)."""
+    imports, attributes = [], []
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            imports.append(node)
+        elif isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+            attributes.append(node)
+    return imports, attributes
 
 
 def violations(root: Path) -> list[str]:
@@ -127,9 +136,61 @@ def violations(root: Path) -> list[str]:
     return out
 
 
-@pytest.mark.validation
+def circles(root: Path) -> list[list[str]]:
+    """Every set of modules that import each other round a circle (inside a layer, where the
+    order of the layers cannot see it): the strongly connected components of the import graph,
+    lazy imports included."""
+    graph: dict[str, set[str]] = {}
+    for path in sorted(root.rglob("*.py")):
+        if "data" in path.relative_to(root).parts:
+            continue
+        here = module_name(path, root)
+        graph.setdefault(here, set()).update(t for _, t, _ in imports_of(path, root) if t != here)
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out = []
+
+    def visit(v: str) -> None:  # Tarjan's algorithm
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while not component or component[-1] != v:
+                component.append(stack.pop())
+            if len(component) > 1:
+                out.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
 def test_every_import_in_dem_points_down_and_no_private_name_crosses_a_module():
     assert violations(PACKAGE) == []
+
+
+def test_no_modules_of_dem_import_each_other_round_a_circle():
+    assert circles(PACKAGE) == []
+
+
+def test_the_circle_check_finds_a_planted_circle(tmp_path):
+    import shutil
+
+    root = tmp_path / "dem"
+    shutil.copytree(PACKAGE, root, ignore=shutil.ignore_patterns("__pycache__", "data"))
+    before = circles(root)
+    (root / "physics" / "extra_a.py").write_text("from dem.physics import extra_b\n")
+    (root / "physics" / "extra_b.py").write_text("def f():\n    from dem.physics import extra_a\n")
+    found = [c for c in circles(root) if c not in before]
+    assert found == [["dem.physics.extra_a", "dem.physics.extra_b"]]
 
 
 def test_every_module_of_dem_is_in_a_layer():

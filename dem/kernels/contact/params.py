@@ -58,7 +58,7 @@ N_PARAMS = 27
 TANGENTIAL = {"coulomb": 0.0, "liggghts": 1.0, "impact": 2.0}
 IMPACT = TANGENTIAL["impact"]
 #: Floats of contact history per contact, by convention: the spring s (3); "impact" adds its
-#: phase and the previous normal velocity (:func:`_impact_tangential`).
+#: phase and the previous normal velocity (:func:`dem.kernels.contact.laws.impact_tangential`).
 HISTORY_WIDTH = {"coulomb": 3, "liggghts": 3, "impact": 5}
 #: "impact": an impact phase lasts at most this many radians of the local normal oscillation
 #: (sqrt(k_n / m*) integrated over time); a free impact ends within about 3.
