@@ -17,8 +17,11 @@ The CPU engine's clump step (:func:`dem.kernels.integrate.advance_clumps`) in tw
 Each body writes only its own rows and its members' rows. The rigid body's physics is written
 once: a body's kick, drift and free rotation (the symmetric Lie-Poisson splitting), its members'
 placement and their arms are the CPU engine's functions (:func:`dem.kernels.rigid.
-kick_drift_one`, :func:`~dem.kernels.rigid.place_members_of`, :func:`~dem.kernels.rigid.
+kick_drift_one`, :func:`~dem.kernels.rigid.place_member`, :func:`~dem.kernels.rigid.
 member_arm`) compiled from their source as device functions (:mod:`dem.kernels.cuda.source`).
+A body's members are placed in one loop that checks each for a rebuild as it goes, as
+:func:`dem.kernels.rigid.place_members_of` places them: ptxas then gives the kernels the
+registers and the double-precision operations of the hand-written glue they replace.
 The simulator tests (tests/engine/test_gpu_engine.py) hold the two engines to the bit.
 """
 
@@ -32,8 +35,8 @@ from dem.kernels.periodic import wrap
 #: :func:`dem.kernels.rigid.kick_drift_one` compiled from its source: body b's half kick (and,
 #: with ``drift``, its drift and free rotation), then its angular velocity.
 kick_drift = device(_rigid.kick_drift_one, store_omega=device(_rigid.store_omega))
-#: :func:`dem.kernels.rigid.place_members_of` compiled from its source: body b's members placed.
-place_members_of = device(_rigid.place_members_of, place_member=device(_rigid.place_member))
+#: :func:`dem.kernels.rigid.place_member` compiled from its source: member s of body b placed.
+place_member = device(_rigid.place_member)
 #: :func:`dem.kernels.rigid.member_arm` compiled from its source: member s's arm from X_b.
 member_arm = device(_rigid.member_arm)
 
@@ -43,12 +46,15 @@ def _place_members(
     b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega, seq, trip, x_ref,
     length, limit, check,
 ):  # fmt: skip
-    """Members of body b placed; with ``check``, a member past skin/2 trips a rebuild."""
-    place_members_of(b, body_x, body_v, q, body_omega, offsets, start, members, x, v, omega)
-    if check:
-        for e in range(start[b], start[b + 1]):
-            if moved_past(x, x_ref, members[e], length, limit):
-                trip[0] = seq
+    """Members of body b placed (:func:`dem.kernels.rigid.place_members_of`).
+
+    With ``check``, a member past skin/2 trips a rebuild.
+    """
+    for e in range(start[b], start[b + 1]):
+        s = members[e]
+        place_member(s, b, body_x, body_v, q, body_omega, offsets, x, v, omega)
+        if check and moved_past(x, x_ref, s, length, limit):
+            trip[0] = seq
 
 
 @cuda.jit(device=True)
