@@ -1,4 +1,5 @@
 """The state, the step loop and its checks.
 
-A simulation built from a scene, the finite feeder, the thread guard.
+A simulation built from a scene, the engine door and its CPU and GPU engines, the finite feeder,
+the thread guard.
 """

@@ -29,26 +29,18 @@ import math
 import time
 import warnings
 
-import numba
 import numpy as np
 
 from dem import config
 from dem.engine.checks import InstabilityChecks
+from dem.engine.door import Engine, make_engine
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
 from dem.kernels.contact import P_BETA
 from dem.kernels.forces import N_WALLS
 from dem.kernels.forces import contact_counts as kernel_contact_counts
-from dem.kernels.integrate import (
-    DONE,
-    advance,
-    advance_clumps,
-    build,
-    evaluate_forces,
-    evaluate_forces_clumps,
-)
 from dem.kernels.layout import Geometry, MeshArrays
-from dem.kernels.neighbours import OK, OVERFLOW_PAIRS
+from dem.kernels.neighbours import OVERFLOW_PAIRS
 from dem.kernels.rigid import rotational_energy
 from dem.physics.drive import cycle_edge
 from dem.scene.mesh import TriangleMesh
@@ -104,6 +96,7 @@ class Simulation(InstabilityChecks):
         if device not in ("cpu", "cuda"):  # dem.scene.schema.DEVICES
             raise ValueError(f"device = {device!r}: 'cpu' or 'cuda'")
         self.device = device
+        self._engine: Engine | None = None  # made at first use (:attr:`engine`)
         self.spheres = spheres
         self.bodies = bodies
         self.trough = trough
@@ -167,23 +160,46 @@ class Simulation(InstabilityChecks):
         self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
     @property
+    def engine(self) -> Engine:
+        """The engine that steps this simulation (:class:`dem.engine.door.Engine`).
+
+        Chosen from ``device`` and made at first use (again where ``device`` changed): the CPU
+        engine (:class:`dem.engine.cpu.CpuEngine`) or the GPU engine
+        (:class:`dem.engine.gpu.engine.GpuEngine`).
+        """
+        if self._engine is None or self._engine.device != self.device:
+            self._engine = make_engine(self, self.device)
+        return self._engine
+
+    def use_engine(self, engine: Engine) -> Engine:
+        """Step with ``engine`` from now on (the GPU engine of a batch of replicas); returns it."""
+        self.device = engine.device
+        self._engine = engine
+        return engine
+
+    @property
+    def _gpu_engine(self):
+        """The GPU engine, or None: the instability checks find the deepest pair on the device.
+
+        (:meth:`dem.engine.checks.InstabilityChecks._deepest` reads it by this name.)
+        """
+        return self._engine if self.device == "cuda" else None
+
+    @property
     def pairs(self) -> PairList:
         """The pair list and its springs; after GPU steps, brought to the host when asked for.
 
         The GPU engine keeps the pairs on the device (copying them back costs more than 500 steps
         of a million spheres); reading this attribute copies them into the host's list first.
         """
-        gpu = getattr(self, "_gpu_engine", None)
-        if gpu is not None and gpu.pairs_on_device:
-            gpu.download_pairs(self._pairs)
+        if self._engine is not None:
+            self._engine.fetch_pairs(self._pairs)
         return self._pairs
 
     @pairs.setter
     def pairs(self, value: PairList) -> None:
-        gpu = getattr(self, "_gpu_engine", None)
-        if gpu is not None:  # the host's list is the one now: the engine takes it up again
-            gpu.pairs_on_device = False
-            gpu.snapshot = None
+        if self._engine is not None:  # the host's list is the one now: the engine takes it up
+            self._engine.pairs_replaced()
         self._pairs = value
 
     # --- stepping ---------------------------------------------------------------------------
@@ -205,9 +221,6 @@ class Simulation(InstabilityChecks):
         if self.feeder is not None:
             self.feeder.start(self)
         # sin(0) = 0: the stored forces are already those of drive time 0
-
-    def _drive(self) -> np.ndarray:
-        return self.trough.drive_array(self.drive_on)
 
     def mesh_layout(self) -> MeshArrays | None:
         """The trough mesh and the spheres' contact slots as the kernels take them (or None)."""
@@ -281,121 +294,24 @@ class Simulation(InstabilityChecks):
             return self.trough.wall_gaps(x)
         return np.stack([self.mesh.gaps(x), self.trough.back_gaps(x)])
 
-    def _build(self) -> None:
-        while True:
-            status, need = build(
-                self.spheres.n, self.spheres.as_layout(), self.spheres.body,
-                self.pairs.as_layout(), self.pairs.counters, self.geom,
-            )  # fmt: skip
-            if status == OK:
-                return
-            self.pairs.grow(status, need)
-
     def compute_forces(self) -> None:
         """Rebuild the pair list and evaluate forces and torques at the current state (no kick).
 
         Updates the contact history once, as a step does; ``spheres.force``/``torque`` hold
         contact forces plus m a_body.
         """
-        if self._gpu() is not None:
-            self._gpu().compute_forces(self, self._drive())
-            self.forces_valid = True
-            return
-        self._build()
-        serial = self._serial()
-        if self.bodies is not None:
-            evaluate_forces_clumps(
-                self.spheres.n, self.law.model_id, self.law.params, self.spheres.as_layout(),
-                self.pairs.as_layout(), self.pairs.n_pairs, self.geom, self.drive_time,
-                self.gravity, self._drive(), self.bodies.as_layout(), serial, self.mesh_layout(),
-            )  # fmt: skip
-            self.forces_valid = True
-            return
-        evaluate_forces(
-            self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-            self.spheres.as_layout(), self.pairs.as_layout(), self.pairs.n_pairs, self.geom,
-            self.drive_time, self.gravity, self._drive(), False, False, serial, self.mesh_layout(),
-        )  # fmt: skip
-        self.forces_valid = True
-
-    def _serial(self) -> bool:
-        """One thread: True, the pairs add to the spheres directly; else allocate the inbox.
-
-        Both paths give the same bits (:mod:`dem.kernels.forces`).
-        """
-        if numba.get_num_threads() == 1:
-            return True
-        self.pairs.ensure_inbox()
-        return False
-
-    def _advance(self, n_steps: int) -> None:
-        threads = numba.get_num_threads()
-        if self.spheres.n < config.DEM_PARALLEL_MIN_SPHERES:
-            numba.set_num_threads(1)
-        try:
-            self._advance_steps(n_steps)
-        finally:
-            numba.set_num_threads(threads)
-
-    def _gpu(self):
-        """The GPU engine (:mod:`dem.engine.gpu`) when ``device`` is "cuda", else None."""
-        if getattr(self, "device", "cpu") != "cuda":
-            return None
-        if getattr(self, "_gpu_engine", None) is None:
-            self.use_gpu()
-        return self._gpu_engine
-
-    def use_gpu(self, scene=None):
-        """Step on the GPU from now on; ``scene`` as :class:`dem.engine.gpu.GpuEngine`'s.
-
-        Returns the engine.
-        """
-        from dem.engine.gpu import GpuEngine
-
-        self.device = "cuda"
-        self._gpu_engine = GpuEngine(self, scene)
-        return self._gpu_engine
+        self.engine.compute_forces()
 
     def drive_array(self) -> np.ndarray:
         """The drive as the kernels take it (:meth:`dem.physics.drive.Motion.kernel_array`)."""
-        return self._drive()
+        return self.trough.drive_array(self.drive_on)
 
-    def _advance_steps(self, n_steps: int) -> None:
-        gpu = self._gpu()
-        if gpu is not None:
-            step0 = self.step_index - self.drive_start_step
-            self.stats[0] += gpu.advance(self, n_steps, step0, self._drive())
-            self.stats[1] += n_steps
-            self.step_index += n_steps
-            return
-        if not self.forces_valid:
-            self.compute_forces()
-        done = 0
-        resume = False
-        while done < n_steps:
-            serial = self._serial()
-            if self.bodies is None:
-                status, steps, need = advance(
-                    n_steps - done, self.step_index - self.drive_start_step, resume,
-                    self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-                    self.spheres.as_layout(), self.spheres.body, self.pairs.as_layout(),
-                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
-                    self.mesh_layout(),
-                )  # fmt: skip
-            else:
-                status, steps, need = advance_clumps(
-                    n_steps - done, self.step_index - self.drive_start_step, resume,
-                    self.spheres.n, self.law.model_id, self.law.params, self.rotation,
-                    self.spheres.as_layout(), self.bodies.as_layout(), self.pairs.as_layout(),
-                    self.pairs.counters, self.geom, self.gravity, self._drive(), self.stats, serial,
-                    self.mesh_layout(),
-                )  # fmt: skip
-            done += steps
-            self.step_index += steps
-            if status == DONE:
-                return
-            self.pairs.grow(status, need)
-            resume = True
+    def advance(self, n_steps: int) -> None:
+        """``n_steps`` steps by the engine, without the instability checks (:meth:`run` has them).
+
+        The x-momentum and step sums go to :attr:`stats`.
+        """
+        self.engine.advance(n_steps)
 
     def run(self, n_steps: int, stop=None) -> int:
         """Advance ``n_steps`` steps, checking for instability every ``DEM_CHECK_INTERVAL``.
@@ -433,10 +349,10 @@ class Simulation(InstabilityChecks):
                 self.stats[2] += chunk * self.total_mass
             t0 = time.perf_counter()
             if guard is None:
-                self._advance(chunk)
+                self.advance(chunk)
             else:
                 threads = guard.choose()
-                self._advance(chunk)
+                self.advance(chunk)
                 guard.record(threads, chunk, time.perf_counter() - t0)
             self._step_seconds = (time.perf_counter() - t0) / chunk
             left -= chunk

@@ -232,7 +232,7 @@ def member_arm(sphere_x, s, body_x, b, length):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def _place_member(s, b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega):
+def place_member(s, b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega):
     """Member s of body b: x_s = X_b + R d_s, v_s = V_b + omega_b x R d_s, omega_s = omega_b."""
     rx, ry, rz = rotate(
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
@@ -345,7 +345,7 @@ def omega_one(w, qx, qy, qz, lx, ly, lz, i0, i1, i2):
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
-def _store_omega(b, q, ang_mom, inertia, out_omega):
+def store_omega(b, q, ang_mom, inertia, out_omega):
     """out_omega[b] = R I^-1 R^T L of body b."""
     o0, o1, o2 = omega_one(
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
@@ -366,7 +366,7 @@ def angular_velocity(q, ang_mom, inertia, out_omega):
 
     """
     for b in numba.prange(q.shape[0]):
-        _store_omega(b, q, ang_mom, inertia, out_omega)
+        store_omega(b, q, ang_mom, inertia, out_omega)
 
 
 @numba.njit(**NUMBA_PARALLEL_OPTIONS)
@@ -455,9 +455,7 @@ def update_members(
 
     """
     for s in numba.prange(offsets.shape[0]):
-        _place_member(
-            s, body_of[s], body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega
-        )
+        place_member(s, body_of[s], body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega)
 
 
 # --- one body at a time (for fused loops over bodies, e.g. dem.kernels.integrate) -------------
@@ -484,7 +482,7 @@ def kick_drift_one(
         q[b, 1] = qx
         q[b, 2] = qy
         q[b, 3] = qz
-    _store_omega(b, q, ang_mom, inertia, out_omega)
+    store_omega(b, q, ang_mom, inertia, out_omega)
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
@@ -493,6 +491,6 @@ def place_members_of(
 ):  # fmt: skip
     """:func:`update_members` for the members of body b only (CSR ``body_start/members``)."""
     for e in range(body_start[b], body_start[b + 1]):
-        _place_member(
+        place_member(
             body_members[e], b, body_x, body_v, q, body_omega, offsets, out_x, out_v, out_omega
         )

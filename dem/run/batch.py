@@ -2,7 +2,7 @@
 
 A bed of a few thousand spheres keeps a GPU mostly idle (launches, not arithmetic, set its
 pace); N runs of it stepped as one scene of N times the spheres
-(:class:`dem.engine.gpu_replicas.GpuReplicas`) fill it. The runs are the replicas of a case
+(:class:`dem.engine.gpu.replicas.GpuReplicas`) fill it. The runs are the replicas of a case
 (seeds ``run.seed + k``) or the points of a sweep that differ only in their drive (angle,
 amplitude or throw number), incline or seed: one section, one period, one law, one time step (the
 smallest of their automatic ones). :func:`run_batch` leaves, for each run, what its own run would
@@ -20,7 +20,7 @@ step of a sweep, rebuilds of every pair list whenever one run needs one (this mo
 of positions, not the physics), and the wall time: each summary's ``wall_time_s`` is its share of
 the batch's step loop (the batch's time over the runs still recording), and ``gpu_batch`` gives
 the batch's size, whole wall time and the step kernel that ran (with the engine's timings of the
-plain and compact steps where it tried both: :meth:`dem.engine.gpu.GpuEngine.step_scheme`). An
+plain and compact steps where it tried both: ``GpuEngine.step_scheme()``). An
 interrupted batch writes every unfinished run's checkpoint; a rerun (``--resume``, or the sweep
 again) continues them one by one, not as a batch. One run that blows up stops the batch: a sweep
 then runs its points one by one.
@@ -39,7 +39,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from dem.engine import setup
-from dem.engine.gpu_replicas import GpuReplicas
+from dem.engine.gpu.replicas import GpuReplicas
 from dem.physics.drive import cycle_edge
 from dem.run import plan
 from dem.run.checks import check_memory, compile_first, warn_plan

@@ -55,7 +55,7 @@ RECORD = "sweep_point.json"
 #: The files a sweep writes beside its points' folders.
 TABLE_FILES = (f"{TABLE}.csv", f"{TABLE}.json", f"{TABLE}.h5", f"{TABLE}.png")
 #: Swept keys whose points can share one GPU batch (``--device cuda``): each point's body
-#: acceleration is its own (:mod:`dem.engine.gpu_replicas`); law, section and period are shared.
+#: acceleration is its own (:mod:`dem.engine.gpu.replicas`); law, section and period are shared.
 BATCH_KEYS = frozenset(
     {"drive.angle", "drive.throw_number", "drive.amplitude", "trough.inclination", "run.seed"}
 )

@@ -103,13 +103,13 @@ def test_gpu_steps_equal_the_cpu_engine(model, e, mu, mu_roll, limit, tangential
     steps = 40 if SIMULATOR else 5
     springs = False  # whether the history held a spring at a comparison
     for _ in range(3):
-        cpu._advance(steps)
-        gpu._advance(steps)
+        cpu.advance(steps)
+        gpu.advance(steps)
         springs |= bool(np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0))
         # the instability check's deepest overlap, from the pairs kept on the GPU
-        assert gpu._gpu_engine.pairs_on_device
+        assert gpu.engine.pairs_on_device
         deep_gpu, deep_cpu = gpu._deepest(), cpu._deepest()
-        assert gpu._gpu_engine.pairs_on_device  # the check did not copy the pairs back
+        assert gpu.engine.pairs_on_device  # the check did not copy the pairs back
         assert deep_gpu[1:3] == deep_cpu[1:3]
         _same(np.array(deep_gpu[0]), np.array(deep_cpu[0]))
         _same(deep_gpu[3], deep_cpu[3])
@@ -120,22 +120,7 @@ def test_gpu_steps_equal_the_cpu_engine(model, e, mu, mu_roll, limit, tangential
     # along the slip, a new contact's spring can be zero)
     assert springs
     # steps queued after a rebuild's trip did nothing and were relaunched after the rebuild
-    assert gpu._gpu_engine.skipped > 0
-
-
-@pytest.mark.parametrize("lanes", [4])
-def test_gpu_lanes_give_the_same_bits(lanes):
-    """The step with several threads a sphere (their terms summed in the loops' order by the
-    sphere's first lane) against the CPU engine, spheres through rebuilds: the same bits."""
-    cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
-    gpu.use_gpu().lanes = lanes
-    steps = 40 if SIMULATOR else 5
-    for _ in range(2):
-        cpu._advance(steps)
-        gpu._advance(steps)
-        _compare(cpu, gpu)
-    assert cpu.pairs.builds >= 2 and np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
-    assert np.any(cpu.spheres.wall_hist != 0.0)
+    assert gpu.engine.skipped > 0
 
 
 @pytest.mark.parametrize("keep", [16, 1])
@@ -144,13 +129,13 @@ def test_gpu_compact_step_gives_the_same_bits(keep):
     block, or with ``keep`` 1 a pass for every touching candidate of the most crowded sphere)
     against the CPU engine, spheres (through rebuilds with 16), walls touched: the same bits."""
     cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
-    engine = gpu.use_gpu()
+    engine = gpu.engine
     engine.compact = True
     engine.compact_keep = keep
     steps = (40 if keep > 1 else 6) if SIMULATOR else 5  # the simulator's barriers are slow
     for _ in range(2):
-        cpu._advance(steps)
-        gpu._advance(steps)
+        cpu.advance(steps)
+        gpu.advance(steps)
         _compare(cpu, gpu)
     assert keep == 1 or cpu.pairs.builds >= 2
     assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
@@ -159,17 +144,18 @@ def test_gpu_compact_step_gives_the_same_bits(keep):
 
 
 def test_gpu_times_the_plain_and_compact_steps_and_keeps_the_faster(monkeypatch):
-    """With ``compact`` None (the default) a scene of ``tune_min`` spheres or more runs its chunks
-    alternately with the plain and the compact step, times them (here on a clock that charges
+    """With ``compact`` None (the opt-in trial) a scene of ``tune_min`` spheres or more runs its
+    chunks alternately with the plain and the compact step, times them (here on a clock that charges
     each launch by its kernel, the compact one a tenth) and keeps the faster for the rest of the
     run, across calls, until the trial runs again (the costs swapped: the plain wins): every
     chunk, whichever step ran it, gives the CPU engine's bits."""
-    from dem.engine import gpu as gpu_module
+    from dem.engine.gpu import schemes as gpu_module
 
     faster = "compact"  # then "plain", in the second trial
     cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.05, False, "impact", "surface", 2e-5)
-    engine = gpu.use_gpu()
-    assert engine.compact is None
+    engine = gpu.engine
+    assert engine.compact is False  # the plain step unless a run opts in
+    engine.compact = None
     engine.tune_min = 1  # the 40 spheres: below the default, which would not time them
     monkeypatch.setattr(gpu_module, "TUNE_CHUNKS", 2)  # fewer of the simulator's slow compact
     monkeypatch.setattr(gpu_module, "TUNE_LAUNCHES", 8)  # steps (its barriers run as threads)
@@ -188,8 +174,8 @@ def test_gpu_times_the_plain_and_compact_steps_and_keeps_the_faster(monkeypatch)
     calls = 0
     while engine.tuned is None:
         assert calls < 8, f"no decision after {calls} calls: {engine._trial}"
-        cpu._advance(per_call)
-        gpu._advance(per_call)
+        cpu.advance(per_call)
+        gpu.advance(per_call)
         _compare(cpu, gpu)
         calls += 1
     assert engine.tuned["chose"] == faster, (engine.tuned, engine._trial, launched)
@@ -197,8 +183,8 @@ def test_gpu_times_the_plain_and_compact_steps_and_keeps_the_faster(monkeypatch)
     assert us[faster] == pytest.approx(1e5) and us[next(n for n in us if n != faster)] == 1e6
     assert min(launched.values()) >= gpu_module.TUNE_LAUNCHES
     before = dict(launched)
-    cpu._advance(per_call)
-    gpu._advance(per_call)
+    cpu.advance(per_call)
+    gpu.advance(per_call)
     _compare(cpu, gpu)
     assert launched[names[faster]] > before[names[faster]]
     slower = next(k for k in launched if k != names[faster])
@@ -211,30 +197,32 @@ def test_gpu_times_the_plain_and_compact_steps_and_keeps_the_faster(monkeypatch)
     calls = 0
     while engine.tuned["trials"] < 2:
         assert calls < 8, f"no second decision after {calls} calls: {engine._trial}"
-        cpu._advance(per_call)
-        gpu._advance(per_call)
+        cpu.advance(per_call)
+        gpu.advance(per_call)
         _compare(cpu, gpu)
         calls += 1
     assert engine.tuned["chose"] == "plain"
     assert engine.step_scheme()["kernel"] == "step_kernel"
 
 
-def test_gpu_small_scenes_run_the_plain_step_untimed():
-    """Below ``tune_min`` spheres (the default 20,000 here) nothing is timed: the plain step."""
+@pytest.mark.parametrize(("compact", "tune_min"), [(False, 1), (None, 20_000)])
+def test_gpu_runs_the_plain_step_untimed_unless_a_trial_is_asked_for(compact, tune_min):
+    """The default (``compact`` False) runs the plain step, untimed whatever the scene's size;
+    with the trial asked for (None), a scene below ``tune_min`` spheres is not timed either."""
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
-    engine = gpu.use_gpu()
-    gpu._advance(3)
+    engine = gpu.engine
+    engine.compact, engine.tune_min = compact, tune_min
+    gpu.advance(3)
     assert engine.tuned is None and engine._trial is None
     assert engine.step_scheme() == {"kernel": "step_kernel"}
 
 
-@pytest.mark.parametrize(("lanes", "keep", "words"), [(4, 16, "one lane"), (1, 0, "1 to 16")])
-def test_gpu_compact_step_refuses_what_it_cannot_do(lanes, keep, words):
+def test_gpu_compact_step_refuses_what_it_cannot_do():
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
-    engine = gpu.use_gpu()
-    engine.compact, engine.lanes, engine.compact_keep = True, lanes, keep
-    with pytest.raises(ValueError, match=words):
-        gpu._advance(2)
+    engine = gpu.engine
+    engine.compact, engine.compact_keep = True, 0
+    with pytest.raises(ValueError, match="1 to 16"):
+        gpu.advance(2)
 
 
 def _pan():
@@ -276,12 +264,12 @@ def test_gpu_steps_in_a_mesh_equal_the_cpu_engine():
     twice, the slots that carry a spring from one triangle to the next) through a rebuild: the
     same bits as the CPU, the mesh springs and their normals included."""
     cpu, gpu = _mesh_pair("hertz_mindlin", 0.3, 0.5, "impact")
-    gpu.use_gpu().tune_min = 1  # no trial all the same: the mesh has one step
+    gpu.engine.compact, gpu.engine.tune_min = None, 1  # no trial all the same: one mesh step
     steps = 15 if SIMULATOR else 5  # the simulator runs the mesh's Python: slow
     on_mesh = 0
     for _ in range(2):
-        cpu._advance(steps)
-        gpu._advance(steps)
+        cpu.advance(steps)
+        gpu.advance(steps)
         _compare(cpu, gpu)
         for name in ("mesh_hist", "mesh_normal"):
             ref = getattr(cpu.spheres, name)
@@ -291,18 +279,11 @@ def test_gpu_steps_in_a_mesh_equal_the_cpu_engine():
         assert np.any(cpu.spheres.mesh_hist != 0.0)  # springs on the mesh
     assert on_mesh >= 5
     assert cpu.pairs.builds >= 2
-    assert gpu._gpu_engine._trial is None
-    assert gpu._gpu_engine.step_scheme() == {"kernel": "mesh_step_kernel"}
+    assert gpu.engine._trial is None
+    assert gpu.engine.step_scheme() == {"kernel": "mesh_step_kernel"}
     with pytest.raises(ValueError, match="mesh step has one thread a sphere"):
-        gpu.use_gpu().compact = True
-        gpu._advance(1)
-
-
-def test_gpu_lanes_refuse_a_count_that_does_not_divide_the_block():
-    cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
-    gpu.use_gpu().lanes = 3
-    with pytest.raises(ValueError, match="lanes = 3"):
-        gpu._advance(2)
+        gpu.engine.compact = True
+        gpu.advance(1)
 
 
 def test_gpu_takes_up_a_state_the_host_changed():
@@ -310,27 +291,27 @@ def test_gpu_takes_up_a_state_the_host_changed():
     and springs included, and the GPU goes on as the CPU does."""
     cpu, gpu = _pair("hertz_mindlin", 0.3, 0.5, 0.0, False, "coulomb", "surface", 2e-5)
     for sim in (cpu, gpu):
-        sim._advance(20)
+        sim.advance(20)
         sim.spheres.v[:, 0] += 0.05
     for sim in (cpu, gpu):
-        sim._advance(20)
+        sim.advance(20)
     _compare(cpu, gpu)
 
 
 def test_gpu_grows_its_slots_and_keeps_the_springs():
     """A build that overflows the slots (one start slot a sphere) regrows them and keeps the
     history: the same bits as the CPU engine."""
-    import dem.engine.gpu as gpu_engine
+    import dem.engine.gpu.buffers as gpu_engine
 
     start = gpu_engine.START_SLOTS, gpu_engine.START_CELL
     gpu_engine.START_SLOTS, gpu_engine.START_CELL = 1, 1
     try:
         cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "liggghts", "surface", 2e-5, seed=5)
         for _ in range(2):
-            cpu._advance(30)
-            gpu._advance(30)
+            cpu.advance(30)
+            gpu.advance(30)
             _compare(cpu, gpu)
-        assert gpu._gpu_engine.slots > 1 and gpu._gpu_engine.cell_cap > 1
+        assert gpu.engine.slots > 1 and gpu.engine.cell_cap > 1
     finally:
         gpu_engine.START_SLOTS, gpu_engine.START_CELL = start
 
@@ -410,8 +391,8 @@ def test_gpu_clumps_equal_the_cpu_engine(model, e, mu, tangential, rotation):
     steps = 40 if SIMULATOR else 5
     springs = False  # whether the history held a spring at a comparison
     for _ in range(3):
-        cpu._advance(steps)
-        gpu._advance(steps)
+        cpu.advance(steps)
+        gpu.advance(steps)
         springs |= bool(np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0))
         _compare_bodies(cpu, gpu)
         k = cpu.pairs.n_pairs
@@ -423,26 +404,15 @@ def test_gpu_clumps_equal_the_cpu_engine(model, e, mu, tangential, rotation):
     assert rotation == np.any(cpu.bodies.ang_mom != 0.0)
 
 
-def test_gpu_clumps_with_lanes_equal_the_cpu_engine():
-    """Screws with four threads a member sphere: the same bits as the CPU engine."""
-    cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact")
-    gpu.use_gpu().lanes = 4
-    for _ in range(2):
-        cpu._advance(25 if SIMULATOR else 5)
-        gpu._advance(25 if SIMULATOR else 5)
-        _compare_bodies(cpu, gpu)
-    assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
-
-
 def test_gpu_clumps_with_the_compact_step_equal_the_cpu_engine():
     """Screws' member spheres through the compact step, two touching candidates a pass: the same
     bits as the CPU engine."""
     cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact")
-    engine = gpu.use_gpu()
+    engine = gpu.engine
     engine.compact, engine.compact_keep = True, 2
     for _ in range(2):
-        cpu._advance(25 if SIMULATOR else 5)
-        gpu._advance(25 if SIMULATOR else 5)
+        cpu.advance(25 if SIMULATOR else 5)
+        gpu.advance(25 if SIMULATOR else 5)
         _compare_bodies(cpu, gpu)
     assert np.any(cpu.pairs.hist[: cpu.pairs.n_pairs] != 0.0)
 
@@ -451,8 +421,8 @@ def test_gpu_clumps_in_a_mesh_equal_the_cpu_engine():
     """Screws in the triangle-mesh pan: the same bits as the CPU engine, mesh springs included."""
     cpu, gpu = _clump_pair("hertz_mindlin", 0.0, 0.5, "impact", mesh=True)
     for _ in range(2):  # the simulator runs the mesh's Python for 160 spheres: few steps
-        cpu._advance(8 if SIMULATOR else 5)
-        gpu._advance(8 if SIMULATOR else 5)
+        cpu.advance(8 if SIMULATOR else 5)
+        gpu.advance(8 if SIMULATOR else 5)
         _compare_bodies(cpu, gpu)
         for name in ("mesh_hist", "mesh_normal"):
             ref = getattr(cpu.spheres, name)
@@ -468,10 +438,10 @@ def test_gpu_clumps_evaluate_and_take_up_a_host_change():
         sim.compute_forces()
     _compare_bodies(cpu, gpu)
     for sim in (cpu, gpu):
-        sim._advance(25)
+        sim.advance(25)
         sim.bodies.v[:, 0] += 0.05
         sim.bodies.place(sim.spheres)
-        sim._advance(25)
+        sim.advance(25)
     _compare_bodies(cpu, gpu)
 
 
@@ -480,7 +450,7 @@ def test_gpu_takes_up_a_law_changed_between_calls():
     call uses, as on the CPU."""
     cpu, gpu = _pair("linear", 0.5, 0.3, 0.0, False, "coulomb", "surface", 2e-5)
     for sim in (cpu, gpu):
-        sim._advance(20)
+        sim.advance(20)
         sim.law = _law("linear", _coefficients("linear", 0.5, 0.8, 0.0, False, "coulomb"))
-        sim._advance(20)
+        sim.advance(20)
     _compare(cpu, gpu)

@@ -1,4 +1,4 @@
-"""Replicas stepped together on the GPU (dem.engine.gpu_replicas) against each replica alone.
+"""Replicas stepped together on the GPU (dem.engine.gpu.replicas) against each replica alone.
 
 Run with ``NUMBA_ENABLE_CUDASIM=1 pytest -m cuda``. Every replica has a cell grid of its own, so
 a replica in a batch meets only its own spheres and is stepped by the single scene's code; the
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from test_gpu_engine import _clump_pair, _mesh_pair, _pair
 
-from dem.engine.gpu_replicas import GpuReplicas
+from dem.engine.gpu.replicas import GpuReplicas
 from dem.errors import SimulationError
 
 SIMULATOR = os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
@@ -49,7 +49,7 @@ def test_identical_replicas_are_the_single_run_to_the_bit():
     for _ in range(2):
         v = batch.advance(40)
         alone.stats[:] = 0.0
-        alone._advance(40)
+        alone.advance(40)
         for r in range(2):
             part = batch.spheres(r)
             for name in ("x", "v", "omega", "force", "torque"):
@@ -70,7 +70,7 @@ def test_different_replicas_each_as_alone():
     batch = GpuReplicas([_pair(*LAW, seed=seed)[1] for seed in (3, 4)])
     batch.advance(60)
     for r, sim in enumerate(singles):
-        sim._advance(60)
+        sim.advance(60)
         part = batch.spheres(r)
         for name in ("x", "v", "omega"):
             ref = getattr(sim.spheres, name)
@@ -204,7 +204,7 @@ def test_clump_replicas_are_the_single_run_to_the_bit():
             _same_pairs(rs, alone)
     v = batch.advance(20)
     alone.stats[:] = 0.0
-    alone._advance(20)
+    alone.advance(20)
     np.testing.assert_allclose(v, alone.cycle_velocity(), rtol=1e-12)
 
 

@@ -128,7 +128,7 @@ def _head_on(law, radius, density, speed, dt):
     sim.gravity[:] = 0.0
     gaps = [spheres.x[1, 0] - spheres.x[0, 0] - 2 * radius]
     for _ in range(200000):
-        sim._advance(1)
+        sim.advance(1)
         gaps.append(spheres.x[1, 0] - spheres.x[0, 0] - 2 * radius)
         if gaps[-1] > 0 and min(gaps) < 0:
             break

@@ -73,11 +73,11 @@ def test_gpu_forces_equal_the_cpu_engine(
     for _ in range(2):
         spheres.v[:] = rng.normal(0, 0.3, (len(r), 3))
         spheres.omega[:] = rng.normal(0, 300.0, (len(r), 3))
-        sim._build()  # the pair list the CPU step will use (a rebuild is deterministic)
+        sim.engine.build()  # the pair list the CPU step will use (a rebuild is deterministic)
         pairs = sim.pairs
         n_pairs = pairs.n_pairs
         pair_i, pair_j = pairs.pair_i[:n_pairs].copy(), pairs.pair_j[:n_pairs].copy()
-        a_body = np.array(body_acceleration(sim.drive_time, sim.gravity, sim._drive()))
+        a_body = np.array(body_acceleration(sim.drive_time, sim.gravity, sim.drive_array()))
         force, torque, hist, wall_hist = gpu_forces(
             law.model_id, law.params, spheres.x.copy(), spheres.v.copy(), spheres.omega.copy(),
             spheres.radius, spheres.mass, pair_i, pair_j, n_pairs, pairs.hist[:n_pairs].copy(),

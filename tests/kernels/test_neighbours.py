@@ -44,7 +44,7 @@ def _brute_force_keys(sim):
 def test_pair_list_equals_brute_force(n, length, width):
     sim, _ = _sim(n, length, width, seed=n)
     sim.spheres.x[:5, 0] += np.array([-0.5, 1.0, 2.3, -3.1, 0.7]) * length  # outside the box
-    sim._build()
+    sim.engine.build()
     p = sim.pairs
     k = p.n_pairs
     expected = _brute_force_keys(sim)
@@ -65,21 +65,21 @@ def test_pair_list_equals_brute_force(n, length, width):
 
 def test_overflow_regrows_to_the_same_list():
     sim, _ = _sim(300, 0.03, 0.02, seed=5, capacity=3)
-    sim._build()
+    sim.engine.build()
     assert sim.pairs.capacity >= sim.pairs.n_pairs > 3
     np.testing.assert_array_equal(sim.pairs.pair_key[: sim.pairs.n_pairs], _brute_force_keys(sim))
 
 
 def test_history_survives_rebuild_by_pair_key():
     sim, rng = _sim(300, 0.03, 0.02, seed=11)
-    sim._build()
+    sim.engine.build()
     p, n = sim.pairs, sim.spheres.n
     k = p.n_pairs
     old = {int(key): np.array([key, -key, 0.5 * key], dtype=float) for key in p.pair_key[:k]}
     for m in range(k):
         p.hist[m] = old[int(p.pair_key[m])]
     sim.spheres.x += rng.normal(0, 4e-4, sim.spheres.x.shape)
-    sim._build()
+    sim.engine.build()
     k2 = p.n_pairs
     kept = new = 0
     for m in range(k2):
@@ -100,7 +100,7 @@ def test_overflow_inside_the_step_loop_resumes_the_step_exactly():
         sim, rng = _sim(300, 0.03, 0.02, seed=4)
         sim.spheres.x[:, 2] *= 0.3  # a dense layer: many contacts
         sim.spheres.v[:] = rng.normal(0, 0.05, sim.spheres.v.shape)
-        sim._advance(20)  # (no instability checks: the random start overlaps deeply)
+        sim.advance(20)  # (no instability checks: the random start overlaps deeply)
         if small_lists:  # same list, but every capacity of the next build overflows
             k = sim.pairs.n_pairs
             small = PairList(sim.spheres.n, capacity=k, cell_capacity=2, slots=2)
@@ -112,7 +112,7 @@ def test_overflow_inside_the_step_loop_resumes_the_step_exactly():
             small.x_ref[:] = sim.pairs.x_ref
             sim.pairs = small
         sim.pairs.x_ref[:] = np.inf  # force a build in the next step
-        sim._advance(30)
+        sim.advance(30)
         runs.append((sim.spheres.x.copy(), sim.spheres.v.copy(), sim.pairs.n_pairs))
         assert sim.pairs.n_pairs > 0
     assert sim.pairs.cell_capacity > 2 and sim.pairs.slots > 2  # it did regrow

@@ -188,8 +188,8 @@ def test_a_try_of_the_other_thread_count_runs_a_short_chunk(tmp_path, monkeypatc
     sim = setup.from_case(load_case(write_case(tmp_path / "case")))
     sim.guard = threads.ThreadGuard(2, period=4)
     sizes = []
-    real = sim._advance
-    monkeypatch.setattr(sim, "_advance", lambda n: (sizes.append(n), real(n)))
+    real = sim.advance
+    monkeypatch.setattr(sim, "advance", lambda n: (sizes.append(n), real(n)))
     sim.run(6 * config.DEM_CHECK_INTERVAL)
     assert sizes[2] == config.DEM_THREAD_GUARD_TRY_STEPS  # the third chunk tries one thread
     assert sizes[:2] == [config.DEM_CHECK_INTERVAL] * 2

@@ -1,6 +1,6 @@
 """Replicas as one GPU job (dem.run.batch): the run's bookkeeping, with the batch on the CPU.
 
-The batch's own stepping (:class:`dem.engine.gpu_replicas.GpuReplicas`: one scene of all the
+The batch's own stepping (:class:`dem.engine.gpu.replicas.GpuReplicas`: one scene of all the
 replicas, scattered back into each replica's Simulation) is checked against single runs in
 numba's CUDA simulator (tests/engine/test_gpu_replicas.py); a whole case there would take
 hours. Here :class:`LockstepCpu` stands in for it, stepping each replica's own Simulation on the

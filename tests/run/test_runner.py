@@ -452,7 +452,7 @@ def test_a_slow_scene_asks_for_a_stop_every_stop_latency_not_500_steps(tmp_path,
         time.sleep(per_step * n)
         self.step_index += n
 
-    monkeypatch.setattr(Simulation, "_advance", slow_advance)
+    monkeypatch.setattr(Simulation, "advance", slow_advance)
     monkeypatch.setattr(Simulation, "check", lambda self: None)
     monkeypatch.setattr(config, "DEM_STOP_LATENCY_S", 0.05)
     asked = []

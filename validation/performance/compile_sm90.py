@@ -37,7 +37,7 @@ def signatures() -> dict:
     from numba import types
 
     from dem.kernels.contact import N_PARAMS
-    from dem.kernels.cuda import bodies, forces, neighbours, step
+    from dem.kernels.cuda import bodies, compact, forces, neighbours, step
 
     f8, i8, b1 = types.float64, types.int64, types.boolean
     a2 = types.Array(f8, 2, "C")
@@ -69,10 +69,7 @@ def signatures() -> dict:
             i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a, i4a,
             a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1,
             a3, a1, i8a, i8a, i8a, a2, a2)),
-        "lanes_step_kernel": (step.lanes_step_kernel, (
-            i8, i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a,
-            i4a, a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
-        "compact_step_kernel": (step.compact_step_kernel, (
+        "compact_step_kernel": (compact.compact_step_kernel, (
             i8, i8, i8a, i8, row, row, a2, a2, a2, a2, a2, a2, a1, a1, a1, a1, i4a, i4a, i4a,
             i4a, a2, a2, a2, a2, f8, f8, f8, f8, a3, i8, i4a, b1, b1, b1, a2, f8, a2, a2, a1)),
         "reduce_kernel": (bodies.reduce_kernel, (

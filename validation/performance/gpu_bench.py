@@ -123,14 +123,13 @@ def screw_lattice_sim(n: int, device: str, seed: int = 1):
     return sim
 
 
-STEPS = {"plain": False, "compact": True, "auto": None}
+STEPS = {"plain": False, "compact": True, "auto": None}  # GpuEngine.compact
 
 
 def _scheme(sim, args) -> None:
-    """The step scheme the command line asks for (--lanes, --step) on ``sim``'s GPU engine."""
-    engine = sim.use_gpu()
-    engine.lanes = args.lanes
-    engine.compact = STEPS[args.step] if args.lanes == 1 else False
+    """The step scheme the command line asks for (--step) on ``sim``'s GPU engine."""
+    engine = sim.engine
+    engine.compact = STEPS[args.step]
 
 
 def _trial_done(advance, engine, steps: int = 64, calls: int = 40) -> None:
@@ -158,16 +157,16 @@ def clumps_job(args) -> dict:
                 _scheme(sim, args)
             if args.device == "cpu":
                 numba.set_num_threads(max(threads))
-            sim._advance(200)  # compile, upload, the lattice starts to shake
+            sim.advance(200)  # compile, upload, the lattice starts to shake
             if args.device == "cuda":
-                _trial_done(sim._advance, sim._gpu_engine)
+                _trial_done(sim.advance, sim.engine)
             for t in threads:
                 if t is not None:
                     numba.set_num_threads(t)
-                sim._advance(5)
+                sim.advance(5)
                 steps = int(max(50, min(4000, args.work / 8 / sim.bodies.n * (t or 50))))
                 t0 = time.perf_counter()
-                sim._advance(steps)
+                sim.advance(steps)
                 wall = time.perf_counter() - t0
                 row = {"screws": sim.bodies.n, "spheres": sim.spheres.n, "threads": t,
                        "steps": steps, "wall_s": round(wall, 3),
@@ -176,7 +175,7 @@ def clumps_job(args) -> dict:
                        "finite": bool(np.all(np.isfinite(sim.bodies.x))),
                        "loadavg": load_loadavg()}  # fmt: skip
                 if args.device == "cuda":
-                    eng = sim._gpu_engine
+                    eng = sim.engine
                     row.update(builds=eng.builds, skipped_launches=eng.skipped, chunk=eng.chunk,
                                step=eng.step_scheme())  # fmt: skip
                 print(f"{args.device} {sim.bodies.n} screws x{t}: "
@@ -222,16 +221,16 @@ def prepared_vs_ordinary(n: int = 10000, steps: int = 300) -> dict:
     """The same lattice stepped with prepared launches and with numba-cuda's ordinary ones."""
     sims = [lattice_sim(n, "cuda") for _ in range(2)]
     for sim in sims:
-        sim._advance(20)
-    sims[1]._gpu_engine.fast = False
+        sim.advance(20)
+    sims[1].engine.fast = False
     walls = []
     for sim in sims:
         t0 = time.perf_counter()
-        sim._advance(steps)
+        sim.advance(steps)
         walls.append(time.perf_counter() - t0)
     a, b = (sim.spheres for sim in sims)
     same = all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ("x", "v", "omega", "force"))
-    out = {"spheres": sims[0].spheres.n, "steps": steps, "used": sims[0]._gpu_engine.fast,
+    out = {"spheres": sims[0].spheres.n, "steps": steps, "used": sims[0].engine.fast,
            "same_bits": bool(same), "prepared_s_per_step": walls[0] / steps,
            "ordinary_s_per_step": walls[1] / steps}  # fmt: skip
     print(f"prepared launch: {out}", flush=True)
@@ -281,16 +280,16 @@ def gpu_job(args) -> dict:
             row["spheres"] = sim.spheres.n
             row["setup_s"] = round(time.perf_counter() - t0, 2)
             t0 = time.perf_counter()
-            sim._advance(20)  # compile (first size), upload, first build
+            sim.advance(20)  # compile (first size), upload, first build
             row["first_call_s"] = round(time.perf_counter() - t0, 2)
-            sim._advance(200)  # the bed starts to sit
+            sim.advance(200)  # the bed starts to sit
             steps = int(max(200, min(4000, args.work / sim.spheres.n)))
-            eng = sim._gpu_engine
-            _trial_done(sim._advance, eng)
+            eng = sim.engine
+            _trial_done(sim.advance, eng)
             builds = eng.builds
             cuda.synchronize()
             t0 = time.perf_counter()
-            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim._drive())
+            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim.drive_array())
             cuda.synchronize()
             wall = time.perf_counter() - t0
             sim.step_index += steps
@@ -298,7 +297,7 @@ def gpu_job(args) -> dict:
             eng.download(sim)
             row["download_s"] = round(time.perf_counter() - t0, 3)
             t0 = time.perf_counter()
-            eng.steps(sim, 1, sim.step_index - sim.drive_start_step, sim._drive())
+            eng.steps(sim, 1, sim.step_index - sim.drive_start_step, sim.drive_array())
             cuda.synchronize()
             row["one_step_call_s"] = round(time.perf_counter() - t0, 5)
             sim.step_index += 1
@@ -349,20 +348,20 @@ def gpu_job(args) -> dict:
         row = {"spheres_asked": int(float(args.sizes[-2])), "max_registers": regs}
         try:
             sim = lattice_sim(row["spheres_asked"], "cuda")
-            sim._advance(20)
-            eng = sim._gpu_engine
+            sim.advance(20)
+            eng = sim.engine
             alt = cuda.jit(max_registers=regs)(step.step_kernel.py_func)
             eng.step = pytypes.SimpleNamespace(
                 step_kernel=alt, kick_drift_kernel=step.kick_drift_kernel
             )
             eng._prepared.clear()
             t0 = time.perf_counter()
-            sim._advance(200)
+            sim.advance(200)
             row["compile_and_200_steps_s"] = round(time.perf_counter() - t0, 2)
             steps = int(max(200, min(4000, args.work / sim.spheres.n)))
             cuda.synchronize()
             t0 = time.perf_counter()
-            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim._drive())
+            eng.steps(sim, steps, sim.step_index - sim.drive_start_step, sim.drive_array())
             cuda.synchronize()
             wall = time.perf_counter() - t0
             row.update(steps=steps, wall_s=round(wall, 3),
@@ -393,13 +392,13 @@ def cpu_job(args) -> dict:
         n = int(float(n))
         sim = lattice_sim(n, "cpu", mesh=args.mesh)
         numba.set_num_threads(max(args.threads))
-        sim._advance(220)
+        sim.advance(220)
         for threads in args.threads:
             numba.set_num_threads(threads)
-            sim._advance(5)
+            sim.advance(5)
             steps = int(max(10, min(2000, args.work / 10 / sim.spheres.n * threads)))
             t0 = time.perf_counter()
-            sim._advance(steps)
+            sim.advance(steps)
             wall = time.perf_counter() - t0
             row = {"spheres": sim.spheres.n, "threads": threads, "steps": steps,
                    "wall_s": round(wall, 3), "sphere_steps_per_s": sim.spheres.n * steps / wall,
@@ -458,22 +457,23 @@ def _replicas(blob: bytes, reps: int) -> list:
 
 
 def _time_batch(
-    blob: bytes, reps: int, cycles: int, threads=None, max_registers=None, lanes: int = 1,
+    blob: bytes, reps: int, cycles: int, threads=None, max_registers=None,
     compact: bool | None = False,
 ) -> dict:  # fmt: skip
     """One batch of ``reps`` replicas timed over ``cycles`` drive cycles (a row of the JSON).
 
     ``threads``: threads per block of the step launches; ``max_registers``: the step kernels
-    compiled with at most this many registers (None: the defaults); ``lanes``: threads a sphere
-    (:attr:`dem.engine.gpu.GpuEngine.lanes`); ``compact``: the step that gathers the touching
-    candidates first (:attr:`dem.engine.gpu.GpuEngine.compact`; None: the engine times it
-    against the plain step, as by default, before the timed cycles).
+    compiled with at most this many registers (None: the defaults; the plain step and the
+    compact one); ``compact``: the step that gathers the touching candidates first
+    (:attr:`dem.engine.gpu.schemes.StepSchemes.compact`; None: the engine's trial against the
+    plain step, before the timed cycles).
     """
     import types as pytypes
 
     from numba import cuda
 
-    from dem.engine.gpu_replicas import GpuReplicas
+    from dem.engine.gpu.replicas import GpuReplicas
+    from dem.kernels.cuda import compact as compact_module
     from dem.kernels.cuda import step
 
     sims = _replicas(blob, reps)
@@ -483,17 +483,15 @@ def _time_batch(
     eng = batch.engine
     if threads is not None:
         eng.threads = threads
-    eng.lanes, eng.compact = lanes, compact
+    eng.compact = compact
     if max_registers is not None:
         capped = cuda.jit(max_registers=max_registers)
         eng.step = pytypes.SimpleNamespace(
-            step_kernel=capped(step.step_kernel.py_func),
-            lanes_step_kernel=capped(step.lanes_step_kernel.py_func),
-            compact_step_kernel=capped(step.compact_step_kernel.py_func),
-            kick_drift_kernel=step.kick_drift_kernel, LANE_COUNTS=step.LANE_COUNTS,
-            LANE_BLOCK=step.LANE_BLOCK, COMPACT_BLOCK=step.COMPACT_BLOCK,
-            COMPACT_KEEP=step.COMPACT_KEEP,
+            step_kernel=capped(step.step_kernel.py_func), mesh_step_kernel=step.mesh_step_kernel,
+            kick_drift_kernel=step.kick_drift_kernel,
         )  # fmt: skip
+        # the engine imports the compact step where it runs it: the capped one is bound there
+        compact_module.compact_step_kernel = capped(compact_module.compact_step_kernel.py_func)
     kernel, _, block, _, _ = eng._step_kernel()
     eng._prepared.clear()
     batch.advance(10)  # compile, upload, first build
@@ -506,7 +504,7 @@ def _time_batch(
     n_steps = int(round(cycles * batch.sim.trough.period / batch.sim.dt))
     row = {"replicas": reps, "spheres": int(batch.sim.spheres.n), "cycles": cycles,
            "threads_per_block": block or eng.threads, "max_registers": max_registers,
-           "lanes": lanes, "compact": compact, "step": eng.step_scheme(),
+           "compact": compact, "step": eng.step_scheme(),
            "wall_s": round(wall, 2), "setup_s": round(setup, 2),
            "host_queueing_s": round(eng.host_s - host0, 3),
            "host_waiting_s": round(eng.wait_s - wait0, 3),
@@ -521,7 +519,7 @@ def _time_batch(
     except Exception:  # noqa: BLE001  (a report, not a result)
         pass
     row["sphere_steps_per_s"] = batch.sim.spheres.n * n_steps / wall
-    scheme = {True: "compact", None: "auto"}.get(compact, f"{lanes} lanes")
+    scheme = {True: "compact", None: "auto"}.get(compact, "plain")
     if compact is None:
         scheme += f" ({eng.step_scheme()})"
     print(f"batch {reps} x {cycles} cycles, {scheme}, {block or eng.threads} threads/block, "
@@ -532,7 +530,7 @@ def _time_batch(
 
 
 def batch_job(args) -> dict:
-    """R replicas of the pickled bed in one GPU job (dem.engine.gpu_replicas), timed."""
+    """R replicas of the pickled bed in one GPU job (dem.engine.gpu.replicas), timed."""
     blob = Path(args.state).read_bytes()
     out = {"runs": [], "loadavg_start": load_loadavg()}
     for reps, cycles in zip(args.batch, args.batch_cycles, strict=True):
@@ -552,12 +550,10 @@ def variants_job(args) -> dict:
     out = {"variants": [], "loadavg_start": load_loadavg()}
     for spec in args.batch_variants:
         compact = {"c": True, "a": None}.get(spec[-1], False)
-        spec_launch, _, lanes = spec.rstrip("ca").partition("x")
-        threads, _, regs = spec_launch.partition(":")
+        threads, _, regs = spec.rstrip("ca").partition(":")
         try:
             row = _time_batch(
-                blob, reps, cycles, int(threads), int(regs) if regs else None,
-                int(lanes) if lanes else 1, compact,
+                blob, reps, cycles, int(threads), int(regs) if regs else None, compact
             )  # fmt: skip
         except Exception:  # noqa: BLE001  (the next variant may still run)
             row = {"variant": spec, "error": traceback.format_exc()}
@@ -574,7 +570,7 @@ def variants_job(args) -> dict:
         best = min(timed, key=lambda r: r["wall_s"])
         out["best_full"] = _time_batch(
             blob, reps, args.batch_cycles[0], best["threads_per_block"], best["max_registers"],
-            best["lanes"], best["compact"],
+            best["compact"],
         )  # fmt: skip
         Path(args.out).write_text(json.dumps(out, indent=1))
     return out
@@ -608,23 +604,17 @@ def main() -> None:
         default=[],
         help="cycles measured for each --batch count",
     )
-    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][xL|c|a]",
+    p.add_argument("--batch-variants", nargs="*", default=[], metavar="T[:R][c|a]",
                    help="time the first --batch count with T threads per block (the step "
-                   "kernel capped at R registers, L threads a sphere, c: the compact step, a: the "
-                   "engine's trial of the plain and compact steps) "
+                   "kernel capped at R registers, c: the compact step, a: the engine's trial of "
+                   "the plain and compact steps) "
                    "for --variant-cycles each")  # fmt: skip
-    p.add_argument(
-        "--lanes",
-        type=int,
-        default=1,
-        help="threads a sphere in the step (--gpu and --clumps on cuda)",
-    )
     p.add_argument(
         "--step",
         choices=list(STEPS),
-        default="auto",
-        help="the step kernel (--gpu and --clumps on cuda): plain, compact (touching candidates "
-        "gathered first) or auto (the engine times both on the first chunks, the default)",
+        default="plain",
+        help="the step kernel (--gpu and --clumps on cuda): plain (the default), compact "
+        "(touching candidates gathered first) or auto (the engine times both on the first chunks)",
     )
     p.add_argument(
         "--mesh",

@@ -3,7 +3,7 @@
 On the H200 one replica alone ran 58 us a step and the 100-replica batch spent 67 us a step
 queueing launches (gpu_h200_batch_queued.json): below some 1e5 spheres the host, not the
 kernel, sets the pace. This script times the Python the engine runs for each queued step
-(:meth:`dem.engine.gpu.GpuEngine.steps`: the body accelerations of a chunk, the step launch's
+(:meth:`dem.engine.gpu.engine.GpuEngine.steps`: the body accelerations of a chunk, the step launch's
 arguments, the prepared launch's lookup and its changing scalars) with every
 :class:`dem.kernels.cuda.launch.PreparedLaunch` replaced by one whose launch does nothing, in
 numba's CUDA simulator (device arrays are host arrays there; the kernels themselves never run in
@@ -60,15 +60,15 @@ def _engine(clumps: bool):
     sim = from_case(case)
     sim.device = "cuda"
     sim.start_drive()
-    engine = sim.use_gpu()
-    sim._advance(2)  # upload, first build, compile in the simulator
+    engine = sim.engine
+    sim.advance(2)  # upload, first build, compile in the simulator
     engine.fast = True  # the GPU's path: prepared launches (no-ops here)
     return sim, engine
 
 
 def time_steps(sim, engine, steps: int) -> float:
     """Host microseconds a queued step: the chunk loop of ``steps`` with no trip and no build."""
-    drive = sim._drive()
+    drive = sim.drive_array()
     dt = sim.geom.dt
     engine.chunk = 64
     t0 = time.perf_counter()

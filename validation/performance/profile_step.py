@@ -116,7 +116,7 @@ base = copy.deepcopy((sim.spheres, sim.pairs, sim.bodies))
 res = {"threads": numba.get_num_threads(), "spheres": n, "pairs": nb.n_pairs,
        "whole_step_s": whole, "builds_per_step": builds}
 res["displacement_s"] = timed(loop_disp, s.x, nb.x_ref, n, geom.length)
-serial = numba.get_num_threads() == 1  # as Simulation._advance chooses
+serial = numba.get_num_threads() == 1  # as the CPU engine chooses
 res["pair_forces_s"] = timed(loop_pairs, model, p, s.as_layout(), nb.as_layout(), nb.n_pairs,
                              geom, serial)
 if sim.bodies is None:

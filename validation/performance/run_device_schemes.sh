@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # What the next GPU loan should measure for issue 29, about 4 minutes: the step schemes of
-# dem/kernels/cuda/step.py on the 100-replica bed batch (4 cycles each; the fastest over 20):
-# one thread a sphere (step_kernel), the compact step (GpuEngine.compact = True,
-# compact_step_kernel: a block's touching candidates gathered before the contact law), the
-# engine's default (compact = None: it times both on its first chunks and keeps the faster), and 2
-# and 4 threads a sphere (GpuEngine.lanes, lanes_step_kernel); then the Done-when sizes with the
+# dem/kernels/cuda/ on the 100-replica bed batch (4 cycles each; the fastest over 20): one
+# thread a sphere (step_kernel, the default), the compact step (GpuEngine.compact = True,
+# compact.py's compact_step_kernel: a block's touching candidates gathered before the contact
+# law) and the engine's opt-in trial (compact = None: it times both on its first chunks and keeps
+# the faster); several threads a sphere is a patch (experiments/gpu_lanes_step.patch, apply it
+# and add 128x2 128x4 to the variants); then the Done-when sizes with the
 # fastest (1e6 spheres, 1e5 screws), 1e5 spheres in a trough of triangles (gpu_bench --mesh:
 # mesh_step_kernel), and Nsight Compute on the fastest step kernel. warp_model.py counts what
 # each scheme should save (warp_model_sphere-bed.json). The baseline of the 50x (100 x the
@@ -17,20 +18,20 @@ PY=${1:-python3}
 BUDGET=${2:-240}
 . "$(dirname "$0")/device_common.sh"
 { date +%T; nvidia-smi -L; } 2>&1
-"$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 128c 128a 128x2 128x4 \
+"$PY" $B --batch 100 --batch-cycles 20 --batch-variants 128 128c 128a \
     --variant-cycles 4 --state $S --out "$OUT/schemes_batch.json" 2>&1 | quiet
 echo "batch done at ${SECONDS} s"
-read -r L M K < <("$PY" -c "import json; b = json.load(open('$OUT/schemes_batch.json'))['best_full']
-k = b['step']['kernel']; print(b['lanes'], 'compact' if k == 'compact_step_kernel' else 'plain', k)" \
-    2>/dev/null || echo "1 plain step_kernel")
+read -r M K < <("$PY" -c "import json; b = json.load(open('$OUT/schemes_batch.json'))['best_full']
+k = b['step']['kernel']; print('compact' if k == 'compact_step_kernel' else 'plain', k)" \
+    2>/dev/null || echo "plain step_kernel")
 C="--step $M"
-echo "fastest: lanes $L, $M, kernel $K"
+echo "fastest: $M, kernel $K"
 if [ "$(left)" -gt 60 ]; then
-    "$PY" $B --gpu --sizes 1e6 --lanes "$L" $C --out "$OUT/schemes_spheres.json" 2>&1 | quiet \
+    "$PY" $B --gpu --sizes 1e6 $C --out "$OUT/schemes_spheres.json" 2>&1 | quiet \
         | grep -i "sphere-steps\|error" | head -5
 fi
 if [ "$(left)" -gt 40 ]; then
-    "$PY" $B --clumps --device cuda --clump-sizes 1e5 --lanes "$L" $C \
+    "$PY" $B --clumps --device cuda --clump-sizes 1e5 $C \
         --out "$OUT/schemes_screws.json" 2>&1 | quiet | tail -2
 fi
 if [ "$(left)" -gt 50 ]; then  # the trough mesh on the GPU (one thread a sphere): untimed so far
@@ -39,8 +40,7 @@ if [ "$(left)" -gt 50 ]; then  # the trough mesh on the GPU (one thread a sphere
 fi
 echo "sizes done at ${SECONDS} s"
 if [ "$(left)" -gt 45 ] && [ "$K" != step_kernel ]; then
-    V="128x$L"
-    [ "$M" = compact ] && V=128c
+    V=128c
     NCU=$(command -v ncu || ls /opt/nvidia/nsight-compute/*/ncu 2>/dev/null | head -1)
     timeout $(($(left) - 5)) "$NCU" -k "regex:$K" --launch-skip 300 \
         --launch-count 1 --section SpeedOfLight --section Occupancy --section LaunchStats \

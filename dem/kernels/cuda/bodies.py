@@ -14,51 +14,31 @@ The CPU engine's clump step (:func:`dem.kernels.integrate.advance_clumps`) in tw
    members placed (x = X + R d, v = V + omega x R d, spin omega) and the rebuild trip written
    where a member moved past skin/2 (:mod:`dem.kernels.cuda.step`).
 
-Each body writes only its own rows and its members' rows. The free rotation is the CPU
-engine's scalar :func:`dem.kernels.rigid.free_rotation_one` (the symmetric Lie-Poisson
-splitting) compiled as a device function, the quaternion rotation its ``rotate``: the rigid
-body's physics is written once. The glue here (kick, drift, reduce, place) repeats the CPU
-kernels' few lines on arrays because a device function taking arrays does not run in numba's
-CUDA simulator; the simulator tests (tests/engine/test_gpu_engine.py) hold the two to the bit.
+Each body writes only its own rows and its members' rows. The rigid body's physics is written
+once: a body's kick, drift and free rotation (the symmetric Lie-Poisson splitting), its members'
+placement and their arms are the CPU engine's functions (:func:`dem.kernels.rigid.
+kick_drift_one`, :func:`~dem.kernels.rigid.place_member`, :func:`~dem.kernels.rigid.
+member_arm`) compiled from their source as device functions (:mod:`dem.kernels.cuda.source`).
+A body's members are placed in one loop that checks each for a rebuild as it goes, as
+:func:`dem.kernels.rigid.place_members_of` places them: ptxas then gives the kernels the
+registers and the double-precision operations of the hand-written glue they replace.
+The simulator tests (tests/engine/test_gpu_engine.py) hold the two engines to the bit.
 """
 
 from numba import cuda
 
+from dem.kernels import rigid as _rigid
+from dem.kernels.cuda.source import device
 from dem.kernels.cuda.step import moved_past
-from dem.kernels.periodic import nearest_image, wrap
-from dem.kernels.rigid import free_rotation_one, omega_one, rotate
+from dem.kernels.periodic import wrap
 
-
-@cuda.jit(device=True)
-def _kick_drift(
-    b, dt, drift, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass, inertia,
-    out_omega,
-):  # fmt: skip
-    """:func:`dem.kernels.rigid.kick_drift_one` for body b (the same operations in order)."""
-    h = 0.5 * dt
-    a = h * inv_mass[b]
-    for c in range(3):
-        body_v[b, c] += a * body_force[b, c]
-        if rotation:
-            ang_mom[b, c] += h * body_torque[b, c]
-    if drift:
-        for c in range(3):
-            body_x[b, c] += dt * body_v[b, c]
-        w, qx, qy, qz = free_rotation_one(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-            inertia[b, 0], inertia[b, 1], inertia[b, 2], dt,
-        )  # fmt: skip
-        q[b, 0] = w
-        q[b, 1] = qx
-        q[b, 2] = qy
-        q[b, 3] = qz
-    o0, o1, o2 = omega_one(
-        q[b, 0], q[b, 1], q[b, 2], q[b, 3], ang_mom[b, 0], ang_mom[b, 1], ang_mom[b, 2],
-        inertia[b, 0], inertia[b, 1], inertia[b, 2],
-    )  # fmt: skip
-    out_omega[b, 0] = o0
-    out_omega[b, 1] = o1
-    out_omega[b, 2] = o2
+#: :func:`dem.kernels.rigid.kick_drift_one` compiled from its source: body b's half kick (and,
+#: with ``drift``, its drift and free rotation), then its angular velocity.
+kick_drift = device(_rigid.kick_drift_one, store_omega=device(_rigid.store_omega))
+#: :func:`dem.kernels.rigid.place_member` compiled from its source: member s of body b placed.
+place_member = device(_rigid.place_member)
+#: :func:`dem.kernels.rigid.member_arm` compiled from its source: member s's arm from X_b.
+member_arm = device(_rigid.member_arm)
 
 
 @cuda.jit(device=True)
@@ -68,25 +48,11 @@ def _place_members(
 ):  # fmt: skip
     """Members of body b placed (:func:`dem.kernels.rigid.place_members_of`).
 
-    With ``check``, a member that moved past skin/2 trips a rebuild.
+    With ``check``, a member past skin/2 trips a rebuild.
     """
-    ox = body_omega[b, 0]
-    oy = body_omega[b, 1]
-    oz = body_omega[b, 2]
     for e in range(start[b], start[b + 1]):
         s = members[e]
-        rx, ry, rz = rotate(
-            q[b, 0], q[b, 1], q[b, 2], q[b, 3], offsets[s, 0], offsets[s, 1], offsets[s, 2]
-        )
-        x[s, 0] = body_x[b, 0] + rx
-        x[s, 1] = body_x[b, 1] + ry
-        x[s, 2] = body_x[b, 2] + rz
-        v[s, 0] = body_v[b, 0] + oy * rz - oz * ry
-        v[s, 1] = body_v[b, 1] + oz * rx - ox * rz
-        v[s, 2] = body_v[b, 2] + ox * ry - oy * rx
-        omega[s, 0] = ox
-        omega[s, 1] = oy
-        omega[s, 2] = oz
+        place_member(s, b, body_x, body_v, q, body_omega, offsets, x, v, omega)
         if check and moved_past(x, x_ref, s, length, limit):
             trip[0] = seq
 
@@ -101,7 +67,7 @@ def _drift_place(
     With ``drift`` a member past skin/2 trips a rebuild.
     """
     if drift:
-        _kick_drift(
+        kick_drift(
             b, dt, True, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
             inertia, body_omega,
         )  # fmt: skip
@@ -119,11 +85,7 @@ def _reduce(b, force, torque, x, body_x, start, members, length):
     tx = ty = tz = 0.0
     for e in range(start[b], start[b + 1]):
         s = members[e]
-        rx = x[s, 0] - body_x[b, 0]
-        if length > 0.0:
-            rx = nearest_image(rx, length)
-        ry = x[s, 1] - body_x[b, 1]
-        rz = x[s, 2] - body_x[b, 2]
+        rx, ry, rz = member_arm(x, s, body_x, b, length)
         f0 = force[s, 0]
         f1 = force[s, 1]
         f2 = force[s, 2]
@@ -207,7 +169,7 @@ def bodies_kernel(
                 acc[row, bscene[b], 0], acc[row, bscene[b], 1], acc[row, bscene[b], 2],
                 body_force, body_torque)  # fmt: skip
     m = body_mass[b]
-    _kick_drift(
+    kick_drift(
         b, dt, False, rotation, body_x, body_v, q, ang_mom, body_force, body_torque, inv_mass,
         inertia, body_omega,
     )  # fmt: skip

@@ -32,21 +32,14 @@ import numpy as np
 from numba import cuda
 
 from dem.kernels.contact import N_PARAMS, contact_core, pair_arms, wall_arms
+from dem.kernels.cuda.launch import THREADS_PER_BLOCK, blocks
 from dem.kernels.cuda.mesh import mesh_walls
 from dem.kernels.forces import N_WALLS, flat_wall
 from dem.kernels.periodic import minimum_image
 
-#: Threads per block of every per-sphere kernel.
-THREADS_PER_BLOCK = 128
-
-
-def blocks(n: int) -> int:
-    """Blocks of :data:`THREADS_PER_BLOCK` threads covering n items (at least one)."""
-    return max(1, (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK)
-
 
 @cuda.jit(device=True)
-def _separation(a, b, x, radius, length):
+def separation(a, b, x, radius, length):
     """Pair (a, b): x_a - x_b (minimum image in x), its square, r_a + r_b: (dx, dy, dz, d2, rsum).
 
     The pair touches where d2 < rsum^2: the test every path of this module makes.
@@ -58,7 +51,7 @@ def _separation(a, b, x, radius, length):
 
 
 @cuda.jit(device=True)
-def _wall_gap(i, w, x, radius, half_width, back):
+def wall_gap(i, w, x, radius, half_width, back):
     """Sphere i's overlap with wall w and the wall's inward normal: (delta, nx, ny, nz).
 
     The walls: the floor, the side walls y = -width/2 and +width/2, the back wall x = back
@@ -108,7 +101,7 @@ def _upper_add(
     -F and the torque on i are added to the sums, as :func:`sphere_force` adds them.
     """
     a = k // slots
-    dx, dy, dz, d2, rsum = _separation(a, i, x, radius, length)
+    dx, dy, dz, d2, rsum = separation(a, i, x, radius, length)
     if d2 >= rsum * rsum:
         return False, fx, fy, fz, tx, ty, tz
     f = _pair(model, p, x, v, omega, radius, mass, a, i, k, hist_in, dx, dy, dz, d2, dt)
@@ -125,7 +118,7 @@ def _lower_add(
     F and the torque on i are added; i writes the slot's history row (zeros where apart).
     """
     b = nbr[k]
-    dx, dy, dz, d2, rsum = _separation(i, b, x, radius, length)
+    dx, dy, dz, d2, rsum = separation(i, b, x, radius, length)
     if d2 >= rsum * rsum:
         for c in range(hist_out.shape[1]):
             hist_out[k, c] = 0.0
@@ -141,14 +134,14 @@ def _wall_add(
     i, w, model, pw, x, v, omega, radius, mass, wall_in, wall_out, half_width, back, dt, fx, fy,
     fz, tx, ty, tz,
 ):  # fmt: skip
-    """Sphere i on wall w (:func:`_wall_gap`) by the grain-wall law.
+    """Sphere i on wall w (:func:`wall_gap`) by the grain-wall law.
 
     Returns (touching, the sums with F and torque added); i writes its wall row (zeros where
     apart).
     """
     width = wall_in.shape[1]
     ri = radius[i]
-    delta, nx, ny, nz = _wall_gap(i, w, x, radius, half_width, back)
+    delta, nx, ny, nz = wall_gap(i, w, x, radius, half_width, back)
     row = N_WALLS * i + w
     if delta <= 0.0:
         for c in range(width):
@@ -263,142 +256,6 @@ def _pair_sums(
             length, dt, fx, fy, fz, tx, ty, tz,
         )  # fmt: skip
     return fx, fy, fz, tx, ty, tz
-
-
-@cuda.jit(device=True)
-def _candidate(i, e, n_rev, n_pairs, x, radius, nbr, rev, length, half_width, back):
-    """Sphere i's candidate e located and measured (:func:`candidate_force`'s numbering).
-
-    Returns:
-        (kind, a, b, row, touching, dx, dy, dz, d2, rsum): kind 0 a reverse slot (pair (a, i),
-        i = b), 1 an own slot (pair (i, b)), 2 a wall (dx, dy, dz its normal, d2 the overlap
-        delta); ``row`` the history row: the pair slot, or the wall row N_WALLS i + w.
-
-    """
-    n = x.shape[0]
-    slots = nbr.shape[0] // n
-    if e >= n_pairs:
-        w = e - n_pairs
-        delta, nx, ny, nz = _wall_gap(i, w, x, radius, half_width, back)
-        return 2, i, i, N_WALLS * i + w, delta > 0.0, nx, ny, nz, delta, 0.0
-    if e < n_rev:
-        kind = 0
-        k = rev[i * (rev.shape[0] // n) + e]
-        a = k // slots
-        b = i
-    else:
-        kind = 1
-        k = i * slots + (e - n_rev)
-        a = i
-        b = nbr[k]
-    dx, dy, dz, d2, rsum = _separation(a, b, x, radius, length)
-    return kind, a, b, k, d2 < rsum * rsum, dx, dy, dz, d2, rsum
-
-
-@cuda.jit(device=True)
-def candidate_touches(
-    i, e, n_rev, n_pairs, x, radius, nbr, rev, hist_out, wall_out, length, half_width, back,
-):  # fmt: skip
-    """Whether sphere i's candidate e touches, by the test of :func:`candidate_force`.
-
-    Where it does not, the history row i owns (own slot, wall) is written with zeros, as
-    :func:`candidate_force` writes it.
-    """
-    kind, _, _, row, touching, _, _, _, _, _ = _candidate(
-        i, e, n_rev, n_pairs, x, radius, nbr, rev, length, half_width, back
-    )
-    if not touching:
-        _clear(kind, row, hist_out, wall_out)
-    return touching
-
-
-@cuda.jit(device=True)
-def _clear(kind, row, hist_out, wall_out):
-    """Zeros in the history row of a candidate that does not touch (none for a reverse slot)."""
-    if kind == 1:
-        for c in range(hist_out.shape[1]):
-            hist_out[row, c] = 0.0
-    elif kind == 2:
-        for c in range(wall_out.shape[1]):
-            wall_out[row, c] = 0.0
-
-
-@cuda.jit(device=True)
-def _history(hist, row):
-    """Row ``row`` of a history array as five floats, the last two zero where it has three."""
-    h3 = 0.0
-    h4 = 0.0
-    if hist.shape[1] > 3:
-        h3 = hist[row, 3]
-        h4 = hist[row, 4]
-    return hist[row, 0], hist[row, 1], hist[row, 2], h3, h4
-
-
-@cuda.jit(device=True)
-def candidate_force(
-    i, e, n_rev, n_pairs, model, p, pw, x, v, omega, radius, mass, nbr, rev, hist_in, hist_out,
-    wall_in, wall_out, length, half_width, back, dt,
-):  # fmt: skip
-    """Sphere i's candidate e, in :func:`sphere_force`'s order, and what it adds to i's sums.
-
-    e < ``n_rev``: the reverse slots; up to ``n_pairs``: the own slots; then the N_WALLS walls.
-    Writes the history row i owns (own pairs, walls), as :func:`sphere_force` does. The three
-    kinds meet the contact law at one call site: the threads of a warp that hold candidates of
-    different kinds run it together (:func:`sphere_force`'s loops call it once per kind). The
-    law's inputs are those of :func:`_upper_add`, :func:`_lower_add` and :func:`_wall_add`.
-
-    Returns:
-        (touching, dfx, dfy, dfz, dtx, dty, dtz): whether it touches, and its terms added to
-        zeros (the same floats as the terms, but for the sign of a zero).
-
-    """
-    kind, a, b, row, touching, dx, dy, dz, d2, rsum = _candidate(
-        i, e, n_rev, n_pairs, x, radius, nbr, rev, length, half_width, back
-    )
-    if not touching:
-        _clear(kind, row, hist_out, wall_out)
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if kind == 2:
-        q = pw
-        nx, ny, nz, delta = dx, dy, dz, d2
-        ri = radius[i]
-        ci, ai = wall_arms(pw, ri, delta)
-        cj = 0.0
-        aj = 0.0
-        vx, vy, vz = v[i, 0], v[i, 1], v[i, 2]
-        wjx, wjy, wjz = 0.0, 0.0, 0.0
-        m_eff = mass[i]
-        r_eff = ri
-        h0, h1, h2, h3, h4 = _history(wall_in, row)
-    else:
-        q = p
-        d = math.sqrt(d2)
-        ra = radius[a]
-        rb = radius[b]
-        delta = rsum - d
-        inv_d = 1.0 / d
-        nx, ny, nz = dx * inv_d, dy * inv_d, dz * inv_d
-        ma = mass[a]
-        mb = mass[b]
-        ci, cj, ai, aj = pair_arms(p, ra, rb, delta)
-        vx, vy, vz = v[a, 0] - v[b, 0], v[a, 1] - v[b, 1], v[a, 2] - v[b, 2]
-        wjx, wjy, wjz = omega[b, 0], omega[b, 1], omega[b, 2]
-        m_eff = ma * mb / (ma + mb)
-        r_eff = ra * rb / rsum
-        h0, h1, h2, h3, h4 = _history(hist_in, row)
-    f = contact_core(
-        model, q, nx, ny, nz, delta, vx, vy, vz, omega[a, 0], omega[a, 1], omega[a, 2], wjx, wjy,
-        wjz, ci, cj, ai, aj, m_eff, r_eff, h0, h1, h2, h3, h4, dt,
-    )  # fmt: skip
-    if kind == 0:
-        return True, 0.0 - f[0], 0.0 - f[1], 0.0 - f[2], 0.0 + f[6], 0.0 + f[7], 0.0 + f[8]
-    if kind == 1:
-        for c in range(hist_out.shape[1]):
-            hist_out[row, c] = f[10 + c]
-    else:
-        for c in range(wall_out.shape[1]):
-            wall_out[row, c] = f[10 + c]
-    return True, 0.0 + f[0], 0.0 + f[1], 0.0 + f[2], 0.0 + f[3], 0.0 + f[4], 0.0 + f[5]
 
 
 @cuda.jit

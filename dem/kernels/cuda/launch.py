@@ -1,4 +1,9 @@
-"""Kernel launches with their arguments converted once, for the launch every step makes.
+"""Kernel launches: the launch shapes in one place, and the step's arguments converted once.
+
+The shapes: :data:`THREADS_PER_BLOCK` for every per-sphere and per-body kernel (:func:`blocks`),
+the queue of step launches (:data:`MAX_CHUNK`), and the compact step's block and pass size
+(:data:`COMPACT_BLOCK`, :data:`COMPACT_KEEP`, the rows of its shared arrays). Tuning knobs only:
+none changes a bit of the results.
 
 numba-cuda converts every argument of every launch in Python (an array is seven numbers, a tuple
 of 24 floats 24 ctypes objects): for :func:`dem.kernels.cuda.step.step_kernel`'s 37 arguments
@@ -24,6 +29,28 @@ This uses numba-cuda internals (pinned at 0.30.4 by the ``cuda`` extra); where t
 from __future__ import annotations
 
 import ctypes
+
+#: Threads per block of every per-sphere and per-body kernel.
+THREADS_PER_BLOCK = 128
+
+#: The most step launches the GPU engine queues before it reads the rebuild trip
+#: (:meth:`dem.engine.gpu.engine.GpuEngine.steps`).
+MAX_CHUNK = 64
+
+#: Threads per block of :func:`dem.kernels.cuda.compact.compact_step_kernel` (its shared arrays'
+#: rows).
+COMPACT_BLOCK = 128
+
+#: Touching candidates a sphere lists in one pass of the compact step (its shared list's rows, a
+#: column a thread: a warp's writes fall in different banks); a sphere with more takes further
+#: passes.
+COMPACT_KEEP = 16
+
+
+def blocks(n: int) -> int:
+    """Blocks of :data:`THREADS_PER_BLOCK` threads covering n items (at least one)."""
+    return max(1, (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK)
+
 
 #: An intptr_t is 8 bytes: a Python int passes an int64 (cuda.core passes ints as intptr_t).
 _INT64_AS_INT = ctypes.sizeof(ctypes.c_void_p) == 8

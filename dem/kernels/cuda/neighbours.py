@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import cuda
 
-from dem.kernels.cuda.forces import THREADS_PER_BLOCK, blocks
+from dem.kernels.cuda.launch import THREADS_PER_BLOCK, blocks
 from dem.kernels.neighbours import cell_coords
 from dem.kernels.periodic import minimum_image, wrap
 
@@ -87,7 +87,7 @@ def bin_kernel(
 ):  # fmt: skip
     """Sphere i into its cell's list ``cell_items[c cap : c cap + cap]``; overflow: ``status``.
 
-    Each scene (``scene[i]``, :mod:`dem.engine.gpu_replicas`) has a grid of its own, the cells
+    Each scene (``scene[i]``, :mod:`dem.engine.gpu.replicas`) has a grid of its own, the cells
     ncx ncy ncz scene[i] onwards: spheres of two scenes are never neighbours.
     """
     i = cuda.grid(1)

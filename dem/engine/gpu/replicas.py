@@ -37,7 +37,8 @@ import copy
 import numpy as np
 
 from dem import config
-from dem.engine.gpu import csr_index
+from dem.engine.gpu.buffers import csr_index
+from dem.engine.gpu.engine import GpuEngine
 from dem.engine.simulation import Simulation, rest_speed
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
@@ -127,7 +128,7 @@ class GpuReplicas:
         sim.reference_speed = max(s.reference_speed for s in sims)
         self.sim = sim
         self.sims = sims
-        self.engine = sim.use_gpu(self.scene)
+        self.engine = sim.use_engine(GpuEngine(sim, self.scene))
         self.engine.px_sum = np.zeros(self.start[-1])
         self._set_drives()
 
@@ -141,18 +142,14 @@ class GpuReplicas:
         return slice(int(self.start[r]), int(self.start[r + 1]))
 
     def step_scheme(self) -> dict:
-        """The step kernel the batch runs (:meth:`dem.engine.gpu.GpuEngine.step_scheme`)."""
+        """The step kernel the batch runs (``GpuEngine.step_scheme``)."""
         return self.engine.step_scheme()
 
     def advance(self, n_steps: int) -> np.ndarray:
         """``n_steps`` steps of every replica; each one's mass-weighted mean x-velocity, m/s."""
         sim = self.sim
         sim.stats[:] = 0.0
-        sim.stats[0] += self.engine.advance(
-            sim, n_steps, sim.step_index - sim.drive_start_step, sim.drive_array()
-        )  # fmt: skip
-        sim.stats[1] += n_steps
-        sim.step_index += n_steps
+        self.engine.advance(n_steps)
         return self._px() / (n_steps * self.mass)
 
     def _set_drives(self) -> None:
