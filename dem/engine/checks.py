@@ -42,12 +42,7 @@ class InstabilityChecks:
         s = self.spheres
         r = s.radius
         worst, sphere, other, point = 0.0, -1, "", np.full(3, np.nan)
-        gpu = getattr(self, "_gpu_engine", None)
-        if gpu is not None and gpu.pairs_on_device:  # the GPU's deepest pair: no list to copy
-            i, j = gpu.deepest_pair()
-        else:
-            p = self.pairs
-            i, j = p.pair_i[: p.n_pairs], p.pair_j[: p.n_pairs]
+        i, j = self.engine.deepest_pair()  # on a GPU found there: no pair list to copy
         if i.shape[0]:
             d = self.trough.minimum_image(s.x[i] - s.x[j])
             dist = np.sqrt(np.einsum("ij,ij->i", d, d))

@@ -36,7 +36,6 @@ from dem.engine.checks import InstabilityChecks
 from dem.engine.door import Engine, make_engine
 from dem.engine.state import Bodies, PairList, Spheres
 from dem.errors import SimulationError
-from dem.kernels.contact import P_BETA
 from dem.kernels.forces import N_WALLS
 from dem.kernels.forces import contact_counts as kernel_contact_counts
 from dem.kernels.layout import Geometry, MeshArrays
@@ -176,14 +175,6 @@ class Simulation(InstabilityChecks):
         self.device = engine.device
         self._engine = engine
         return engine
-
-    @property
-    def _gpu_engine(self):
-        """The GPU engine, or None: the instability checks find the deepest pair on the device.
-
-        (:meth:`dem.engine.checks.InstabilityChecks._deepest` reads it by this name.)
-        """
-        return self._engine if self.device == "cuda" else None
 
     @property
     def pairs(self) -> PairList:
@@ -443,7 +434,7 @@ class Simulation(InstabilityChecks):
             causes.append(f"the trough is inclined {incline:.3g} deg: grains that roll (spheres "
                           "without material.rolling_friction) or slide (beyond the friction "
                           "angle) never rest on it")  # fmt: skip
-        if self.law.params[P_BETA] > -1.0 + 1e-12:  # not critically damped: eps_n > 0
+        if not self.law.critically_damped:  # eps_n > 0
             causes.append("raise the normal damping (lower material.restitution_normal)")
         causes.append("check the contact stiffness and the time step")
         raise SimulationError(

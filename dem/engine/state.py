@@ -38,11 +38,15 @@ class Spheres:
         mass: (n,), kg.
         inv_mass: 1 / mass, (n,), 1/kg.
         inv_inertia: 1 / I with I = 2/5 m r^2 (solid sphere), (n,), 1/(kg m^2).
-        wall_hist: Tangential elongation per sphere and wall (row 3 s + w), (3 n, 3), m.
+        wall_hist: Contact history per sphere and wall, row ``N_WALLS s + w`` (N_WALLS = 4: the
+            floor, the side walls at y = -W/2 and +W/2, a feeder's back wall), (N_WALLS n,
+            width), width the law's history width (the tangential spring first, m); a row is
+            zeroed while its sphere does not touch that wall.
         body: Grain index of each sphere, (n,), int64.
         mesh_hist, mesh_normal: Contact slots with a trough mesh (row ``MESH_SLOTS s + k``):
-            tangential spring, m, and the normal of the slot's last contact, (MESH_SLOTS n, 3);
-            (0, 3) without a mesh (:mod:`dem.kernels.mesh`, :meth:`use_mesh`).
+            each slot's contact history (width floats, the tangential spring first, m),
+            (MESH_SLOTS n, width), and the normal of its last contact, (MESH_SLOTS n, 3); no
+            rows without a mesh (:mod:`dem.kernels.mesh`, :meth:`use_mesh`).
 
     """
 
