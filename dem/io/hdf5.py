@@ -314,7 +314,7 @@ class ResultsWriter:
         """Append one frame of a ragged file (format version 3)."""
         pos = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         n = pos.shape[0]
-        rows = {
+        rows: dict[str, np.ndarray] = {
             "positions": pos,
             "velocity": np.asarray(velocity, dtype=np.float64).reshape(n, 3),
             "contact_count": (np.zeros(n, np.int32) if contact_count is None
