@@ -82,6 +82,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+from numpy.typing import ArrayLike
 
 from dem.errors import InputError
 from dem.io.contacts import CONTACT_ROW_NAMES, WALL_LOAD_NAMES, wall_loads
@@ -206,7 +207,7 @@ class ResultsWriter:
         contact_count: np.ndarray | None = None,
         orientation: np.ndarray | None = None,
         grain_index: np.ndarray | None = None,
-        per_frame: Mapping[str, np.ndarray] | None = None,
+        per_frame: Mapping[str, ArrayLike] | None = None,
         contacts: Mapping[str, np.ndarray] | None = None,
     ) -> None:
         """Append one frame to ``/frames`` (and its contacts to ``/contacts``).
