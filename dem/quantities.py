@@ -60,7 +60,7 @@ class Quantity:
         if isinstance(value, bool):
             raise InputError(key, value, f"a number: {self.allowed}", source=source)
         try:
-            number = float(value)
+            number = float(value)  # type: ignore[arg-type]  # any object: a TypeError refuses it
         except (TypeError, ValueError):
             raise InputError(key, value, f"a number: {self.allowed}", source=source) from None
         if not math.isfinite(number):

@@ -51,11 +51,11 @@ def cmd_velocity(args) -> int:
             value = getattr(args, option[2:].replace("-", "_"))
             if value is not None:
                 raise InputError(option, value, "only with --grain rolling-sphere")
-        r = pointmass.velocity(
+        v = pointmass.velocity(
             args.throw_number, args.angle, args.friction, args.inclination, args.eps_t,
             args.eps_n, impact=args.impact or "paper",
         )  # fmt: skip
-        result, lines = velocity_answer(r, args.frequency)
+        result, lines = velocity_answer(v, args.frequency)
     if args.bulk is not None or args.depth is not None or args.atlas is not None:
         bulk, more = bulk_answer(args)
         result["bulk"] = bulk

@@ -3,6 +3,7 @@
 import argparse
 import math
 from pathlib import Path
+from typing import NoReturn
 
 from dem.errors import InputError
 from dem.quantities import QUANTITIES
@@ -55,7 +56,7 @@ def check_numbers(args) -> None:
 class Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line and exit with status 2."""
 
-    def error(self, message: str) -> None:  # noqa: D102
+    def error(self, message: str) -> NoReturn:  # noqa: D102
         prefix = "the following arguments are required: "
         if message.startswith(prefix):
             names = [n.strip() for n in message[len(prefix) :].split(",")]

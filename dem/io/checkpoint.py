@@ -26,6 +26,7 @@ import json
 import math
 import re
 from pathlib import Path
+from typing import TypeGuard
 
 import numpy as np
 
@@ -48,12 +49,13 @@ class CheckpointError(SimulationError):
 
 
 _F, _I = np.dtype(np.float64), np.dtype(np.int64)
+_Row = tuple[str | int | None, tuple[int | str, ...], np.dtype, str | None]
 #: Saved arrays: name -> (rows, trailing shape, dtype, values). Rows are in terms of n spheres,
 #: B bodies, ``cap`` pairs, ``cells`` cell capacity, ``slots`` per sphere and ``mesh`` (the mesh
 #: slots per sphere, 0 without a mesh). Values: "finite", "positive" (finite and > 0),
 #: "no-nan" (inf allowed: x_ref starts at inf to force a build), "index" (checked below) or
 #: None (work arrays each neighbour build writes before reading them).
-LAYOUT = {
+LAYOUT: dict[str, _Row] = {
     "sph.x": ("n", (3,), _F, "finite"),
     "sph.v": ("n", (3,), _F, "finite"),
     "sph.omega": ("n", (3,), _F, "finite"),
@@ -87,7 +89,7 @@ LAYOUT = {
     "sim.dt": (None, (), _F, "positive"),
     "sim.grain_id": ("grains", (), _I, "index"),
 }
-BODY_LAYOUT = {
+BODY_LAYOUT: dict[str, _Row] = {
     "body.x": ("B", (3,), _F, "finite"),
     "body.v": ("B", (3,), _F, "finite"),
     "body.q": ("B", (4,), _F, "finite"),
@@ -270,7 +272,7 @@ def _check_feeder(feeder, state) -> None:
         raise CheckpointError(f"loop.json: feeder.random is no generator state ({exc})") from None
 
 
-def _real(value) -> bool:
+def _real(value: object) -> TypeGuard[int | float]:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
@@ -302,7 +304,7 @@ def validate(state: dict[str, np.ndarray]) -> None:
         raise CheckpointError(f"nb.sizes = {state['nb.sizes'].tolist()}: counts >= 1")
     bodies = len(state["body.x"]) if clumps and np.ndim(state["body.x"]) else n
     mesh_rows = len(state["sph.mesh_hist"]) if np.ndim(state["sph.mesh_hist"]) else -1
-    rows = {
+    rows: dict[str | int | None, int | None] = {
         "n": n, "walls": N_WALLS * n, "mesh": mesh_rows if mesh_rows == 0 else MESH_SLOTS * n,
         "cap": cap, "n*slots": n * slots, "n+1": n + 1, "cells+1": cells + 1, "2cap": 2 * cap,
         "stats": len(state["sim.stats"]) if np.ndim(state["sim.stats"]) == 1 else 3,
@@ -495,7 +497,12 @@ def write(path: Path, sim, loop: dict) -> None:
     """Write ``sim``'s state and the caller's ``loop`` position (JSON-serialisable) to ``path``."""
     state = state_dict(sim)
     state[LOOP_KEY] = np.array(json.dumps(loop))
-    replace_file(path, lambda tmp: np.savez(tmp, **state), suffix=".tmp.npz")
+
+    def save(tmp: Path) -> None:
+        # numpy's stub lets ``**state`` fill allow_pickle, but its keys are array names only
+        np.savez(tmp, **state)  # type: ignore[arg-type]
+
+    replace_file(path, save, suffix=".tmp.npz")
 
 
 def read(path: Path) -> tuple[dict[str, np.ndarray], dict]:

@@ -73,7 +73,7 @@ def own_folder(path: Path, key: str = OUTPUT_KEY) -> Path:
 
 
 def replace_file(
-    path: Path, write: Callable[[Path], None], suffix: str = ".tmp", *, key: str = OUTPUT_KEY
+    path: Path, write: Callable[[Path], object], suffix: str = ".tmp", *, key: str = OUTPUT_KEY
 ) -> None:
     """Call ``write(tmp)`` on ``path`` + ``suffix``, then rename it over ``path``.
 

@@ -82,6 +82,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+from numpy.typing import ArrayLike
 
 from dem.errors import InputError
 from dem.io.contacts import CONTACT_ROW_NAMES, WALL_LOAD_NAMES, wall_loads
@@ -206,7 +207,7 @@ class ResultsWriter:
         contact_count: np.ndarray | None = None,
         orientation: np.ndarray | None = None,
         grain_index: np.ndarray | None = None,
-        per_frame: Mapping[str, np.ndarray] | None = None,
+        per_frame: Mapping[str, ArrayLike] | None = None,
         contacts: Mapping[str, np.ndarray] | None = None,
     ) -> None:
         """Append one frame to ``/frames`` (and its contacts to ``/contacts``).
@@ -314,7 +315,7 @@ class ResultsWriter:
         """Append one frame of a ragged file (format version 3)."""
         pos = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         n = pos.shape[0]
-        rows = {
+        rows: dict[str, np.ndarray] = {
             "positions": pos,
             "velocity": np.asarray(velocity, dtype=np.float64).reshape(n, 3),
             "contact_count": (np.zeros(n, np.int32) if contact_count is None

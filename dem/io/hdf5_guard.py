@@ -23,7 +23,7 @@ import h5py
 try:
     import resource
 except ImportError:  # not on Windows: no file size limit to check
-    resource = None
+    resource = None  # type: ignore[assignment]  # the module, or None where there is none
 
 #: Free bytes results.h5 keeps in reserve beyond a write's own data (HDF5's metadata and chunk
 #: allocation): below it a write is refused rather than risked (:func:`writing`).

@@ -133,7 +133,7 @@ def read_results(path: Path) -> dict:
             count = min(g["time"].shape[0], g["start"].shape[0] - 1)
             time = g["time"][:count]
         elif "time" in g:
-            names = ("time", "contact_count", *FRAME_VECTORS)
+            names: tuple[str, ...] = ("time", "contact_count", *FRAME_VECTORS)
             names += ("orientation",) if "orientation" in g else ()
             count = min(g[k].shape[0] for k in names)
             time = g["time"][:count]

@@ -170,7 +170,7 @@ class VTKSeriesWriter:
         self.wall_height = 0.5 * self.width if wall_height is None else float(wall_height)
         self.pvd_path = self.out_dir / PVD_NAME
         # (time, particles file, trough file); a resumed run passes the entries it had
-        self._entries: list[tuple[float, str, str]] = [tuple(e) for e in entries or []]
+        self._entries: list[tuple[float, str, str]] = [(t, p, w) for t, p, w in entries or []]
         self._section = Trough(self.length if period is None else float(period), self.width)
         if mesh is None:
             self._trough_mesh = trough_polydata(

@@ -185,7 +185,7 @@ def _collinear(c: np.ndarray, r: np.ndarray) -> bool:
     return bool(np.max(np.linalg.norm(off, axis=1)) <= 1e-12 * (np.max(np.abs(rel)) + r.max()))
 
 
-def _moments_disjoint(c: np.ndarray, r: np.ndarray):
+def _moments_disjoint(c: np.ndarray, r: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """Raw moments of separate spheres.
 
     V_i = 4/3 pi R_i^3, int x dV = V_i c_i, int x x^T dV = V_i (c_i c_i^T + R_i^2/5 Id).
@@ -195,7 +195,7 @@ def _moments_disjoint(c: np.ndarray, r: np.ndarray):
     return v.sum(), v @ c, second
 
 
-def _moments_axial(c: np.ndarray, r: np.ndarray):
+def _moments_axial(c: np.ndarray, r: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """Raw moments of a union of spheres with collinear centres (solid of revolution)."""
     p0, d = _axis(c)
     t = (c - p0) @ d
@@ -302,15 +302,12 @@ def _grid(c: np.ndarray, r: np.ndarray, rtol: float) -> UnionProperties:
     offsets = np.random.default_rng(GRID_SEED).random((GRID_SHIFTS, 2))
     cells = GRID_START_CELLS
     while True:
-        vols, coms, inertias = [], [], []
+        levels = []
         for offset in offsets:
             vol, first, second = _grid_level(c - shift, r, cells, offset)
-            com, inertia = _central(vol, first, second)
-            vols.append(vol)
-            coms.append(com)
-            inertias.append(inertia)
+            levels.append((vol, *_central(vol, first, second)))
         # the shifted estimates are independent and unbiased: bound = GRID_SIGMAS standard errors
-        vols, coms, inertias = np.array(vols), np.array(coms), np.array(inertias)
+        vols, coms, inertias = (np.array(column) for column in zip(*levels, strict=True))
         vol, com, inertia = vols.mean(), coms.mean(axis=0), inertias.mean(axis=0)
         scale = GRID_SIGMAS / math.sqrt(GRID_SHIFTS * (GRID_SHIFTS - 1))
         errors = (

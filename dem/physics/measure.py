@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 @dataclass(frozen=True)
@@ -231,7 +232,7 @@ def transient_end(samples: np.ndarray) -> int:
     return best_d
 
 
-def steady(samples: np.ndarray, min_samples: int = 6, tolerance: float = 0.0,
+def steady(samples: ArrayLike, min_samples: int = 6, tolerance: float = 0.0,
            trend_z: float | None = None) -> bool:  # fmt: skip
     """True when the transient of a growing series has ended: its MSER point lies inside.
 
@@ -274,7 +275,7 @@ class Trend(NamedTuple):
     samples: int
 
 
-def trend(samples: np.ndarray) -> Trend:
+def trend(samples: ArrayLike) -> Trend:
     """The least-squares slope of a series against its autocorrelated standard error.
 
     slope = sum t (x_t - m) / sum t^2 (t centred); its error std(res, ddof=2)
@@ -382,7 +383,7 @@ def distinct(a: float, b: float, digits: int = 2) -> tuple[str, str]:
     return sa, sb
 
 
-def with_error(value: float, error: float, unit: str = "") -> str:
+def with_error(value: float | None, error: float | None, unit: str = "") -> str:
     """``value +- error unit`` with the digits the error allows: 0.0457 +- 0.0008 m/s.
 
     The error keeps two significant digits when its first is 1 (0.011: rounding it to 0.01

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import cast
 
 #: (sqrt(5) - 1) / 2: each step keeps this fraction of the bracket.
 RATIO = (math.sqrt(5.0) - 1.0) / 2.0
@@ -37,7 +38,8 @@ def golden_section(
     c, d = b - RATIO * (b - a), a + RATIO * (b - a)
     fc, fd = f(c), f(d)
     done = 0
-    while (b - a > tol) if iterations is None else (done < iterations):
+    # one of the two is None (checked above), so ``iterations`` is an int when ``tol`` is None
+    while (b - a > tol) if tol is not None else (done < cast(int, iterations)):
         if (fc >= fd) if maximize else (fc < fd):
             b, d, fd = d, c, fc
             c = b - RATIO * (b - a)

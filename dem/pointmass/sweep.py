@@ -99,7 +99,8 @@ def sweep(
             f"({sizes}): sweep fewer values, or in parts",
         )  # fmt: skip
     grid = np.meshgrid(*axes, indexing="ij")
-    result = velocities(*(g.ravel() for g in grid), impact=impact)
+    gamma, phi, mu, alpha, e_t, e_n = (g.ravel() for g in grid)
+    result = velocities(gamma, phi, mu, alpha, e_t, e_n, impact=impact)
     result["regime"] = np.array([REGIMES[c] for c in result["regime_code"]])
     result["impact"] = np.full(result["regime"].shape, impact)
     return result
@@ -286,9 +287,10 @@ def optimum(
     }
     if hold in needs:
         key = "peak_acceleration" if hold == "acceleration" else hold
-        if needs[hold] is None:
+        held = needs[hold]
+        if held is None:
             raise InputError(key, None, f"required when holding {hold} fixed")
-        fixed[key] = check_positive(needs[hold], key)
+        fixed[key] = check_positive(held, key)
     if over == "throw_number":
         if angle is None:
             raise InputError("angle", None, "required for an optimum over throw_number")

@@ -203,6 +203,7 @@ def _loop(batch, replicas, per_frame, estimate, out_dir, bar) -> None:
             if done < n:
                 for r in live:
                     r.checkpoints.save(r.progress)
+                assert flag.signum is not None  # the flag's signal stopped it
                 raise RunInterrupted(flag.signum, out_dir / CHECKPOINT, lead.cycle)
             for r in live:
                 r.sim.check()  # the replica's own overlaps, speeds and grains

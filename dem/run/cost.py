@@ -112,7 +112,7 @@ def _allocated_bytes(scene, spheres: int, grains: int, threads: int) -> int:
     total = 0
     if not case.particles.clumps:
         s = Spheres.create(np.zeros((spheres, 3)), case.particles.radius, case.material.density)
-        arrays = [s]
+        arrays: list[Spheres | Bodies | PairList] = [s]
     else:
         q = np.zeros((grains, 4))
         q[:, 0] = 1.0

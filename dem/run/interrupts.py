@@ -11,9 +11,14 @@ limit ends the run with an ordinary write error instead of a core dump.
 from __future__ import annotations
 
 import signal
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from types import FrameType
+from typing import Any, Self
+
+#: What signal.signal takes and returns: a handler, SIG_DFL, SIG_IGN, or None (not set from Python).
+_Handler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 
 class RunInterrupted(Exception):
@@ -36,11 +41,11 @@ class RunInterrupted(Exception):
 class SignalFlag:
     """Record SIGINT/SIGTERM instead of dying, so the loop can checkpoint between chunks."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.signum: int | None = None
-        self._old: dict[int, object] = {}
+        self._old: dict[int, _Handler] = {}
 
-    def __enter__(self) -> SignalFlag:
+    def __enter__(self) -> Self:
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
                 self._old[sig] = signal.signal(sig, self._handle)
@@ -69,7 +74,7 @@ class StopNow(SignalFlag):
     (settling calls them in 5 ms chunks).
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         super().__init__()
         self.phase = "compiling"
 

@@ -13,6 +13,7 @@ the study's advice, :mod:`dem.run.accuracy`; the bed's compliance, :mod:`dem.run
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -158,6 +159,7 @@ def plan(
     away = accuracy.unmeasured(case, data, kind) if data else []
     if data and grains > 1:
         away += accuracy.bed_and_contact_away(scene, data, kind)
+    parts: dict[str, float]
     if data and away:
         expected, parts = math.nan, {}
         measure = (
@@ -347,7 +349,7 @@ def suggest(
     seen: dict[str, list] = {}
     current, current_case = before, case
     for _ in range(SUGGEST_ROUNDS):
-        todo = {
+        todo: dict[str, Any] = {
             a.key: a.value
             for a in current.advice
             if a.value is not None and changes.get(a.key) != a.value
@@ -383,8 +385,7 @@ def suggest(
     out.mkdir(parents=True, exist_ok=True)
     for item in copied:  # not the README: it describes the case as it was
         if not os.path.lexists(out / item.name):
-            replace_file(out / item.name, lambda tmp, item=item: shutil.copy2(item, tmp),
-                         key="--suggest")  # fmt: skip
+            replace_file(out / item.name, functools.partial(shutil.copy2, item), key="--suggest")
     stamp = datetime.date.today().isoformat()
     as_filed = load_case(source) if overrides else case  # "was": the file's value, not --set's
     was = {k: _case_value(as_filed, k) for k in changes}

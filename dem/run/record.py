@@ -106,7 +106,8 @@ class Progress:
     @property
     def finished(self) -> bool:
         """True once every cycle has run."""
-        return self.settle_cycles is not None and self.cycle >= self.total_cycles
+        total = self.total_cycles  # set with settle_cycles
+        return self.settle_cycles is not None and total is not None and self.cycle >= total
 
 
 @dataclass(frozen=True)
@@ -245,6 +246,7 @@ def extend_if_unsteady(case, progress: Progress) -> int:
         return 0
     if not drifts(case, measure.trend(progress.per_cycle)):
         return 0
+    assert progress.total_cycles is not None  # measuring: settling has ended
     progress.cycles += base
     progress.total_cycles += base
     progress.extended_cycles = extended + base

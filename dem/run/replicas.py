@@ -468,11 +468,12 @@ def pool_summaries(
         else f"fills with seeds {unsteady} still drifting (per_replica: their steadiness); the "
         "pooled error bar includes their spread, not the drift common to all fills",
     }  # fmt: skip
-    flights = [s.get("flight") for s in summaries]
-    if flights[0] and all(f and f.get("fraction") for f in flights):
+    flights = [s.get("flight") or {} for s in summaries]
+    flight = flights[0]
+    if flight and all(f.get("fraction") for f in flights):
         columns = zip(*(f["fraction"] for f in flights), strict=True)
-        what = flights[0]["what"] + f", and over {len(flights)} fills"
-        out["flight"] = dict(flights[0], fraction=[sum(x) / len(flights) for x in columns],
+        what = flight["what"] + f", and over {len(flights)} fills"
+        out["flight"] = dict(flight, fraction=[sum(x) / len(flights) for x in columns],
                              what=what)  # fmt: skip
     out["per_cycle_velocity_replica"] = 0
     steps = sum(s["spheres"] * s["steps"] for s in summaries)

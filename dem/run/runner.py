@@ -34,6 +34,7 @@ import signal
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numba
@@ -158,8 +159,11 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         fill_wall = time.perf_counter() - t0
     if config.DEM_THREAD_GUARD and n_threads > 1:
         busy = busy_cores()
-        sim.guard = ThreadGuard(n_threads, start=starting_threads(n_threads, busy=busy),
-                                note=_note if show else None, busy=busy)  # fmt: skip
+        # dem.engine's Simulation declares guard as None, not ThreadGuard | None
+        sim.guard = ThreadGuard(  # type: ignore[assignment]
+            n_threads, start=starting_threads(n_threads, busy=busy),
+            note=_note if show else None, busy=busy,
+        )  # fmt: skip
     if resume:
         try:
             checkpoint_io.load_state(sim, state)
@@ -231,6 +235,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
                 progress.steps += done
                 if done < n:  # stopped mid-frame: resume computes the rest from step_index
                     checkpoints.save(progress)
+                    assert flag.signum is not None  # the flag's signal stopped it
                     raise RunInterrupted(flag.signum, checkpoint, progress.cycle)
                 if frames:
                     write_frame(writers, sim, progress)
@@ -333,7 +338,7 @@ def finish(scene, sim, progress, cycles, n_threads, estimate, out_dir, writers,
 
 def _set_threads(threads: int | None) -> int:
     n = config.default_threads() if threads is None else int(threads)
-    n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))
+    n = max(1, min(n, numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]  # set at import
     numba.set_num_threads(n)
     return n
 
@@ -355,7 +360,7 @@ def phase_bar(case, progress: Progress):
     from tqdm import tqdm
 
     settle = progress.settle_cycles
-    if progress.measuring:
+    if progress.measuring and settle is not None:  # measuring: settling has ended
         return tqdm(total=progress.cycles, initial=progress.cycle - settle, unit="cycle",
                     desc=f"dem {case.name}: measuring")  # fmt: skip
     if settle is None:
@@ -366,7 +371,7 @@ def phase_bar(case, progress: Progress):
                 desc=f"dem {case.name}: settling")  # fmt: skip
 
 
-def fill_bar(case):
+def fill_bar(case) -> Callable[[float, float, float, bool], None]:
     """The fill's settling (drive off): a callback for :meth:`Simulation.settle`.
 
     A bar of simulated time up to the cap, with the rms speed against the speed that counts as

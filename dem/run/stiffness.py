@@ -31,6 +31,7 @@ import json
 import math
 from dataclasses import dataclass
 from importlib import resources
+from typing import Any
 
 from dem.config import BED_PACKING, GRAVITY
 from dem.physics import measure
@@ -142,7 +143,7 @@ def single_grain(scene) -> dict | None:
     expected = max(sliding, hopping or 0.0)
     # both terms grow about linearly in c: the compliance at which the larger meets the bound
     limit = c * allowed / expected if expected > 0.0 else math.inf
-    out = {
+    out: dict[str, Any] = {
         "single_grain": True,
         "converged": expected <= allowed,
         "compliance": c,

@@ -346,7 +346,7 @@ def wall_summary(case) -> dict:
 RESUMABLE_KEYS = ("name", "directory", "source", "run.cycles")
 #: Case keys added after checkpoints (and sweep records) were first written, with the value
 #: every older record ran with: an older record without the key is taken to hold that value.
-ADDED_KEYS = {
+ADDED_KEYS: dict[str, object] = {
     "run.device": "cpu",
     "particles.layers": None,
     "particles.bed_height": None,

@@ -537,6 +537,7 @@ def _check_engine(case: Case, table: Callable[[str], Table]) -> None:
     if pt.grain is not None:  # a screw or clump: built at load
         r_max = float(max(pt.grain.radii))
         reach = float(max(math.hypot(*c) for c in pt.grain.centres))
+    assert r_max is not None  # a sphere's radius, else the clump's largest member
     skin = config.DEM_SKIN_FRACTION * r_max  # the Simulation's default skin
     check_section_length(length, r_max, skin, reach, source=str(case.source))
     step = timestep_for(case)  # checks a given run.timestep against the limit

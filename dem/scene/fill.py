@@ -548,10 +548,11 @@ class _ClumpGrid:
 
     def _index(self, c) -> tuple[int, int, int]:
         shifted = (c[0], c[1] + 0.5 * self.width, c[2])
-        return tuple(
+        i, j, k = (
             min(max(int(v / h), 0), n - 1)
             for v, h, n in zip(shifted, self.size, self.n, strict=True)
         )
+        return i, j, k
 
     def add(self, i: int, c) -> None:
         self.cells.setdefault(self._index(c), []).append(i)

@@ -81,17 +81,18 @@ class TriangleMesh:
         thi = np.floor((self.tri.max(axis=1) + reach - lo) / cell).astype(np.int64)
         tlo = np.clip(tlo, 0, dims - 1)
         thi = np.clip(thi, 0, dims - 1)
-        cells, tris = [], []
+        cell_parts: list[np.ndarray] = []
+        tri_parts: list[np.ndarray] = []
         for t in range(self.count):
             ix = np.arange(tlo[t, 0], thi[t, 0] + 1)
             iy = np.arange(tlo[t, 1], thi[t, 1] + 1)
             iz = np.arange(tlo[t, 2], thi[t, 2] + 1)
             z, y, x = np.meshgrid(iz, iy, ix, indexing="ij")
             c = ((z * dims[1] + y) * dims[0] + x).ravel()
-            cells.append(c)
-            tris.append(np.full(c.size, t, dtype=np.int64))
-        cells = np.concatenate(cells) if cells else np.zeros(0, dtype=np.int64)
-        tris = np.concatenate(tris) if tris else np.zeros(0, dtype=np.int64)
+            cell_parts.append(c)
+            tri_parts.append(np.full(c.size, t, dtype=np.int64))
+        cells = np.concatenate(cell_parts) if cell_parts else np.zeros(0, dtype=np.int64)
+        tris = np.concatenate(tri_parts) if tri_parts else np.zeros(0, dtype=np.int64)
         order = np.lexsort((tris, cells))  # by cell, triangles in index order within a cell
         n_cells = int(np.prod(dims))
         self.cell_start = np.zeros(n_cells + 1, dtype=np.int64)
@@ -216,7 +217,7 @@ def _read_ascii_stl(text: str, path: Path, where: str) -> np.ndarray:
         elif state == "vertex":
             xyz = _numbers(words[1:]) if key == "vertex" else None
             ok = xyz is not None
-            if ok:
+            if xyz is not None:
                 corners.append(xyz)
                 vertices += 1
             after = "endloop" if vertices == 3 else "vertex"
@@ -279,17 +280,17 @@ def _read_meshio(path: Path, where: str) -> np.ndarray:
     points = points.astype(np.float64)
     if points.shape[1] == 2:
         points = np.column_stack([points, np.zeros(len(points))])
-    faces = []
+    blocks = []
     for block in mesh.cells:
         if block.type == "triangle":
-            faces.append(block.data)
+            blocks.append(block.data)
         elif block.type == "quad":
             q = block.data
-            faces += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
-    if not faces:
+            blocks += [q[:, [0, 1, 2]], q[:, [0, 2, 3]]]
+    if not blocks:
         kinds = sorted({b.type for b in mesh.cells}) or ["none"]
         raise _refuse(path, f"triangles or quads (the file has {', '.join(kinds)})", where)
-    faces = np.concatenate(faces)
+    faces = np.concatenate(blocks)
     if faces.dtype.kind not in "iu":
         raise _refuse(path, "faces given by whole vertex numbers", where)
     # meshio has already made the file's numbers 0-based (OBJ counts from 1, and its negative

@@ -106,7 +106,7 @@ def _read_types(t: Table) -> tuple[GrainType, ...]:
                           "with types, [particles] gives no size key")  # fmt: skip
     if len(given) > MAX_GRAIN_TYPES:
         raise t.error("types", f"{len(given)} tables", f"1 to {MAX_GRAIN_TYPES} grain types")
-    types = []
+    types: list[GrainType] = []
     for k, data in enumerate(given):
         tt = Table(f"particles.types[{k + 1}]", data, t.source, t.directory, PARTICLE_TYPE)
         tt.check_known()
@@ -198,8 +198,10 @@ def count_from_depth(particles: ParticlesSpec, density: float, trough: TroughSpe
 def grain_diameter(particles: ParticlesSpec) -> float:
     """Largest sphere diameter of a grain cross-section, m (a clump's template is built)."""
     if particles.shape == "sphere":
+        assert particles.radius is not None  # a sphere's radius is read with its shape
         return 2.0 * particles.radius
     if particles.shape == "screw":
+        assert particles.head_radius is not None and particles.shank_radius is not None
         return 2.0 * max(particles.head_radius, particles.shank_radius)
     return 2.0 * float(max(particles.grain.radii))
 
@@ -241,11 +243,15 @@ def build_grain(particles: ParticlesSpec, density: float | None, t: Table) -> Pa
     rho = None if mass is not None else density
     try:
         if particles.shape == "screw":
+            # a screw's keys are required with its shape; max_bumpiness has a default
+            assert particles.length is not None and particles.shank_radius is not None
+            assert particles.head_radius is not None and particles.max_bumpiness is not None
             grain = shapes.screw(
                 particles.length, particles.shank_radius, particles.head_radius,
                 mass=mass, density=rho, max_bumpiness=particles.max_bumpiness,
             )  # fmt: skip
         else:
+            assert particles.template is not None  # a clump's template is required
             grain = shapes.clump_from_file(particles.template, mass=mass, density=rho)
     except InputError as exc:
         if exc.source:  # inside the template file: name it, and the key that points to it

@@ -76,6 +76,7 @@ class Scene:
     def max_radius(self) -> float:
         """Largest member sphere radius of the grain, m (a sphere's; of several, the largest)."""
         if self.case.particles.types:
+            assert self.case.particles.radius is not None  # the largest radius of the types
             return float(self.case.particles.radius)
         return float(np.max(self.grain.radii))
 

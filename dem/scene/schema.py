@@ -24,7 +24,7 @@ SHAPES = ("sphere", "screw", "clump")
 #: Contact laws (a selector plus a block of its coefficients, as in OpenFOAM and LIGGGHTS).
 CONTACT_MODELS = tuple(laws.NORMAL_LAWS)
 #: Tangential conventions: the total force capped at Coulomb, or LIGGGHTS's (dem.kernels.contacts).
-TANGENTIAL_CONVENTIONS = tuple(sorted(laws.TANGENTIAL_LAWS, key=contact.TANGENTIAL.get))
+TANGENTIAL_CONVENTIONS = tuple(sorted(laws.TANGENTIAL_LAWS, key=contact.TANGENTIAL.__getitem__))
 #: Where a wall contact's tangential force acts (:data:`dem.kernels.contact.WALL_LEVER_ARMS`).
 WALL_LEVER_ARMS = ("surface", "midpoint", "radius")
 #: The slip velocity's lever arms (:data:`dem.kernels.contact.SLIP_LEVER_ARMS`).

@@ -300,6 +300,7 @@ def clump(
         density = mass / props.volume
         rel_density = props.volume_error / props.volume  # rho = m / V carries V's error
     else:
+        assert density is not None  # exactly one of the two (checked above)
         _check_positive("density", density, "kg/m^3")
         rel_density = 0.0
     eigenvalues, axes = principal_axes(props.inertia)

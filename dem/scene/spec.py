@@ -263,20 +263,20 @@ class SizeSpec:
     @property
     def smallest(self) -> float:
         """The smallest radius a grain of this distribution can have, m."""
-        if self.distribution == "none":
-            return self.radius
         if self.distribution == "discrete":
             return min(self.radii)
-        return self.radius_min
+        smallest = self.radius if self.distribution == "none" else self.radius_min
+        assert smallest is not None  # set for its distribution when read
+        return smallest
 
     @property
     def largest(self) -> float:
         """The largest radius a grain of this distribution can have, m."""
-        if self.distribution == "none":
-            return self.radius
         if self.distribution == "discrete":
             return max(self.radii)
-        return self.radius_max
+        largest = self.radius if self.distribution == "none" else self.radius_max
+        assert largest is not None  # set for its distribution when read
+        return largest
 
 
 @dataclass(frozen=True)
@@ -296,7 +296,7 @@ class GrainType:
 
     name: str
     fraction: float
-    density: float
+    density: float | None
     size: SizeSpec
 
 
@@ -359,7 +359,9 @@ class ParticlesSpec:
     @property
     def reach(self) -> float:
         """How far a grain reaches from its centre, m: the radius, or a clump's bounding radius."""
-        return self.grain.bounding_radius if self.clumps else self.radius
+        reach = self.grain.bounding_radius if self.clumps else self.radius
+        assert reach is not None  # a sphere's radius, or a clump's template, is set at load
+        return reach
 
     @property
     def spheres_per_grain(self) -> int:
@@ -572,5 +574,6 @@ def resolve_drive(
     if amplitude is not None:
         throw_number = drive.throw_number(amplitude, frequency, angle, inclination)
     else:
+        assert throw_number is not None  # exactly one of the two (checked above)
         amplitude = drive.amplitude(throw_number, frequency, angle, inclination)
     return DriveSpec(frequency, angle, amplitude, throw_number, given)

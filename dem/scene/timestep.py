@@ -60,7 +60,7 @@ def timestep_limits(
     contacts_list = [(mass, radius, True)]  # the grain-wall law ([wall])
     if pairs and other is None:
         contacts_list.append((0.5 * mass, 0.5 * radius, False))
-    elif pairs:
+    elif pairs and other is not None:
         m2, r2 = other
         contacts_list.append((mass * m2 / (mass + m2), radius * r2 / (radius + r2), False))
     limit = math.inf

@@ -255,18 +255,18 @@ class Table:
                 raise TypeError(f"{self.name}.{name}: its default is derived ({default.how})")
         if key.auto and self.data.get(name) == "auto":
             return None
-        if key.kind == "number":
+        if key.kind in ("number", "whole", "numbers"):
+            assert key.quantity is not None  # every number row names its quantity
+            if key.kind == "numbers":
+                return self.numbers(name, key.quantity, default)
             q = QUANTITIES[key.quantity]
-            return self.number(name, default, q.accepts, q.allowed)
-        if key.kind == "whole":
-            q = QUANTITIES[key.quantity]
+            if key.kind == "number":
+                return self.number(name, default, q.accepts, q.allowed)
             return self.integer(name, default, q.accepts, q.allowed)
         if key.kind == "boolean":
             return self.boolean(name, default)
         if key.kind == "choice":
             return self.choice(name, key.choices, default)
-        if key.kind == "numbers":
-            return self.numbers(name, key.quantity, default)
         if key.kind == "tables":
             return self.tables(name, default)
         if key.kind == "name":

@@ -487,7 +487,7 @@ class EvaluationTrail:
     the target eps_t (the floor's ``restitution_tangential``).
     """
 
-    def __init__(self, case):
+    def __init__(self, case) -> None:
         self.target = case.wall_material.restitution_tangential
         self.path = own_folder(case.directory / "output", "CASE_DIR") / EVALUATIONS_FILE
         self.tried: list[tuple[float, float]] = []

@@ -31,6 +31,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -347,7 +348,7 @@ def _honest(result: NoisyOptimum, band: dict, lo: float, hi: float, tol: float) 
     """
     flat = "no significant curvature" in result.reason
     half = 0.5 * (band["range"][1] - band["range"][0])
-    out = {"flat": flat, "uncertainty_bootstrap": result.uncertainty}
+    out: dict[str, Any] = {"flat": flat, "uncertainty_bootstrap": result.uncertainty}
     if flat:
         out["uncertainty"] = None
     else:
@@ -480,7 +481,8 @@ def _plot(path: Path, result: NoisyOptimum, pm, over: str, objective: str, name:
     ax.errorbar(x, [s[2] for s in result.samples], yerr=[s[3] for s in result.samples], fmt="o",
                 color="C0", capsize=2, ms=4, label="DEM runs (each fill, +-1 s.e.)")  # fmt: skip
     if band["parabola"] is not None:
-        grid = np.linspace(*band["fitted_over"], 100)
+        start, stop = band["fitted_over"]
+        grid = np.linspace(start, stop, 100)
         ax.plot(grid, np.polyval(band["parabola"], grid), "-", color="C2", lw=1,
                 label="weighted parabola through the top")  # fmt: skip
     ax.errorbar([result.x], [result.value], xerr=[result.uncertainty], fmt="D", color="C3",

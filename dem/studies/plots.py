@@ -10,11 +10,13 @@ import re
 import textwrap
 import warnings
 from pathlib import Path
+from typing import cast
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from dem.io.files import replace_file  # noqa: E402
 
@@ -194,7 +196,8 @@ def velocity_cycles_figure(
         ax.axhspan(mean - err, mean + err, color="C3", alpha=0.2,
                    label="+-1 pooled standard error (fill-to-fill spread included)")  # fmt: skip
     ax.set_xlabel("drive cycle (-)")
-    ax.xaxis.get_major_locator().set_params(integer=True)
+    # a linear axis's locator is an AutoLocator, a MaxNLocator: it takes ``integer``
+    cast(MaxNLocator, ax.xaxis.get_major_locator()).set_params(integer=True)
     ax.set_ylabel("cycle's mean x-velocity v (m/s)")
     set_title(ax, title)
     ax.grid(alpha=0.3)
@@ -401,6 +404,7 @@ def bed_snapshot_figure(
     a2.axhline(0.5 * width, color="k", lw=1.0)
     a2.set_ylabel("y (m)")
     a2.set_xlabel("x, along the trough (m)")
+    assert coll is not None  # both panels drew theirs
     fig.colorbar(coll, ax=[a1, a2], label="v_x relative to the trough (m/s)", shrink=0.8)
     return save(fig, path)
 

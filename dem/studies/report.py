@@ -421,10 +421,11 @@ def _comparison(rows: list[dict], dest: Path) -> list[Path]:
     labels, xlabel = [r["run"] for r in rows], ""
     for key in ("angle", "throw_number"):
         vals = [r.get(key) for r in rows]
-        if all(isinstance(v, int | float) for v in vals) and len(set(vals)) == len(vals):
+        numbers = [v for v in vals if isinstance(v, int | float)]
+        if len(numbers) == len(vals) and len(set(numbers)) == len(numbers):
             others = [k for k in ("angle", "throw_number") if k != key]
             if all(len({r.get(k) for r in rows}) == 1 for k in others):
-                labels, xlabel = [float(v) for v in vals], plots.axis_label(key)
+                labels, xlabel = [float(v) for v in numbers], plots.axis_label(key)
                 break
     same = [k for k in _DRIVE_KEYS if len({repr(r.get(k)) for r in rows}) == 1]
     shared = {k: rows[0][k] for k in same if is_number(rows[0].get(k))}

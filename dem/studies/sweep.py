@@ -191,6 +191,7 @@ def check_finished(points: list[SweepPoint], out: Path) -> None:
                    "options that made it (an older dem, or copied in)")  # fmt: skip
             differ.append((p, why))
             continue
+        assert p.record is not None  # a planned point carries its record
         changed = fingerprint_changes(before, p.record)
         if changed:
             differ.append((p, "it was run with " + "; ".join(changed)))

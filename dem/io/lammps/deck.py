@@ -125,11 +125,13 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
     ``fix property/atom mol``); a member's x is its body's wrapped centre plus its offset, so
     LAMMPS remaps it into the box with the image flag that keeps the body whole.
     """
-    t = scene.trough
+    trough = scene.trough
     n = len(x)
     r_max = float(radius.max())
     pan = trough_pan(scene)
-    y_lo, y_hi = (-0.5 * t.width, 0.5 * t.width) if pan is None else (pan.lo[1], pan.hi[1])
+    y_lo, y_hi = (
+        (-0.5 * trough.width, 0.5 * trough.width) if pan is None else (pan.lo[1], pan.hi[1])
+    )
     z_lo = 0.0 if pan is None else min(0.0, float(pan.lo[2]))
     top = max(float(x[:, 2].max()) + 4.0 * r_max, z_lo + 8.0 * r_max)
     density = mass / (4.0 / 3.0 * math.pi * radius**3)
@@ -139,14 +141,14 @@ def write_data(path: Path, scene: Scene, x: np.ndarray, v: np.ndarray, omega: np
         f"{n} atoms",
         f"{1 if kind is None else len(scene.case.particles.types)} atom types",
         "",
-        f"0.0 {float(t.length)!r} xlo xhi",
+        f"0.0 {float(trough.length)!r} xlo xhi",
         f"{float(y_lo) - r_max!r} {float(y_hi) + r_max!r} ylo yhi",
         f"{z_lo!r} {top!r} zlo zhi",
         "",
         "Atoms # sphere",
         "",
     ]
-    xw = np.mod(x[:, 0], t.length) if body is None else x[:, 0]
+    xw = np.mod(x[:, 0], trough.length) if body is None else x[:, 0]
 
     def row(*values) -> str:
         return " ".join(repr(float(u)) for u in values)
@@ -203,6 +205,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     d = case.drive
     gx0, gz0 = static_gravity(case.trough.inclination)
     pan = trough_pan(scene)
+    mesh_name = "" if case.trough.mesh is None else Path(case.trough.mesh).name  # with a pan
     period_steps = 1.0 / (d.frequency * timestep)
     lines = [
         f"# LAMMPS deck of dem case {case.name}, written by dem {__version__} "
@@ -221,7 +224,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
     ]
     if settle_note:
         lines.append(f"# settle: {settle_note}")
-    if own:
+    if geometry is not None:  # own fill
         lines += pour.header_lines(scene, geometry, timestep)
     lines.append("# contact law mapped from dem's (dem.io.lammps.contact):")
     lines += [f"#   grain-grain: {n}" for n in pair.notes]
@@ -244,7 +247,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
             else ""
         ),  # a body's members within the ghost cutoff
     ]
-    if own:
+    if geometry is not None:
         lines += pour.box_lines(scene, geometry, r_max)
     if clumps:
         lines += [
@@ -267,7 +270,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
         *(
             flat_wall_lines(wall.words, case.trough.width)
             if pan is None
-            else pan_wall_lines(wall.words, pan, Path(case.trough.mesh).name)
+            else pan_wall_lines(wall.words, pan, mesh_name)
         ),
         "",
         f"timestep {fmt(timestep)}",
@@ -296,7 +299,7 @@ def write_deck(scene: Scene, out: Path, *, timestep: float, steps: int, settle_s
             "",
             *_velocity_lines(case),
         ]
-    if own:
+    if geometry is not None:
         lines += ["", *pour.fill_lines(scene, timestep, group, gx0, gz0, geometry), ""]
     lines += [
         f"fix vxout all ave/time 1 1 1 c_vxm file {VX_FILE}",

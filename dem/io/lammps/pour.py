@@ -135,7 +135,7 @@ def refuse_unpourable(scene: Scene) -> None:
             "none for --fill lammps (the pour block above a mesh pan is not written yet; "
             "--fill dem exports the pan from dem's own fill)",
         )  # fmt: skip
-    clearance = molecule_radius(scene) if case.particles.clumps else float(case.particles.radius)
+    clearance = molecule_radius(scene) if case.particles.clumps else float(case.particles.reach)
     if case.trough.width <= 2.002 * clearance:
         raise InputError(
             "trough.width", case.trough.width,
@@ -163,7 +163,7 @@ class PourGeometry:
         t = case.trough
         pt = case.particles
         n = pt.count
-        self.clearance = molecule_radius(scene) if pt.clumps else float(pt.radius)
+        self.clearance = molecule_radius(scene) if pt.clumps else float(pt.reach)
         c = 1.001 * self.clearance
         self.x = (0.0, float(t.length))
         self.y = (-0.5 * t.width + c, 0.5 * t.width - c)
@@ -172,6 +172,7 @@ class PourGeometry:
             height = clump_box_height(n, scene.grain, t.length, width)
             bed = n * scene.grain.volume / (0.3 * t.length * width)
         else:
+            assert pt.radius is not None  # one sphere size
             height = sphere_box_height(n, pt.radius, t.length, width)
             bed = n * 4.0 / 3.0 * math.pi * pt.radius**3 / (0.6 * t.length * width)
         self.z = (c + bed, c + bed + height)
@@ -194,7 +195,7 @@ def header_lines(scene: Scene, geometry: PourGeometry, timestep: float) -> list[
         f"the molecule template {MOLECULE_NAME} (dem's exact mass, centre and inertia of the "
         "union; fix rigid/small reinit no keeps them)"
         if pt.clumps
-        else f"diameter {fmt(2.0 * pt.radius)} m, density {fmt(scene.case.material.density)} kg/m^3"
+        else f"diameter {fmt(2.0 * pt.reach)} m, density {fmt(scene.case.material.density)} kg/m^3"
     )
     (z0, z1) = geometry.z
     return [
@@ -235,6 +236,7 @@ def pour_lines(scene: Scene, geometry: PourGeometry, timestep: float, group: str
         what = "mol grain rigid integrate"
         ntype = 0  # the template's types, offset by 0
     else:
+        assert pt.radius is not None  # one sphere size
         d, rho = 2.0 * pt.radius, case.material.density
         what = f"diam one {fmt(d)} dens {fmt(rho)} {fmt(rho)}"
         ntype = 1

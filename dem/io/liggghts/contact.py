@@ -98,6 +98,7 @@ def contact_block(scene: Scene, sphere_mass: float) -> tuple[list[str], str, str
                     "comparison)"
                 )  # fmt: skip
             es.append(e)
+        assert contact.youngs_modulus is not None  # Hertz-Mindlin's key
         y, nu = fmt(contact.youngs_modulus), fmt(contact.poisson_ratio)
         lines += [
             f"fix m_Y all property/global youngsModulus peratomtype {y} {y}",

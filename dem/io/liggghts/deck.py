@@ -151,8 +151,9 @@ def write_deck(
             or timestep/steps not positive.
 
     """
-    scene = case if isinstance(case, Scene) else None
-    case = case.case if scene is not None else case
+    scene: Scene | None = None
+    if isinstance(case, Scene):
+        scene, case = case, case.case
     p = case.particles
     if p.clumps and p.grain is None:
         raise InputError(
@@ -176,7 +177,8 @@ def write_deck(
         fill_time = math.sqrt(2.0 * (space.fill_z0 + space.fill_height - space.bottom) / GRAVITY)
         fill_time += 0.1
     fill_steps = max(1, round(fill_time / timestep))
-    feed_lines, balance_note = [], []
+    feed_lines: list[str] = []
+    balance_note: list[str] = []
     if case.feeder is not None:
         feed_lines, balance_note = feeder_lines(
             scene, timestep, space.fill_y, space.fill_z0, space.fill_height, grains.members,
@@ -230,6 +232,7 @@ def _grain_block(scene: Scene, out: Path, seed: int) -> Grains:
     if p.types:
         return _types_block(scene, seed)
     if not p.clumps:
+        assert p.radius is not None  # one sphere size
         grain_volume = 4.0 / 3.0 * math.pi * p.radius**3
         return Grains(
             p.radius, p.radius, grain_volume, case.material.density * grain_volume, 1,
@@ -285,6 +288,7 @@ def _types_block(scene: Scene, seed: int) -> Grains:
     weights, radii, s = [], [], seed
     for k, t in enumerate(p.types):
         size = t.size
+        assert t.density is not None  # the case's material.density fills it at load
         what = _size_words(size)
         template.append(f"# type {k + 1} {t.name}: {t.fraction:.6g} of the grains by number, "
                         f"density {t.density:g} kg/m^3, {what}")  # fmt: skip

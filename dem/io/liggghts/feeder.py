@@ -57,6 +57,7 @@ def feeder_lines(
 
     case = scene.case
     f, d = case.feeder, case.drive
+    assert f is not None  # written only for a case with a [feeder]
     # one grain per insertion, as dem feeds a grain whenever a whole one is owed (checked
     # every EXCHANGE_FRACTION of a period): LIGGGHTS's massrate rounds a fraction of a grain
     # per insertion down and feeds 10 % short (measured on cases/feeder, every 1/16 cycle)

@@ -88,6 +88,8 @@ class Interaction:
         Hertz's nu follows from q = Y* / G* = 2 (2 - nu) / (1 - nu): nu = (4 - q) / (2 - q);
         linear's nu is not in the row (nan), and eps_t only in an "impact" row (else nan).
         """
+        normal: Hertz | Linear
+        tangential: Coulomb | Liggghts | Impact
         if model == Hertz.name:
             y_star, g_star = float(p[contact.P_YSTAR]), float(p[contact.P_GSTAR])
             q = y_star / g_star if g_star else math.nan
@@ -104,8 +106,9 @@ class Interaction:
         elif name == Liggghts.name:
             tangential = Liggghts(float(p[contact.P_KT_RATIO]))
         else:
-            tangential = Coulomb(*(float(p[i]) for i in (contact.P_KT_RATIO, contact.P_ZETA_T,
-                                                          contact.P_MASS_T)))  # fmt: skip
+            tangential = Coulomb(
+                float(p[contact.P_KT_RATIO]), float(p[contact.P_ZETA_T]), float(p[contact.P_MASS_T])
+            )
         return cls(
             normal=normal,
             damping=Damping(restitution_for_beta(beta), beta_override=beta),
@@ -281,7 +284,7 @@ class ContactLaw:
         """The tangential coefficients in use: convention, kappa, zeta_t and f_t ("coulomb")."""
         p = self.wall_params if wall else self.params
         name = self.tangential
-        out = {"tangential": name}
+        out: dict[str, str | float | bool] = {"tangential": name}
         if name == "coulomb" or (self.model == "linear" and name != "impact"):
             out["tangential_stiffness_ratio"] = float(p[contact.P_KT_RATIO])
         if name == "coulomb":

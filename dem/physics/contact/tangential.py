@@ -148,7 +148,11 @@ class Impact:
 
 
 #: The tangential sub-models by their ``[contact] tangential`` name.
-TANGENTIALS = {"coulomb": Coulomb, "liggghts": Liggghts, "impact": Impact}
+TANGENTIALS: dict[str, type[Coulomb] | type[Liggghts] | type[Impact]] = {
+    "coulomb": Coulomb,
+    "liggghts": Liggghts,
+    "impact": Impact,
+}
 
 
 def tangential_from_case(spec, material, particles) -> Coulomb | Liggghts | Impact:
