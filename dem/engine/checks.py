@@ -15,6 +15,7 @@ and keep their records in ``_max_overlap`` and ``_growth``, which ``Simulation._
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,12 +23,58 @@ from dem import config
 from dem.errors import SimulationError
 from dem.scene.trough import WALLS
 
+if TYPE_CHECKING:
+    from dem.engine.door import Engine
+    from dem.engine.state import Bodies, Spheres
+    from dem.scene.mesh import TriangleMesh
+    from dem.scene.timestep import ContactLaw
+    from dem.scene.trough import Trough
+
 
 class InstabilityChecks:
     """The instability checks and overlap record of a :class:`~dem.engine.simulation.Simulation`.
 
     A mixin: it holds no state of its own; the simulation's attributes are what it checks.
+    The annotations below name them for the type checker (``Simulation.__init__`` sets them).
     """
+
+    spheres: Spheres
+    bodies: Bodies | None
+    trough: Trough
+    mesh: TriangleMesh | None
+    law: ContactLaw
+    dt: float
+    timestep_limit: float
+    rotation: bool
+    drive_on: bool
+    step_index: int
+    reference_speed: float
+    gravity: np.ndarray
+    grain_id: np.ndarray
+    #: The deepest overlap seen at the checks (:meth:`overlap_summary`'s record).
+    _max_overlap: dict[str, Any]
+    #: (contact, its fractions at consecutive checks) above the accuracy bound, or None.
+    _growth: tuple[str, list[float]] | None
+    #: A trough mesh's bounding box (lowest corner, highest corner), m; None: flat walls.
+    _mesh_box: tuple[np.ndarray, np.ndarray] | None
+    #: The height above which a grain is far above the trough, m.
+    _ceiling: float
+
+    if TYPE_CHECKING:  # the simulation's, declared for the type checker only
+
+        @property
+        def engine(self) -> Engine:
+            """:attr:`dem.engine.simulation.Simulation.engine`."""
+
+        @property
+        def time(self) -> float:
+            """:attr:`dem.engine.simulation.Simulation.time`."""
+
+        def wall_gaps(self, x: np.ndarray) -> np.ndarray:
+            """:meth:`dem.engine.simulation.Simulation.wall_gaps`."""
+
+        def mean_velocity_x(self) -> float:
+            """:meth:`dem.engine.simulation.Simulation.mean_velocity_x`."""
 
     def max_overlap_fraction(self) -> float:
         """Largest overlap over the smaller radius, pairs and walls (0 if nothing touches)."""
@@ -55,7 +102,7 @@ class InstabilityChecks:
                 point = s.x[b] + d[m] * r[b] / (r[a] + r[b])
         gaps = self.wall_gaps(s.x)
         frac = (r - gaps) / r
-        w, m = np.unravel_index(int(np.argmax(frac)), frac.shape)
+        w, m = map(int, np.unravel_index(int(np.argmax(frac)), frac.shape))
         if frac[w, m] > worst:
             worst, sphere, other, point = float(frac[w, m]), int(m), self._wall_name(int(w)), s.x[m]
             if self.mesh is None or w == 1:  # a flat wall: the point on it (a mesh: the centre)
@@ -117,7 +164,7 @@ class InstabilityChecks:
         if record is None:
             return
         try:
-            rec = {
+            rec: dict[str, Any] = {
                 "fraction": float(record["fraction"]),
                 "grain": int(record["grain"]),
                 "against": str(record["against"]),
@@ -259,6 +306,7 @@ class InstabilityChecks:
                 (x[:, 1] > half, "through the side wall y = +width/2"),
             ]
         else:
+            assert self._mesh_box is not None, "Simulation.__init__ sets it with the mesh"
             lo, hi = self._mesh_box
             side = self.mesh.sides(x)
             behind = side < -0.5 * self.mesh.gaps(x)  # nan (far from the mesh): False

@@ -30,6 +30,7 @@ every frame of results.h5.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,10 +94,10 @@ class Feeder:
     grain_mass: float
     bound: float
     interval: int
-    make: object
+    make: Callable[[np.ndarray, np.ndarray | None], tuple[Spheres, Bodies | None]]
     random: np.random.Generator
     floor: float = 0.0
-    inside: object = None
+    inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
     inserted: int = 0
     discharged: int = 0
     inserted_mass: float = 0.0
@@ -210,6 +211,7 @@ class Feeder:
                     continue
                 placed.append(centre)
                 if clumps:
+                    assert q is not None, "drawn above for clumps"
                     quats.append(q[0])
                 members_x.append(px)
                 members_r.append(pr)

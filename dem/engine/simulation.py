@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -45,6 +46,9 @@ from dem.physics.drive import cycle_edge
 from dem.scene.mesh import TriangleMesh
 from dem.scene.timestep import ContactLaw, timestep_limits  # noqa: F401  (re-exported)
 from dem.scene.trough import Trough, check_section_length
+
+if TYPE_CHECKING:
+    from dem.engine.threads import ThreadGuard
 
 
 class Simulation(InstabilityChecks):
@@ -155,7 +159,7 @@ class Simulation(InstabilityChecks):
         self._ceiling = top + throw * throw / (2.0 * config.GRAVITY)
         #: A :class:`dem.engine.threads.ThreadGuard` (the runner sets one for runs on several
         #: threads).
-        self.guard = None
+        self.guard: ThreadGuard | None = None
         self._step_seconds = 0.0  # wall time of one step in the last chunk ``run`` advanced
 
     @property
@@ -256,6 +260,7 @@ class Simulation(InstabilityChecks):
                 spheres = spheres.concat(new_spheres, np.arange(spheres.n + new_spheres.n))
             else:
                 new_bodies.force[:] = new_bodies.mass[:, None] * a_body
+                assert bodies is not None, "new clumps need a simulation of clumps"
                 bodies = bodies.concat(new_bodies)
                 spheres = spheres.concat(new_spheres, bodies.body_of)
             ids = np.concatenate([ids, np.asarray(new_ids, dtype=np.int64)])

@@ -136,7 +136,7 @@ class ThreadGuard:
         """The thread count that was faster per step (``start`` until both were measured)."""
         if len(self.seconds_per_step) < 2:
             return self.start
-        return min(self.seconds_per_step, key=self.seconds_per_step.get)
+        return min(self.seconds_per_step, key=self.seconds_per_step.__getitem__)
 
     def choose(self) -> int:
         """Thread count for the next chunk (also set in numba)."""

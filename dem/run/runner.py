@@ -159,8 +159,7 @@ def _run(scene, out_dir: Path, estimate, n_threads: int, *, cycles: int, show: b
         fill_wall = time.perf_counter() - t0
     if config.DEM_THREAD_GUARD and n_threads > 1:
         busy = busy_cores()
-        # dem.engine's Simulation declares guard as None, not ThreadGuard | None
-        sim.guard = ThreadGuard(  # type: ignore[assignment]
+        sim.guard = ThreadGuard(
             n_threads, start=starting_threads(n_threads, busy=busy),
             note=_note if show else None, busy=busy,
         )  # fmt: skip

@@ -18,6 +18,7 @@ compact_to_slots`) and comes back in the CPU engine's compact layout with its CS
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -36,13 +37,36 @@ class Buffers:
 
     A mixin of :class:`dem.engine.gpu.engine.GpuEngine`: ``self.cuda`` is numba.cuda, and
     :meth:`forget_trial` the step schemes' (:class:`dem.engine.gpu.schemes.StepSchemes`).
+    The annotations below name for the type checker what the engine's ``__init__`` sets.
     """
+
+    #: numba.cuda, imported by the engine (a GPU, or the simulator).
+    cuda: Any
+    #: Spheres on the device (-1 before the first upload).
+    n: int
+    #: Each sphere's scene, int32 (n,), or None for one scene; ``scenes`` of them.
+    scene_host: np.ndarray | None
+    scenes: int
+    #: Host side of :attr:`acc`: a_body of each queued step and scene, (MAX_CHUNK, scenes, 3).
+    acc_host: np.ndarray
+    #: The rebuild trip's value where no launch tripped (:data:`dem.kernels.cuda.step.NO_TRIP`).
+    NO_TRIP: int
+    _prepared: dict
+    #: The host arrays as the last call left them (:meth:`_state`), None: upload anew.
+    snapshot: tuple | None
+    #: The trough mesh's device arrays, then the spheres' mesh slots (None: flat walls).
+    mesh: tuple | None
+
+    if TYPE_CHECKING:  # the step schemes', declared for the type checker only
+
+        def forget_trial(self) -> None:
+            """:meth:`dem.engine.gpu.schemes.StepSchemes.forget_trial`."""
 
     @staticmethod
     def _state(sim) -> tuple:
         """The host arrays a step starts from (the bodies' too); :meth:`_stale` compares them."""
         s, b = sim.spheres, sim.bodies
-        arrays = (s.x, s.v, s.omega)
+        arrays: tuple = (s.x, s.v, s.omega)
         if sim.mesh is not None:
             arrays += (s.mesh_hist, s.mesh_normal)
         if b is not None:

@@ -26,6 +26,8 @@ import functools
 import inspect
 import math
 import warnings
+from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
@@ -42,7 +44,7 @@ def _grow(need: int) -> int:
     return int(need * DEM_GROWTH_FACTOR) + 1
 
 
-@numba.njit(**NUMBA_OPTIONS)
+@numba.njit(**NUMBA_OPTIONS)  # type: ignore[call-overload]  # numba's stubs take no options dict
 def accelerations(times, gravity, drive, out):
     """a_body of every scene at every time: out[k, s] = a_body(times[k]) of scene s, m/s^2.
 
@@ -72,7 +74,7 @@ class GpuEngine(Buffers, StepSchemes):
 
     device = "cuda"
 
-    def __init__(self, sim, scene=None):
+    def __init__(self, sim, scene=None) -> None:
         """Engine for ``sim``; ``scene``: each sphere's scene, int (n,), or None for one.
 
         Scenes are independent copies of one trough stepped together
@@ -105,15 +107,19 @@ class GpuEngine(Buffers, StepSchemes):
         self.wait_s = 0.0
         # a small scene's grid is below numba's occupancy rule of thumb: no warning every step
         warnings.filterwarnings("ignore", message=".*Grid size .* under-utilization")
-        self.scene_host = None if scene is None else np.asarray(scene, dtype=np.int32)
-        self.scenes = 1 if scene is None else int(self.scene_host.max()) + 1
+        if scene is None:
+            self.scene_host, self.scenes = None, 1
+        else:
+            self.scene_host = np.asarray(scene, dtype=np.int32)
+            self.scenes = int(self.scene_host.max()) + 1
         #: Where scenes differ in their drive or incline: ``drives(sim)`` gives each scene's
         #: gravity (S, 3) and drive (S, 12); None: the simulation's, the same for all.
-        self.drives = None
+        self.drives: Callable[[Any], tuple[np.ndarray, np.ndarray]] | None = None
         self.acc_host = np.zeros((MAX_CHUNK, self.scenes, 3))
-        self.last_px = None  # sum over the last call's steps of m_i v_x,i per sphere, kg m/s
+        #: Sum over the last call's steps of m_i v_x,i per sphere, kg m/s (None before a call).
+        self.last_px: np.ndarray | None = None
         #: Where set (an array like ``last_px``), every call's ``last_px`` is added to it.
-        self.px_sum = None
+        self.px_sum: np.ndarray | None = None
         self.snapshot = None  # the host arrays as the last call left them
         self.n = -1
         #: The device's pair list is newer than the host's (:meth:`download_pairs` on demand).
@@ -309,7 +315,9 @@ class GpuEngine(Buffers, StepSchemes):
         ``kick`` False the forces alone (for clumps reduced to the bodies).
         """
         clumps = self.n_bodies > 0
+        assert self._chosen is not None, "_choose runs before a call's steps"
         step, n, block, lead, trail, scheme = self._chosen
+        key: tuple
         if clumps:
             args = lead + self._sphere_args(sim, seq, self.no_acc, 0, False, False) + trail
             key = ("forces", scheme, id(self.hist[0]), id(self.wall[0]))

@@ -79,7 +79,9 @@ class GpuReplicas:
             if (sim.bodies is not None) != clumps:
                 raise ValueError(f"replica {r} differs from replica 0 in its grains' shape")
             if (sim.mesh is None) != (mesh is None) or (
-                mesh is not None and not np.array_equal(sim.mesh.tri, mesh.tri)
+                mesh is not None
+                and sim.mesh is not None
+                and not np.array_equal(sim.mesh.tri, mesh.tri)
             ):
                 raise ValueError(f"replica {r} differs from replica 0 in its trough mesh")
         _same(sims, "contact law", lambda s: s.law.params)
@@ -93,8 +95,8 @@ class GpuReplicas:
         self.counts = np.array([s.spheres.n for s in sims])
         self.start = np.concatenate([[0], np.cumsum(self.counts)])
         first = sims[0]
-        stacked = ("x", "v", "omega", "force", "torque", "radius", "mass", "inv_mass",
-                   "inv_inertia", "wall_hist")  # fmt: skip
+        stacked: tuple[str, ...] = ("x", "v", "omega", "force", "torque", "radius", "mass",
+                                    "inv_mass", "inv_inertia", "wall_hist")  # fmt: skip
         if mesh is not None:
             stacked += ("mesh_hist", "mesh_normal")
         spheres = Spheres(
@@ -103,9 +105,10 @@ class GpuReplicas:
         )
         bodies = None
         if clumps:
-            bodies = _stacked_bodies([s.bodies for s in sims])
+            each = [s.bodies for s in sims if s.bodies is not None]  # all: checked above
+            bodies = _stacked_bodies(each)
             spheres.body = bodies.body_of
-            self.bcounts = np.array([s.bodies.n for s in sims])
+            self.bcounts = np.array([b.n for b in each])
             self.bstart = np.concatenate([[0], np.cumsum(self.bcounts)])
         sim = Simulation(
             spheres, first.trough, first.law, first.dt, rotation=first.rotation,
@@ -128,7 +131,8 @@ class GpuReplicas:
         sim.reference_speed = max(s.reference_speed for s in sims)
         self.sim = sim
         self.sims = sims
-        self.engine = sim.use_engine(GpuEngine(sim, self.scene))
+        self.engine = GpuEngine(sim, self.scene)
+        sim.use_engine(self.engine)
         self.engine.px_sum = np.zeros(self.start[-1])
         self._set_drives()
 
@@ -177,6 +181,7 @@ class GpuReplicas:
     def _px(self) -> np.ndarray:
         """Each replica's momentum sum since the last call, kg m/s (and the engine's zeroed)."""
         engine = self.engine
+        assert engine.px_sum is not None, "__init__ sets it"
         grains = self.grain_scene.shape[0]
         px = np.bincount(self.grain_scene, weights=engine.px_sum[:grains],
                          minlength=self.replicas)  # fmt: skip

@@ -15,6 +15,7 @@ steps, so it costs only the slower kernel's share of a few chunks and changes no
 from __future__ import annotations
 
 import time
+from typing import Any
 
 from dem.kernels.cuda.launch import COMPACT_BLOCK, COMPACT_KEEP
 
@@ -38,6 +39,15 @@ class StepSchemes:
     module, ``self.mesh``, ``self.n``).
     """
 
+    #: The step kernels' module (:mod:`dem.kernels.cuda.step`), set by the engine.
+    step: Any
+    #: Spheres on the device.
+    n: int
+    #: The trough mesh's device arrays (:class:`dem.engine.gpu.buffers.Buffers`), None: flat.
+    mesh: tuple | None
+    #: The steps a call may run, by ``compact`` (set by :meth:`_choose`).
+    _options: dict[bool | None, tuple]
+
     def init_schemes(self) -> None:
         """The knobs at their defaults: the plain step, no trial."""
         #: The step that gathers each block's touching candidates before the contact law
@@ -45,15 +55,17 @@ class StepSchemes:
         #: most ``compact_keep`` a sphere a pass (1 to ``COMPACT_KEEP``). False (the default):
         #: the plain step; True: the compact step; None: the trial, where the scene has
         #: ``tune_min`` spheres or more and flat walls (the plain step below).
-        self.compact = False
+        self.compact: bool | None = False
         self.compact_keep = COMPACT_KEEP
         self.tune_min = TUNE_MIN_SPHERES
         #: The last trial's outcome: {"chose": "plain" | "compact", "us_per_step": {"plain":
         #: mean, "compact": mean}, "trials": trials so far} (None: no trial, or none decided).
-        self.tuned = None
-        self._trial = None  # the trial under way: seconds, launches and chunks of each step
+        self.tuned: dict[str, Any] | None = None
+        #: The trial under way: seconds, launches and chunks of each step (None: none).
+        self._trial: dict[str, dict[bool, Any]] | None = None
         self._since_trial = 0  # launches since the last decision
-        self._chosen = None  # the step kernel and its launch of the chunk (:meth:`_choose`)
+        #: The step kernel and its launch of the chunk (:meth:`_choose`; None before).
+        self._chosen: tuple | None = None
         self._clock = time.perf_counter
 
     def forget_trial(self) -> None:
@@ -115,7 +127,7 @@ class StepSchemes:
         """The step of the next chunk in a trial (the one with fewer chunks run), else None."""
         if self._trial is None:
             return None  # nothing to time
-        pick = min((False, True), key=self._trial["chunks"].get)
+        pick = min((False, True), key=self._trial["chunks"].__getitem__)
         self._chosen = self._options[pick]
         return pick
 
