@@ -1,5 +1,6 @@
 """dem run end to end: refusing to overwrite, signals, checkpoints and bit-identical resume."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -248,8 +249,8 @@ def test_guard_stops_an_unstable_run_before_a_non_finite_value_is_written(tmp_pa
     case = load_case(_case_dir(tmp_path, cycles=4), {"material.restitution_normal": 0.5})
     limit = timestep_for(case).limit
     monkeypatch.setattr(config, "DEM_DT_STABILITY_FRACTION", 100.0)
-    case = case.__class__(**{**case.__dict__, "run": case.run.__class__(
-        settle_cycles=0, cycles=4, timestep=8.0 * limit, seed=case.run.seed)})  # fmt: skip
+    run = case.run.__class__(settle_cycles=0, cycles=4, timestep=8.0 * limit, seed=case.run.seed)
+    case = dataclasses.replace(case, run=run)
     with pytest.raises(SimulationError) as info:
         run_case(case, tmp_path / "out", progress=False)
     message = str(info.value)
