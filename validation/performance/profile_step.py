@@ -38,14 +38,14 @@ import numpy as np
 from pathlib import Path
 from dem.scene.case import load_case
 from dem.engine import setup
-from dem.io import checkpoint
+from threads_shared import load
 from dem.kernels import integrate as I
 from dem.kernels.forces import pair_forces, pair_forces_serial
 from dem.kernels.neighbours import max_displacement_sq
 
 steps = int(sys.argv[1])
 sim = setup.from_case(load_case(sys.argv[2]))
-checkpoint.load_state(sim, checkpoint.read(Path(sys.argv[3]))[0])
+load(sim, Path(sys.argv[3]))
 sim.run(200)
 
 
@@ -70,20 +70,20 @@ def loop_pairs(k, model, p, sph, nb, n_pairs, geom, serial):
 
 
 @numba.njit
-def loop_gather(k, n, model, p, sph, nb, geom, rotation, serial):
+def loop_gather(k, n, model, p, sph, nb, geom, rotation, serial, mesh):
     s = 0.0
     for _ in range(k):
-        s += I.forces_kick(n, model, p, sph, nb, 0.5 * geom.width, geom.dt, 0.0, 0.0, -9.81,
-                           rotation, True, True, serial)
+        s += I.forces_kick(n, model, p, sph, nb, 0.5 * geom.width, geom.back, geom.dt, 0.0, 0.0,
+                           -9.81, rotation, True, True, serial, mesh)
     return s
 
 
 @numba.njit
-def loop_gather_bodies(k, model, p, sph, nb, geom, rotation, bod, serial):
+def loop_gather_bodies(k, model, p, sph, nb, geom, rotation, bod, serial, mesh):
     s = 0.0
     for _ in range(k):
-        s += I.bodies_forces_kick(model, p, sph, nb, 0.5 * geom.width, geom.dt, 0.0, 0.0, -9.81,
-                                  rotation, True, bod, geom.length, serial)
+        s += I.bodies_forces_kick(model, p, sph, nb, 0.5 * geom.width, geom.back, geom.dt, 0.0,
+                                  0.0, -9.81, rotation, True, bod, geom.length, serial, mesh)
     return s
 
 
@@ -121,10 +121,10 @@ res["pair_forces_s"] = timed(loop_pairs, model, p, s.as_layout(), nb.as_layout()
                              geom, serial)
 if sim.bodies is None:
     res["gather_kick_s"] = timed(loop_gather, n, model, p, s.as_layout(), nb.as_layout(), geom,
-                                 sim.rotation, serial)
+                                 sim.rotation, serial, sim.mesh_layout())
 else:
     res["gather_kick_s"] = timed(loop_gather_bodies, model, p, s.as_layout(), nb.as_layout(),
-                                 geom, sim.rotation, sim.bodies.as_layout(), serial)
+                                 geom, sim.rotation, sim.bodies.as_layout(), serial, sim.mesh_layout())
 sim.spheres, sim.pairs, sim.bodies = base
 s, nb = sim.spheres, sim.pairs
 res["build_s"] = timed(loop_build, n, s.as_layout(), s.body, nb.as_layout(), nb.counters, geom,
@@ -134,9 +134,11 @@ print(json.dumps(res))
 
 
 def measure(threads: int, steps: int, case: str, state: Path) -> dict:
-    env = os.environ | {"NUMBA_NUM_THREADS": str(threads)}
+    env = os.environ | {"NUMBA_NUM_THREADS": str(threads), "PYTHONPATH": str(HERE)}
     out = subprocess.run([sys.executable, "-c", WORKER, str(steps), case, str(state)],
-                         env=env, capture_output=True, text=True, check=True)  # fmt: skip
+                         env=env, capture_output=True, text=True)  # fmt: skip
+    if out.returncode != 0:
+        raise SystemExit(f"the worker failed:\n{out.stderr[-3000:]}")
     row = json.loads(out.stdout.strip().splitlines()[-1])
     row["load_1min"] = round(os.getloadavg()[0], 2)
     return row
