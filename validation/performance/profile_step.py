@@ -124,7 +124,8 @@ if sim.bodies is None:
                                  sim.rotation, serial, sim.mesh_layout())
 else:
     res["gather_kick_s"] = timed(loop_gather_bodies, model, p, s.as_layout(), nb.as_layout(),
-                                 geom, sim.rotation, sim.bodies.as_layout(), serial, sim.mesh_layout())
+                                 geom, sim.rotation, sim.bodies.as_layout(), serial,
+                                 sim.mesh_layout())
 sim.spheres, sim.pairs, sim.bodies = base
 s, nb = sim.spheres, sim.pairs
 res["build_s"] = timed(loop_build, n, s.as_layout(), s.body, nb.as_layout(), nb.counters, geom,

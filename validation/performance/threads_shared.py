@@ -91,8 +91,9 @@ def load(sim, path: Path) -> None:
 def measure(name: str, steps: int, case: str, state: Path) -> float:
     env, threads = CONFIGS[name]
     full = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    full |= env | {"PYTHONPATH": str(HERE)}  # the worker imports load() from here
     out = subprocess.run([sys.executable, "-c", WORKER, str(threads), str(steps), case, str(state)],
-                         env=full | env | {"PYTHONPATH": str(HERE)}, capture_output=True, text=True, check=True)  # fmt: skip
+                         env=full, capture_output=True, text=True, check=True)  # fmt: skip
     return float(out.stdout.strip().splitlines()[-1])
 
 
