@@ -8,8 +8,12 @@ precision, and reassociation would make results depend on the compiler's mood.
 import os
 
 #: Options for every ``numba.njit`` in the package. ``cache=True`` writes compiled code next to
-#: the sources (``__pycache__``) so a second run does not recompile.
-NUMBA_OPTIONS = {"cache": True, "fastmath": False, "nogil": True}
+#: the sources (``__pycache__``) so a second run does not recompile. ``error_model="numpy"``:
+#: a division by zero gives IEEE's inf or nan instead of raising ZeroDivisionError, so numba
+#: compiles no zero test and exception path beside every division (the kernels divide only by
+#: what they know is nonzero, and the runs' instability checks catch any inf or nan); every
+#: other division gives the same bits.
+NUMBA_OPTIONS = {"cache": True, "fastmath": False, "nogil": True, "error_model": "numpy"}
 
 #: Options for kernels that run a ``prange`` loop.
 NUMBA_PARALLEL_OPTIONS = {**NUMBA_OPTIONS, "parallel": True}

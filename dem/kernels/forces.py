@@ -49,6 +49,21 @@ N_WALLS = 4
 
 
 @numba.njit(inline="always", **NUMBA_OPTIONS)
+def clear_row(hist, row):
+    """Set row ``row`` of a contact history to +0.0: the contact does not touch (now).
+
+    Stores only where the row holds anything (a value other than +0.0): most rows cleared in a
+    step are those of pairs in the Verlet skin and of spheres away from the walls, already zero,
+    and a store costs more than a load; the row ends as all +0.0 either way, as the plain
+    reset leaves it (-0.0 is stored over, hence the sign test), so trajectories keep their bits.
+    """
+    for c in range(hist.shape[1]):
+        h = hist[row, c]
+        if h != 0.0 or math.copysign(1.0, h) < 0.0:
+            hist[row, c] = 0.0
+
+
+@numba.njit(inline="always", **NUMBA_OPTIONS)
 def pair_separation(x, i, j, length, half):
     """x_i - x_j with the nearest periodic image along x, and its square: (dx, dy, dz, d2), m, m^2.
 
@@ -89,8 +104,7 @@ def pair_contact(model, p, x, v, omega, radius, mass, i, j, hist, k, length, hal
     rj = radius[j]
     rsum = ri + rj
     if d2 >= rsum * rsum:
-        for c in range(hist.shape[1]):
-            hist[k, c] = 0.0
+        clear_row(hist, k)
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     d = math.sqrt(d2)
     delta = rsum - d
@@ -277,8 +291,7 @@ def wall_forces(
     if (x[i, 2] >= r and x[i, 1] + half_width >= r and half_width - x[i, 1] >= r
             and x[i, 0] - back >= r):  # fmt: skip
         for row in range(N_WALLS * i, N_WALLS * i + N_WALLS):
-            for c in range(wall_hist.shape[1]):
-                wall_hist[row, c] = 0.0
+            clear_row(wall_hist, row)
         return fx, fy, fz, tx, ty, tz
     pw = wall_row(p)  # the grain-wall law ([wall])
     for w in range(N_WALLS - 1):
@@ -286,8 +299,7 @@ def wall_forces(
         delta = r - gap
         row = N_WALLS * i + w
         if delta <= 0.0:
-            for c in range(wall_hist.shape[1]):
-                wall_hist[row, c] = 0.0
+            clear_row(wall_hist, row)
             continue
         fx, fy, fz, tx, ty, tz = add_wall_contact(
             model, pw, 0.0, ny, nz, delta, v, omega, i, m, r, wall_hist, row, dt,
@@ -305,8 +317,7 @@ def _back_wall(i, model, p, x, v, omega, r, m, wall_hist, back, dt, fx, fy, fz, 
     row = N_WALLS * i + N_WALLS - 1
     delta = r - (x[i, 0] - back)
     if delta <= 0.0:
-        for c in range(wall_hist.shape[1]):
-            wall_hist[row, c] = 0.0
+        clear_row(wall_hist, row)
         return fx, fy, fz, tx, ty, tz
     return add_wall_contact(
         model, p, 1.0, 0.0, 0.0, delta, v, omega, i, m, r, wall_hist, row, dt,

@@ -122,8 +122,9 @@ def bench_case(args):
     if args.law != "case":
         case = case.with_tangential(args.law)
     run = dataclasses.replace(
-        case.run, timestep=args.timestep, settle_cycles=args.settle_cycles, cycles=args.cycles
-    )
+        case.run, timestep=args.timestep, settle_cycles=args.settle_cycles, cycles=args.cycles,
+        replicas=1,  # one fill in one process, as the other engines run one deck
+    )  # fmt: skip
     return dataclasses.replace(case, run=run)
 
 
@@ -242,7 +243,8 @@ import dataclasses
 from dem.scene.case import load_case
 from dem.run.runner import run_case
 case = load_case({case!r}){tangential}
-run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r})
+run = dataclasses.replace(case.run, timestep={dt!r}, settle_cycles={settle!r}, cycles={cycles!r},
+                          replicas=1)  # one fill: the shipped beds pool three, side by side
 case = dataclasses.replace(case, run=run)
 run_case(case, {out!r}, cycles={cycles!r}, threads={threads!r}, progress=False,
          overwrite=True, frames=False)
