@@ -1,4 +1,4 @@
-"""A study's CSV tables: rows of dicts written with their header, and read back as numbers."""
+"""A study's tables: CSV rows written with their header and read back as numbers; README tables."""
 
 from __future__ import annotations
 
@@ -26,3 +26,24 @@ def read_rows(path: Path) -> list[dict]:
             except ValueError:
                 r[k] = {"True": True, "False": False}.get(v, v)
     return rows
+
+
+#: The markers between which a study's script writes its README's tables.
+BEGIN, END = "<!-- tables: begin (run.py writes these) -->", "<!-- tables: end -->"
+
+
+def write_readme_tables(path: Path, lines: list[str]) -> None:
+    """Replace what lies between :data:`BEGIN` and :data:`END` in ``path`` by ``lines``.
+
+    Nothing happens where the file or either marker is missing: a README that was edited by
+    hand without them keeps its text.
+    """
+    path = Path(path)
+    if not path.exists():
+        return
+    text = path.read_text()
+    if BEGIN not in text or END not in text:
+        return
+    head, rest = text.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    path.write_text(head + BEGIN + "\n\n" + "\n".join(lines) + "\n\n" + END + tail)

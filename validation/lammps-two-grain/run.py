@@ -64,6 +64,7 @@ from dem.engine import setup  # noqa: E402
 from dem.io.lammps.contact import contact_models, restitution_for_beta  # noqa: E402
 from dem.scene.case import load_case  # noqa: E402
 from dem.scene.resolved import Scene, resolve  # noqa: E402
+from validation._lib import tables  # noqa: E402
 
 CASE = ROOT / "cases" / "sphere-bed"
 #: The contact laws compared: case keys over cases/sphere-bed.
@@ -760,20 +761,9 @@ def report(results: dict) -> list[str]:
     return out
 
 
-BEGIN, END = "<!-- tables: begin (run.py writes these) -->", "<!-- tables: end -->"
-
-
 def write_readme_tables(results: dict) -> None:
-    """Replace the tables between BEGIN and END in README.md (if it has them)."""
-    path = HERE / "README.md"
-    if not path.exists():
-        return
-    text = path.read_text()
-    if BEGIN not in text or END not in text:
-        return
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    path.write_text(head + BEGIN + "\n\n" + "\n".join(report(results)) + "\n\n" + END + tail)
+    """Replace the tables between the markers in README.md (if it has them)."""
+    tables.write_readme_tables(HERE / "README.md", report(results))
 
 
 def main(argv=None) -> int:

@@ -61,6 +61,7 @@ import collide  # noqa: E402
 from dem import provenance  # noqa: E402
 from dem.io.liggghts.contact import contact_block  # noqa: E402
 from dem.io.liggghts.launcher import find_liggghts, run_liggghts  # noqa: E402
+from validation._lib import tables  # noqa: E402
 
 SCRIPT = "validation/liggghts-two-grain/run.py"
 TEST = 8
@@ -432,20 +433,9 @@ def report(results: dict) -> list[str]:
     return out
 
 
-BEGIN, END = "<!-- tables: begin (run.py writes these) -->", "<!-- tables: end -->"
-
-
 def write_readme_tables(results: dict) -> None:
-    """Replace the tables between BEGIN and END in README.md (if it has them)."""
-    path = HERE / "README.md"
-    if not path.exists():
-        return
-    text = path.read_text()
-    if BEGIN not in text or END not in text:
-        return
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    path.write_text(head + BEGIN + "\n\n" + "\n".join(report(results)) + "\n\n" + END + tail)
+    """Replace the tables between the markers in README.md (if it has them)."""
+    tables.write_readme_tables(HERE / "README.md", report(results))
 
 
 def liggghts_unavailable() -> str | None:
