@@ -343,3 +343,22 @@ def test_equivalent_material_is_the_contact_of_two_materials():
     assert contact.equivalent_material(e2, nu2, e2, nu2) == pytest.approx((e2, nu2), rel=1e-14)
     # a rigid partner leaves the sphere's own compliance
     assert contact.contact_moduli(e2, nu2, math.inf, 0.3)[0] == pytest.approx(e2 / (1 - nu2**2))
+
+
+@pytest.mark.parametrize("width", sorted(set(contact.HISTORY_WIDTH.values())))
+def test_clear_row_zeroes_its_row_only(width):
+    """clear_row writes its stores out for the widths the laws have: every column, no other row."""
+    import numba
+
+    from dem.kernels.forces import clear_row
+
+    @numba.njit
+    def clear(hist, row):
+        clear_row(hist, row)
+
+    assert set(contact.HISTORY_WIDTH.values()) <= {3, 5}, "clear_row writes 3 or 5 columns"
+    hist = np.full((3, width), -1.5)
+    hist[1, 0] = -0.0
+    clear(hist, 1)
+    assert np.all(hist[[0, 2]] == -1.5)
+    assert np.all(hist[1] == 0.0) and not np.any(np.signbit(hist[1]))
