@@ -12,7 +12,8 @@ cycle and six measured, one fill; the rate is the summary's particle_steps_per_s
 Measured 2026-11-28 (2-core VM, nothing else running, load 0.9-1.0): 7798172 (2026-11-23)
 6.9-8.9e6 particle-steps/s against 4.4-5.1e6 at b6ab922, three rounds. Single runs scatter by
 up to 40 % on this VM (bcb4815: 8.6 once, 5.2-6.2 three times), which defeated a bisect on one
-run per commit: take three rounds a commit.
+run per commit: take three rounds a commit. count_instructions.py then located the slowdown by
+instruction counts, which the noise does not touch (the contact history's reset, 314b1fd).
 """
 
 from __future__ import annotations
