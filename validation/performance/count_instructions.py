@@ -23,8 +23,10 @@ result per tree: the total, the four largest functions (numba's kernels have no 
 growth under changes to either), instructions per particle-step, the run's mean velocity
 (for a change that must keep every bit) and the step count; appended to ``--out``.
 
-Measured 2026-11-28 (liggghts law): 7798172 (2026-11-23) 9.14e9, d285aa8 11.12e9, b6ab922
-13.10e9 (validation/performance/README.md, "Instructions, not seconds").
+Rows record the date and valgrind's version (the first four rows, 2026-11-28, valgrind-3.19.0,
+Python 3.11.7, did not yet). Measured 2026-11-28 (liggghts law): 7798172 (2026-11-23) 9.14e9,
+d285aa8 11.12e9, b6ab922 13.10e9 (validation/performance/README.md, "Instructions, not
+seconds").
 """
 
 from __future__ import annotations
@@ -115,6 +117,10 @@ def count(label: str, tree: Path, law: str, work: Path) -> dict:
         "mean_velocity": run["mean_velocity"], "native_mean_velocity": same["mean_velocity"],
         "steps": run["steps"], "neighbour_builds": run["neighbour_builds"],
         "valgrind_wall_s": time.perf_counter() - t0,
+        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "valgrind": subprocess.run(["valgrind", "--version"], capture_output=True,
+                                   text=True).stdout.strip(),
+        "python": sys.version.split()[0],
     }  # fmt: skip
 
 
