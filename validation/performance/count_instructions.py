@@ -41,6 +41,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from rate_at_commit import checkout  # noqa: E402  (this folder's script: the same worktrees)
 
 JOB = r"""
 import dataclasses, json, os, subprocess, sys, time
@@ -78,13 +81,8 @@ def tree_of(name: str, work: Path) -> tuple[str, Path]:
     """(label, tree): a folder as it is, or a commit's detached worktree under ``work``."""
     if Path(name).is_dir():
         return Path(name).name, Path(name).resolve()
-    sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", name],
-                         capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
-    tree = work / sha
-    if not tree.exists():
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), sha],
-                       check=True, capture_output=True)  # fmt: skip
-    return sha, tree
+    tree = checkout(name, work)
+    return tree.name, tree
 
 
 def count(label: str, tree: Path, law: str, work: Path) -> dict:
