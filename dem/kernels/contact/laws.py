@@ -162,6 +162,16 @@ def spring_step(s0, s1, s2, vtx, vty, vtz, nx, ny, nz, dt):
     return sx - sn * nx, sy - sn * ny, sz - sn * nz
 
 
+@numba.njit(inline="always", **NUMBA_OPTIONS)
+def _stick(m_t, stick_rate, stick_zeta, dt):
+    """The enduring stick's spring and dashpot (k_s, gamma_s) for mass m_t.
+
+    Computed only where the stick acts (an impact's end, an enduring contact): an impact's steps
+    skip its two divisions.
+    """
+    return m_t * stick_rate * stick_rate / (dt * dt), 2.0 * stick_zeta * stick_rate * m_t / dt
+
+
 @numba.njit(**NUMBA_OPTIONS)
 def impact_tangential(
     impact_ratio, impact_cap, mu, mass_t, stick_rate, stick_zeta,
@@ -204,9 +214,6 @@ def impact_tangential(
                 h2 = ratio * vtz / vt
         else:
             phase = -1.0
-    m_t = mass_t * m_eff
-    ks = m_t * stick_rate * stick_rate / (dt * dt)
-    gs = 2.0 * stick_zeta * stick_rate * m_t / dt
     if phase > 0.0:
         # impact: F_t = -F_n c, c projected onto the tangent plane; ends when the separating
         # speed stops growing (the contact force is back to the external load), when the slip
@@ -230,9 +237,11 @@ def impact_tangential(
         # switch to the enduring stick, its spring set so that the force is continuous; a
         # plastic contact whose approach goes on marks it (-2, :func:`plastic_normal`)
         after = -2.0 if plastic and not over else -1.0
+        ks, gs = _stick(mass_t * m_eff, stick_rate, stick_zeta, dt)
         return (ftx, fty, ftz, -(ftx + gs * vtx) / ks, -(fty + gs * vty) / ks,
                 -(ftz + gs * vtz) / ks, after, vn)  # fmt: skip
     # enduring: a stiff stick, the total force capped at mu F_n (spring reset to match)
+    ks, gs = _stick(mass_t * m_eff, stick_rate, stick_zeta, dt)
     sx, sy, sz = spring_step(h0, h1, h2, vtx, vty, vtz, nx, ny, nz, dt)
     ftx, fty, ftz, sx, sy, sz = coulomb_tangential(ks, gs, f_max, sx, sy, sz, vtx, vty, vtz, False)
     return ftx, fty, ftz, sx, sy, sz, phase, vn
